@@ -14,6 +14,7 @@ __all__ = [
     "TopomapError",
     "MapError",
     "MapFileError",
+    "MapFileNotFoundError",
     "MapTooLargeError",
     "ParameterError",
     "GraphFormatError",
@@ -42,3 +43,7 @@ class ParameterError(TopomapError, ValueError):
 
 class GraphFormatError(TopomapError, ValueError):
     """A saved room graph (GraphML, JSON, GeoJSON) cannot be loaded."""
+
+
+class MapFileNotFoundError(MapFileError, FileNotFoundError):
+    """A map file (or the image a YAML names) does not exist."""

@@ -9,18 +9,76 @@ as ROS map_server defines it.
 
 from __future__ import annotations
 
+import math
+import os
+import re
+import tempfile
+import warnings
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Optional
 
 import numpy as np
 
-from .errors import MapError, ParameterError
+from .errors import (
+    MapError,
+    MapFileError,
+    MapFileNotFoundError,
+    MapTooLargeError,
+    ParameterError,
+)
 
-__all__ = ["FREE", "OCCUPIED", "UNKNOWN", "OccupancyGrid", "from_array"]
+__all__ = [
+    "FREE",
+    "OCCUPIED",
+    "UNKNOWN",
+    "MAX_CELLS",
+    "DEFAULT_RESOLUTION",
+    "OCCUPIED_THRESH",
+    "FREE_THRESH",
+    "GRAY_FREE",
+    "GRAY_OCCUPIED",
+    "GRAY_UNKNOWN",
+    "OccupancyGrid",
+    "classify_gray",
+    "from_array",
+    "load_map",
+    "save_map",
+]
 
 FREE = 0
 OCCUPIED = 100
 UNKNOWN = -1
+
+#: Largest map accepted, in cells (rows * cols). Checked from the image
+#: header before any pixel is decoded; larger maps raise
+#: :class:`~topomap.errors.MapTooLargeError`. Read at call time, so it can be
+#: changed (``topomap.io.MAX_CELLS = ...``).
+MAX_CELLS = 100_000_000
+
+#: Cell size in metres per pixel used for bare images when none is given.
+DEFAULT_RESOLUTION = 0.05
+#: map_server default thresholds on the occupancy probability ``p``.
+OCCUPIED_THRESH = 0.65
+FREE_THRESH = 0.196
+
+#: Gray values map_saver writes (and :func:`save_map` writes) per state.
+GRAY_FREE = 254
+GRAY_OCCUPIED = 0
+GRAY_UNKNOWN = 205
+
+_MODES = ("trinary", "scale", "raw")
+_YAML_SUFFIXES = (".yaml", ".yml")
+
+
+def _one_line(text) -> str:
+    """Collapse whitespace (newlines included) and cap the length."""
+    text = " ".join(str(text).split())
+    return text if len(text) <= 300 else text[:297] + "..."
+
+
+def _msg(name, text) -> str:
+    return _one_line(f"{name}: {text}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -50,7 +108,10 @@ class OccupancyGrid:
 
     def __post_init__(self):
         name = self.source or "<array>"
-        cells = np.asarray(self.cells)
+        try:
+            cells = np.asarray(self.cells)
+        except (TypeError, ValueError) as exc:
+            raise MapError(_msg(name, f"cells are not an array: {exc}")) from None
         if cells.ndim != 2:
             raise MapError(f"{name}: grid must be 2-D, got ndim={cells.ndim}")
         if cells.shape[0] == 0 or cells.shape[1] == 0:
@@ -58,16 +119,23 @@ class OccupancyGrid:
         try:
             res = float(self.resolution)
         except (TypeError, ValueError):
-            raise ParameterError(f"{name}: resolution must be a number, got {self.resolution!r}") from None
+            raise ParameterError(_msg(name, f"resolution must be a number, got {self.resolution!r}")) from None
         if not np.isfinite(res) or res <= 0:
             raise ParameterError(f"{name}: resolution must be > 0 m/px, got {self.resolution!r}")
         object.__setattr__(self, "resolution", res)
-        origin = tuple(float(v) for v in self.origin)
+        try:
+            origin = tuple(float(v) for v in self.origin)
+        except (TypeError, ValueError):
+            raise ParameterError(_msg(name, f"origin must be (x, y[, yaw]) numbers, got {self.origin!r}")) from None
+        if not all(math.isfinite(v) for v in origin):
+            raise ParameterError(_msg(name, f"origin must be finite, got {self.origin!r}"))
         if len(origin) == 2:
             origin = origin + (0.0,)
         if len(origin) != 3:
-            raise ParameterError(f"{name}: origin must be (x, y[, yaw]), got {self.origin!r}")
+            raise ParameterError(_msg(name, f"origin must be (x, y[, yaw]), got {self.origin!r}"))
         object.__setattr__(self, "origin", origin)
+        if not (np.issubdtype(cells.dtype, np.integer) or cells.dtype == bool):
+            raise MapError(_msg(name, f"cells must be integers (0, 100, -1), got dtype {cells.dtype}"))
         object.__setattr__(self, "cells", cells.astype(np.int8, copy=False))
 
     @property
@@ -130,38 +198,539 @@ class OccupancyGrid:
         return row, col
 
 
-def from_array(array, *, resolution: float = 0.05, origin=(0.0, 0.0, 0.0),
-               source: Optional[str] = None) -> OccupancyGrid:
+def _check_thresholds(name, occupied_thresh, free_thresh):
+    """Validate map_server thresholds; return them as floats."""
+    vals = []
+    for key, val in (("occupied_thresh", occupied_thresh), ("free_thresh", free_thresh)):
+        v = _as_float(name, key, val)
+        if not 0.0 <= v <= 1.0:
+            raise ParameterError(_msg(name, f"{key} must be in [0, 1], got {val!r}"))
+        vals.append(v)
+    occ, free = vals
+    if free >= occ:
+        raise ParameterError(_msg(name, f"free_thresh ({free!r}) must be < occupied_thresh ({occ!r})"))
+    return occ, free
+
+
+def _as_float(name, key, val) -> float:
+    """A finite float from a number or numeric string, else ParameterError."""
+    if isinstance(val, (bool, np.bool_)) or val is None:
+        raise ParameterError(_msg(name, f"{key} must be a number, got {val!r}"))
+    try:
+        v = float(val)
+    except (TypeError, ValueError, OverflowError):
+        raise ParameterError(_msg(name, f"{key} must be a number, got {val!r}")) from None
+    if not math.isfinite(v):
+        raise ParameterError(_msg(name, f"{key} must be finite, got {val!r}"))
+    return v
+
+
+def _as_bool(name, key, val) -> bool:
+    if isinstance(val, (bool, np.bool_)):
+        return bool(val)
+    if isinstance(val, (int, np.integer)) and val in (0, 1):
+        return bool(val)
+    if isinstance(val, str) and val.strip().lower() in ("0", "1", "true", "false"):
+        return val.strip().lower() in ("1", "true")
+    raise ParameterError(_msg(name, f"{key} must be 0 or 1, got {val!r}"))
+
+
+def _as_mode(name, val) -> str:
+    if not isinstance(val, str) or val.strip().lower() not in _MODES:
+        raise ParameterError(_msg(name, f"mode must be one of {', '.join(_MODES)}, got {val!r}"))
+    return val.strip().lower()
+
+
+def _as_resolution(name, val) -> float:
+    v = _as_float(name, "resolution", val)
+    if v <= 0:
+        raise ParameterError(_msg(name, f"resolution must be > 0 m/px, got {val!r}"))
+    return v
+
+
+def _as_origin(name, val) -> tuple:
+    if isinstance(val, (str, bytes)) or not hasattr(val, "__len__") or len(val) not in (2, 3):
+        raise ParameterError(_msg(name, f"origin must be [x, y, yaw] in metres/radians, got {val!r}"))
+    return tuple(_as_float(name, "origin", v) for v in val) + ((0.0,) if len(val) == 2 else ())
+
+
+def classify_gray(gray, *, negate: bool = False, occupied_thresh: float = OCCUPIED_THRESH,
+                  free_thresh: float = FREE_THRESH, mode: str = "trinary",
+                  transparent=None) -> np.ndarray:
+    """Classify an 8-bit gray image into ROS cell values, as map_server does.
+
+    With ``p = (255 - v) / 255`` (``v / 255`` when ``negate``), a pixel is
+    ``OCCUPIED`` if ``p > occupied_thresh``, ``FREE`` if ``p < free_thresh``
+    and ``UNKNOWN`` otherwise (``trinary``). ``scale`` mode is classified
+    the same way (topomap only needs three states; map_server would give the
+    in-between pixels graded values). In ``raw`` mode the pixel value
+    (after ``negate``: ``255 - v``) *is* the ROS value: ``0..100`` kept,
+    anything above is ``UNKNOWN``.
+
+    Parameters
+    ----------
+    gray : (M, N) ndarray of uint8
+        Gray image, 0 = black.
+    negate : bool
+        Invert the meaning of gray (white = occupied).
+    occupied_thresh, free_thresh : float
+        Thresholds on ``p`` in ``[0, 1]``, ``free_thresh < occupied_thresh``.
+    mode : {'trinary', 'scale', 'raw'}
+        map_server interpretation mode.
+    transparent : (M, N) ndarray of bool, optional
+        Pixels to mark ``UNKNOWN`` regardless of value (fully transparent).
+
+    Returns
+    -------
+    (M, N) ndarray of int8
+        ``FREE`` (0), ``OCCUPIED`` (100), ``UNKNOWN`` (-1); in raw mode any
+        value in ``0..100``.
+    """
+    mode = _as_mode("<array>", mode)
+    occ, free = _check_thresholds("<array>", occupied_thresh, free_thresh)
+    v = np.arange(256)
+    if negate:
+        v = 255 - v
+    if mode == "raw":
+        lut = np.where(v <= 100, v, UNKNOWN).astype(np.int8)
+    else:
+        p = (255 - v) / 255.0
+        lut = np.full(256, UNKNOWN, np.int8)
+        lut[p > occ] = OCCUPIED
+        lut[p < free] = FREE
+    cells = lut[np.asarray(gray, dtype=np.uint8)]
+    if transparent is not None:
+        cells[np.asarray(transparent, bool)] = UNKNOWN
+    return cells
+
+
+def from_array(array, *, resolution: float = DEFAULT_RESOLUTION, origin=(0.0, 0.0, 0.0),
+               source: Optional[str] = None, negate: bool = False,
+               occupied_thresh: float = OCCUPIED_THRESH,
+               free_thresh: float = FREE_THRESH) -> OccupancyGrid:
     """Build an :class:`OccupancyGrid` from a 2-D array.
 
     Parameters
     ----------
     array : (M, N) ndarray
         ``bool``: True = free, False = occupied. Signed integers: ROS values
-        (0 free, 100 occupied, -1 unknown; 1..99 counted as occupied when
-        >= 65, else free). ``uint8`` : a gray image, classified with
-        map_server's trinary thresholds.
+        (0 free, 100 occupied, negative unknown; 1..99 counted as occupied
+        when >= 65, else free). ``uint8``: a gray image, classified with
+        map_server's trinary rule (see :func:`classify_gray`) and kept as
+        ``grid.gray``.
     resolution : float
-        Metres per pixel.
+        Metres per pixel, > 0.
     origin : (x, y[, yaw])
-        Lower-left corner in map-frame metres.
+        Lower-left corner in map-frame metres (yaw in radians).
+    source : str, optional
+        Name used in messages.
+    negate, occupied_thresh, free_thresh
+        Gray classification options, used for ``uint8`` input only.
+
+    Returns
+    -------
+    OccupancyGrid
+
+    Raises
+    ------
+    MapError
+        Not 2-D, empty, or an unsupported dtype.
+    ParameterError
+        Bad resolution, origin or thresholds.
     """
     name = source or "<array>"
-    a = np.asarray(array)
+    try:
+        a = np.asarray(array)
+    except (TypeError, ValueError) as exc:
+        raise MapError(_msg(name, f"cannot convert {type(array).__name__} to an array: {exc}")) from None
     if a.ndim != 2:
-        raise MapError(f"{name}: array must be 2-D, got ndim={a.ndim} (shape {a.shape})")
+        raise MapError(_msg(name, f"array must be 2-D, got ndim={a.ndim} (shape {a.shape})"))
     if a.size == 0:
-        raise MapError(f"{name}: array is empty (shape {a.shape})")
+        raise MapError(_msg(name, f"array is empty (shape {a.shape})"))
     if a.dtype == bool:
         cells = np.where(a, FREE, OCCUPIED).astype(np.int8)
         return OccupancyGrid(cells, resolution, origin, source)
     if a.dtype == np.uint8:
-        from .io_images import classify_gray  # noqa: F401  (provided by the loader module)
-        cells = classify_gray(a)
+        occ, free = _check_thresholds(name, occupied_thresh, free_thresh)
+        cells = classify_gray(a, negate=_as_bool(name, "negate", negate),
+                              occupied_thresh=occ, free_thresh=free)
         return OccupancyGrid(cells, resolution, origin, source, gray=a)
     if np.issubdtype(a.dtype, np.signedinteger):
         cells = np.full(a.shape, UNKNOWN, np.int8)
         cells[(a >= 0) & (a < 65)] = FREE
         cells[a >= 65] = OCCUPIED
         return OccupancyGrid(cells, resolution, origin, source)
-    raise MapError(f"{name}: unsupported array dtype {a.dtype} (use bool, uint8 gray or int8 ROS values)")
+    raise MapError(_msg(name, f"unsupported array dtype {a.dtype} (use bool, uint8 gray or int8 ROS values)"))
+
+
+# --------------------------------------------------------------------------
+# Reading images
+# --------------------------------------------------------------------------
+
+def _check_size(name, rows, cols):
+    limit = MAX_CELLS
+    if rows * cols > limit:
+        raise MapTooLargeError(_msg(
+            name, f"image is {cols} x {rows} px = {rows * cols:,} cells, more than "
+                  f"topomap.io.MAX_CELLS = {limit:,}"))
+
+
+def _to_gray(name, img):
+    """Decode a Pillow image into ``(gray uint8, transparent bool or None)``."""
+    from PIL import Image
+
+    mode = img.mode
+    transparent = None
+    if mode == "P" or (mode in ("L", "RGB", "1") and "transparency" in img.info):
+        img = img.convert("RGBA")
+        mode = "RGBA"
+    elif mode in ("PA", "La"):
+        img = img.convert("LA")
+        mode = "LA"
+    elif mode in ("RGBa",):
+        img = img.convert("RGBA")
+        mode = "RGBA"
+    if mode == "1":
+        gray = np.asarray(img.convert("L"), dtype=np.uint8)
+    elif mode == "L":
+        gray = np.asarray(img, dtype=np.uint8)
+    elif mode == "LA":
+        a = np.asarray(img, dtype=np.uint8)
+        gray, transparent = a[..., 0], a[..., 1] == 0
+    elif mode.startswith("I;16"):
+        a = np.asarray(img).astype(np.uint32)
+        gray = (a >> 8).astype(np.uint8)
+    elif mode == "I":
+        a = np.asarray(img).astype(np.int64)
+        gray = (np.clip(a, 0, 65535) >> 8).astype(np.uint8)
+    elif mode == "F":
+        a = np.nan_to_num(np.asarray(img, dtype=np.float64), nan=0.0, posinf=255.0, neginf=0.0)
+        gray = np.clip(np.rint(a), 0, 255).astype(np.uint8)
+    else:
+        if mode not in ("RGB", "RGBA"):
+            img = img.convert("RGBA" if "A" in img.getbands() else "RGB")
+            mode = img.mode
+        a = np.asarray(img, dtype=np.uint8)
+        # map_server averages the colour channels
+        gray = np.rint(a[..., :3].astype(np.float64).mean(axis=-1)).astype(np.uint8)
+        if mode == "RGBA":
+            transparent = a[..., 3] == 0
+    if gray.ndim != 2:
+        raise MapError(_msg(name, f"image mode {img.mode} decoded to shape {gray.shape}, not 2-D"))
+    gray = np.ascontiguousarray(gray)
+    if transparent is not None and not transparent.any():
+        transparent = None
+    return gray, transparent
+
+
+def _exists(path: Path) -> bool:
+    try:
+        return os.path.exists(path)
+    except (OSError, ValueError):
+        return False
+
+
+def _check_file(name, path: Path, what="map file"):
+    if not _exists(path):
+        raise MapFileNotFoundError(_msg(name, f"{what} not found"))
+    if path.is_dir():
+        raise MapFileError(_msg(name, f"{what} is a directory, not a file"))
+    try:
+        size = path.stat().st_size
+    except OSError as exc:
+        raise MapFileError(_msg(name, f"cannot stat {what}: {exc.strerror or exc}")) from None
+    if size == 0:
+        raise MapError(_msg(name, f"{what} is empty (0 bytes)"))
+    if not os.access(path, os.R_OK):
+        raise MapFileError(_msg(name, f"{what} is not readable (permission denied)"))
+
+
+def _read_image(path: Path, name: str):
+    """Read any Pillow image as ``(gray uint8 (M, N), transparent or None)``."""
+    from PIL import Image, UnidentifiedImageError
+
+    _check_file(name, path, "image file")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+        try:
+            with Image.open(path) as img:
+                cols, rows = img.size
+                _check_size(name, rows, cols)
+                if rows == 0 or cols == 0:
+                    raise MapError(_msg(name, f"image has zero size ({cols} x {rows} px)"))
+                img.load()
+                return _to_gray(name, img)
+        except Image.DecompressionBombError as exc:
+            m = re.search(r"\((\d+) pixels\)", str(exc))
+            size = f"{int(m.group(1)):,} cells" if m else "too many cells"
+            raise MapTooLargeError(_msg(
+                name, f"image is {size}, more than topomap.io.MAX_CELLS = {MAX_CELLS:,}")) from None
+        except (MapError, MapFileError):
+            raise
+        except UnidentifiedImageError:
+            raise MapError(_msg(name, "not an image file Pillow can read (unknown or corrupt format)")) from None
+        except MemoryError:
+            raise MapTooLargeError(_msg(name, "out of memory while decoding the image")) from None
+        except PermissionError as exc:
+            raise MapFileError(_msg(name, f"cannot read image: {exc.strerror or exc}")) from None
+        except Exception as exc:  # Pillow raises OSError, ValueError, SyntaxError, struct.error, ...
+            detail = _one_line(exc) or type(exc).__name__
+            if "truncated" in detail.lower():
+                raise MapError(_msg(name, f"image file is truncated or corrupt ({detail})")) from None
+            raise MapError(_msg(name, f"cannot decode image: {detail}")) from None
+
+
+# --------------------------------------------------------------------------
+# Loading
+# --------------------------------------------------------------------------
+
+def _read_yaml(path: Path, name: str) -> dict:
+    import yaml
+
+    _check_file(name, path, "map YAML")
+    try:
+        text = path.read_bytes()
+    except OSError as exc:
+        raise MapFileError(_msg(name, f"cannot read map YAML: {exc.strerror or exc}")) from None
+    try:
+        meta = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}" if mark is not None else ""
+        problem = getattr(exc, "problem", None) or type(exc).__name__
+        raise MapError(_msg(name, f"not valid YAML{where}: {problem}")) from None
+    except (RecursionError, MemoryError):
+        raise MapError(_msg(name, "not valid YAML: nested too deeply")) from None
+    except Exception as exc:
+        raise MapError(_msg(name, f"not valid YAML: {_one_line(exc) or type(exc).__name__}")) from None
+    if not isinstance(meta, dict):
+        raise MapError(_msg(name, f"map YAML must be a mapping (key: value), got {type(meta).__name__}"))
+    return meta
+
+
+def load_map(path, *, resolution=None, origin=None, negate=None, occupied_thresh=None,
+             free_thresh=None, mode=None) -> OccupancyGrid:
+    """Load an occupancy grid from a ROS map_server YAML or an image file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A ``.yaml``/``.yml`` map_server description (keys ``image``,
+        ``resolution``, ``origin`` required; ``negate``, ``occupied_thresh``,
+        ``free_thresh``, ``mode`` optional; ``image`` relative to the YAML
+        file), or any image Pillow reads (PGM, PNG, ...).
+    resolution : float, optional
+        Metres per pixel; overrides the YAML. Images default to
+        :data:`DEFAULT_RESOLUTION` (0.05 m/px).
+    origin : (x, y[, yaw]), optional
+        Map-frame pose of the lower-left image corner, metres and radians;
+        overrides the YAML. Images default to ``(0, 0, 0)``.
+    negate : bool, optional
+        White means occupied. Default ``False``.
+    occupied_thresh, free_thresh : float, optional
+        Thresholds on ``p = (255 - v) / 255``; defaults 0.65 and 0.196.
+    mode : {'trinary', 'scale', 'raw'}, optional
+        map_server mode. ``scale`` is classified like ``trinary``; ``raw``
+        takes pixel values ``0..100`` as ROS values (others unknown).
+
+    Returns
+    -------
+    OccupancyGrid
+        ``cells`` (M, N) int8, ``gray`` the (M, N) uint8 image as read
+        (any mode converted to 8-bit gray: colour channels averaged,
+        16-bit values ``>> 8``; fully transparent pixels are ``UNKNOWN``).
+
+    Raises
+    ------
+    MapFileNotFoundError
+        The file, or the image a YAML names, does not exist.
+    MapFileError
+        A directory or unreadable file.
+    MapTooLargeError
+        More than :data:`MAX_CELLS` cells (checked from the image header).
+    MapError
+        Empty, corrupt, truncated or unreadable content; bad YAML.
+    ParameterError
+        Invalid resolution, origin, thresholds, negate or mode (from the
+        YAML or the arguments).
+    """
+    try:
+        p = Path(os.fspath(path))
+    except TypeError:
+        raise MapFileError(_msg(repr(path), "map path must be a str or os.PathLike")) from None
+    name = str(p)
+    if "\x00" in name:
+        raise MapFileError(_msg(repr(name), "map path contains a NUL byte"))
+
+    meta = {}
+    image_path = p
+    image_name = name
+    if p.suffix.lower() in _YAML_SUFFIXES:
+        meta = _read_yaml(p, name)
+        for key in ("image",) + (("resolution",) if resolution is None else ()) + \
+                   (("origin",) if origin is None else ()):
+            if key not in meta or meta[key] is None:
+                raise MapError(_msg(name, f"map YAML lacks the required key '{key}'"))
+        img = meta["image"]
+        if not isinstance(img, str) or not img.strip() or "\x00" in img:
+            raise MapError(_msg(name, f"'image' must be a file name, got {img!r}"))
+        image_path = Path(img)
+        if not image_path.is_absolute():
+            image_path = p.parent / image_path
+        image_name = str(image_path)
+        if not _exists(image_path):
+            raise MapFileNotFoundError(_msg(name, f"image '{img}' not found (looked for {image_name})"))
+
+    def pick(key, value, default):
+        if value is not None:
+            return value, "<argument>"
+        if key in meta and meta[key] is not None:
+            return meta[key], name
+        return default, name
+
+    val, where = pick("resolution", resolution, DEFAULT_RESOLUTION)
+    res = _as_resolution(where, val)
+    val, where = pick("origin", origin, (0.0, 0.0, 0.0))
+    org = _as_origin(where, val)
+    val, where = pick("negate", negate, False)
+    neg = _as_bool(where, "negate", val)
+    val, where = pick("mode", mode, "trinary")
+    mod = _as_mode(where, val)
+    occ_v, where_o = pick("occupied_thresh", occupied_thresh, OCCUPIED_THRESH)
+    free_v, where_f = pick("free_thresh", free_thresh, FREE_THRESH)
+    where = where_o if where_o == where_f else f"{name} (with arguments)"
+    occ, free = _check_thresholds(where, occ_v, free_v)
+
+    try:
+        gray, transparent = _read_image(image_path, image_name)
+    except (MapError, MapFileError) as exc:
+        if image_path is p:
+            raise
+        # name both files: the YAML and its image
+        raise type(exc)(_msg(name, f"image {exc}")) from None
+    cells = classify_gray(gray, negate=neg, occupied_thresh=occ, free_thresh=free,
+                          mode=mod, transparent=transparent)
+    return OccupancyGrid(cells, res, org, name, gray=gray)
+
+
+# --------------------------------------------------------------------------
+# Saving
+# --------------------------------------------------------------------------
+
+def pgm_bytes(gray) -> bytes:
+    """Binary (P5) PGM encoding of an (M, N) uint8 image, no comment line."""
+    g = np.ascontiguousarray(gray, dtype=np.uint8)
+    return b"P5\n%d %d\n255\n" % (g.shape[1], g.shape[0]) + g.tobytes()
+
+
+def _fmt_float(v: float) -> str:
+    return repr(float(v))
+
+
+def yaml_text(meta: dict) -> str:
+    """map_server YAML text for ``meta`` in a fixed key order (deterministic)."""
+    lines = [f"image: {meta['image']}"]
+    if "mode" in meta:
+        lines.append(f"mode: {meta['mode']}")
+    lines.append(f"resolution: {_fmt_float(meta['resolution'])}")
+    lines.append("origin: [" + ", ".join(_fmt_float(v) for v in meta["origin"]) + "]")
+    lines.append(f"negate: {int(meta.get('negate', 0))}")
+    lines.append(f"occupied_thresh: {_fmt_float(meta.get('occupied_thresh', OCCUPIED_THRESH))}")
+    lines.append(f"free_thresh: {_fmt_float(meta.get('free_thresh', FREE_THRESH))}")
+    return "\n".join(lines) + "\n"
+
+
+def _atomic_write(path: Path, data: bytes):
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+
+
+def save_map(grid_or_cells, path_stem, *, resolution=None, origin=None, mode: str = "trinary"):
+    """Write a map_server PGM + YAML pair, atomically.
+
+    Parameters
+    ----------
+    grid_or_cells : OccupancyGrid or (M, N) ndarray
+        A grid, ROS cell values (signed integers), a bool free mask, or a
+        ``uint8`` image that is written verbatim (e.g. a label image to be
+        read back with ``mode='raw'``).
+    path_stem : str or os.PathLike
+        Output path without suffix; ``<stem>.pgm`` and ``<stem>.yaml`` are
+        written (a ``.yaml``/``.yml``/``.pgm`` suffix is stripped).
+    resolution : float, optional
+        Metres per pixel; default the grid's, or 0.05.
+    origin : (x, y[, yaw]), optional
+        Lower-left corner pose; default the grid's, or ``(0, 0, 0)``.
+    mode : {'trinary', 'raw'}
+        ``trinary``: cells written as 254 free, 0 occupied, 205 unknown.
+        ``raw``: cell values ``0..100`` written as is, unknown as 255.
+        (``uint8`` input is always written verbatim.)
+
+    Returns
+    -------
+    pathlib.Path
+        The YAML file, loadable with :func:`load_map`.
+
+    Raises
+    ------
+    MapFileError
+        The directory does not exist or cannot be written. Each file is
+        written to a temporary file in the same directory and renamed into
+        place, so no half-written file is ever left.
+    """
+    stem = Path(os.fspath(path_stem))
+    if stem.suffix.lower() in _YAML_SUFFIXES + (".pgm",):
+        stem = stem.with_suffix("")
+    name = str(stem)
+    mode = _as_mode(name, mode)
+    if mode == "scale":
+        raise ParameterError(_msg(name, "save_map supports mode 'trinary' or 'raw', got 'scale'"))
+    if isinstance(grid_or_cells, OccupancyGrid):
+        grid = grid_or_cells
+        gray = None
+        cells = grid.cells
+        resolution = grid.resolution if resolution is None else resolution
+        origin = grid.origin if origin is None else origin
+    else:
+        try:
+            a = np.asarray(grid_or_cells)
+        except (TypeError, ValueError) as exc:
+            raise MapError(_msg(name, f"cannot convert {type(grid_or_cells).__name__} to an array: {exc}")) from None
+        if a.dtype == np.uint8 and a.ndim == 2 and a.size:
+            gray, cells = a, None
+        else:
+            gray, cells = None, from_array(a, source=name).cells
+    res = _as_resolution(name, DEFAULT_RESOLUTION if resolution is None else resolution)
+    org = _as_origin(name, (0.0, 0.0, 0.0) if origin is None else origin)
+    if gray is None:
+        if mode == "raw":
+            gray = np.where((cells >= 0) & (cells <= 100), cells, 255).astype(np.uint8)
+        else:
+            gray = np.full(cells.shape, GRAY_UNKNOWN, np.uint8)
+            gray[cells == FREE] = GRAY_FREE
+            gray[cells == OCCUPIED] = GRAY_OCCUPIED
+    pgm = stem.parent / (stem.name + ".pgm")
+    yml = stem.parent / (stem.name + ".yaml")
+    meta = {"image": pgm.name, "resolution": res, "origin": list(org), "negate": 0,
+            "occupied_thresh": OCCUPIED_THRESH, "free_thresh": FREE_THRESH}
+    if mode != "trinary":
+        meta["mode"] = mode
+    if not stem.parent.is_dir():
+        raise MapFileNotFoundError(_msg(name, f"output directory {str(stem.parent)!r} does not exist"))
+    try:
+        _atomic_write(pgm, pgm_bytes(gray))
+        _atomic_write(yml, yaml_text(meta).encode())
+    except OSError as exc:
+        raise MapFileError(_msg(name, f"cannot write map: {exc.strerror or exc}")) from None
+    return yml
