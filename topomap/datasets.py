@@ -66,6 +66,11 @@ class BenchmarkMap:
         Both images as 8-bit gray.
     resolution : float
         Metres per pixel (0.05 for the benchmark).
+    unfurnished_gray : (M, N) ndarray of uint8, optional
+        The map without furniture (``NAME.png``), the same array as
+        ``map_gray`` for the unfurnished variant. Extract true doors from it
+        in both variants (furniture next to a door line would otherwise
+        merge into the door's cell group). Defaults to ``map_gray``.
     """
 
     name: str
@@ -75,6 +80,11 @@ class BenchmarkMap:
     map_gray: np.ndarray = field(repr=False)
     gt_gray: np.ndarray = field(repr=False)
     resolution: float = BENCHMARK_RESOLUTION
+    unfurnished_gray: Optional[np.ndarray] = field(default=None, repr=False)
+
+    def __post_init__(self):
+        if self.unfurnished_gray is None:
+            object.__setattr__(self, "unfurnished_gray", self.map_gray)
 
     @property
     def scored(self) -> np.ndarray:
@@ -222,7 +232,16 @@ def load_benchmark(directory, *, variant: str = "unfurnished",
         if map_gray.shape != gt_gray.shape:
             raise MapError(f"{gt_path}: ground truth shape {gt_gray.shape} differs from map "
                            f"{map_path.name} shape {map_gray.shape}")
-        maps.append(BenchmarkMap(name, variant, map_path, gt_path, map_gray, gt_gray))
+        if variant == "unfurnished":
+            base = map_gray
+        else:
+            base_path = directory / (name + ".png")
+            base = read_gray(base_path) if base_path.is_file() else None
+            if base is not None and base.shape != map_gray.shape:
+                raise MapError(f"{base_path}: shape {base.shape} differs from "
+                               f"{map_path.name} shape {map_gray.shape}")
+        maps.append(BenchmarkMap(name, variant, map_path, gt_path, map_gray, gt_gray,
+                                 unfurnished_gray=base))
     if not maps:
         what = "no *_gt_segmentation.png files" if wanted is None else \
             f"none of the maps {sorted(wanted)}"

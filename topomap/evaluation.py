@@ -57,6 +57,7 @@ __all__ = [
     "true_adjacency",
     "room_adjacency_from_doors",
     "points_to_segment_distance",
+    "door_distance_matrix",
     "score_doors",
     "score_adjacency",
     "evaluate",
@@ -266,6 +267,12 @@ def gt_doors_from_images(map_gray, gt_gray, *, min_size: int = 3, min_rooms: int
         outside every room. Set to 0 to keep every group.
     room_min_size : int, optional
         ``min_size`` of the ground-truth rooms used for ``min_rooms``.
+
+    Notes
+    -----
+    For the furnished benchmark variant pass the *unfurnished* map: the
+    ground truth is drawn on it, and furniture touching a door line would
+    otherwise change the door's cell group.
 
     Returns
     -------
@@ -587,7 +594,7 @@ def score_adjacency(labels, gt_rooms, pred_edges, true_edges, *, scored=None,
 # --------------------------------------------------------------------------
 
 def evaluate(labels, map_gray, gt_gray, *, pred_doors=None, resolution: float = 0.05,
-             tol_m: float = 0.5, min_size: int = MIN_SIZE) -> dict:
+             tol_m: float = 0.5, min_size: int = MIN_SIZE, door_map_gray=None) -> dict:
     """All scores of one benchmark map.
 
     Parameters
@@ -605,6 +612,10 @@ def evaluate(labels, map_gray, gt_gray, *, pred_doors=None, resolution: float = 
         Door matching tolerance in metres.
     min_size : int, optional
         Size filter for segments and rooms (cells).
+    door_map_gray : (M, N) array_like of uint8, optional
+        Map the true doors are extracted from (default ``map_gray``). For the
+        furnished variant pass the unfurnished map
+        (:attr:`topomap.datasets.BenchmarkMap.unfurnished_gray`).
 
     Returns
     -------
@@ -621,7 +632,8 @@ def evaluate(labels, map_gray, gt_gray, *, pred_doors=None, resolution: float = 
     p, r = out["precision"], out["recall"]
     out["f1"] = 2 * p * r / (p + r) if p + r > 0 else 0.0
     if pred_doors is not None:
-        true_doors = gt_doors_from_images(map_gray, gt_gray, room_min_size=min_size)
+        dmap = map_gray if door_map_gray is None else np.asarray(door_map_gray)
+        true_doors = gt_doors_from_images(dmap, gt_gray, room_min_size=min_size)
         d = score_doors(pred_doors, true_doors, resolution=resolution, tol_m=tol_m)
         for k in ("precision", "recall", "f1", "tp", "fp", "fn"):
             out[f"door_{k}"] = d[k]
