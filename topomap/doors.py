@@ -1,0 +1,249 @@
+"""Doors: narrow passages of free space that meet protruding parts of walls.
+
+Steps 2, 4 and 5 of the paper (Mora, Prados & Barber): clearance minima on the
+free-space skeleton graph give candidate passages; rays perpendicular to each
+passage give its intersection points (IP) with the walls; endpoints (EP) of
+the occupied-space skeleton graphs mark protruding wall parts; the map's own
+threshold (twice the mean wall half-thickness) decides which candidates are
+doors.
+
+All coordinates here are pixel ``(row, col)`` floats; metres come from the
+grid's resolution.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["Candidate", "Door", "passage_candidates", "intersection_points",
+           "wall_threshold", "select_doors", "segment_crosses"]
+
+
+@dataclass
+class Candidate:
+    """A narrow passage on one free-space skeleton branch.
+
+    Attributes
+    ----------
+    edge : tuple
+        ``(u, v, key)`` of the branch in the free-space graph.
+    centroid : (2,) ndarray
+        Pixel ``(row, col)`` of the passage's centre.
+    direction : (2,) ndarray
+        Unit vector (rows, cols) along the skeleton at the passage.
+    radius : float
+        Clearance at the passage, pixels.
+    ip1, ip2 : (2,) ndarray or None
+        Intersection points with the walls on either side (pixels).
+    """
+
+    edge: tuple
+    centroid: np.ndarray
+    direction: np.ndarray
+    radius: float
+    ip1: np.ndarray | None = None
+    ip2: np.ndarray | None = None
+    status: str = "candidate"
+    ep1: np.ndarray | None = None
+    ep2: np.ndarray | None = None
+
+
+@dataclass
+class Door:
+    """A door: the segment between two wall points, in pixels and metres.
+
+    Attributes
+    ----------
+    id : int
+        Door index (0-based, deterministic).
+    p1, p2 : tuple of float
+        End points, pixel ``(row, col)``.
+    xy1, xy2 : tuple of float
+        End points in map-frame metres ``(x, y)``.
+    width : float
+        Door width, metres (distance between the end points).
+    rooms : tuple of int
+        The two room labels the door joins (``(0, 0)`` until rooms exist).
+    """
+
+    id: int
+    p1: tuple
+    p2: tuple
+    xy1: tuple = (float("nan"), float("nan"))
+    xy2: tuple = (float("nan"), float("nan"))
+    width: float = float("nan")
+    rooms: tuple = (0, 0)
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def midpoint(self):
+        """Door midpoint in map-frame metres ``(x, y)``."""
+        return ((self.xy1[0] + self.xy2[0]) / 2, (self.xy1[1] + self.xy2[1]) / 2)
+
+    @property
+    def segment(self):
+        """``((r1, c1), (r2, c2))`` in pixels."""
+        return (tuple(self.p1), tuple(self.p2))
+
+
+def passage_candidates(G, *, min_branch_px: float = 10, margin_px: int = 2):
+    """Clearance minima on every branch of the free-space skeleton graph.
+
+    For each branch of at least ``min_branch_px`` pixels (the paper: 10), the
+    pixels whose clearance equals the branch minimum are taken together with
+    ``margin_px`` (2) neighbours on each side along the branch; each
+    resulting run is one candidate, with its centroid and orientation (the
+    principal axis of its pixels).
+
+    Parameters
+    ----------
+    G : networkx.MultiGraph
+        Free-space skeleton graph (:func:`topomap.skeleton.skeleton_graph`)
+        with ``radius`` along edges.
+
+    Returns
+    -------
+    list of Candidate
+    """
+    res = G.graph.get("resolution", 1.0)
+    out = []
+    for u, v, k, d in sorted(G.edges(keys=True, data=True), key=lambda e: (e[0], e[1], e[2])):
+        path = d["path"]
+        if path.shape[0] < min_branch_px:
+            continue
+        rad = d["radius"] / res
+        # ignore the node pixels at both ends: a minimum there belongs to the junction
+        inner = rad[1:-1] if rad.size > 2 else rad
+        m = inner.min()
+        hit = np.zeros(rad.size, bool)
+        sel = np.flatnonzero(np.abs(rad - m) < 1e-6)
+        sel = sel[(sel > 0) & (sel < rad.size - 1)] if rad.size > 2 else sel
+        for off in range(-margin_px, margin_px + 1):
+            j = np.clip(sel + off, 0, rad.size - 1)
+            hit[j] = True
+        # runs of consecutive selected pixels
+        idx = np.flatnonzero(hit)
+        runs = np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1)
+        for run in runs:
+            pts = path[run].astype(float)
+            c = pts.mean(axis=0)
+            out.append(Candidate(edge=(u, v, k), centroid=c, direction=_principal(pts, path, run),
+                                 radius=float(rad[run].min())))
+    return out
+
+
+def _principal(pts, path, run):
+    if pts.shape[0] >= 2:
+        q = pts - pts.mean(axis=0)
+        w, vec = np.linalg.eigh(q.T @ q)
+        dvec = vec[:, -1]
+        if w[-1] > 1e-9:
+            return dvec / np.linalg.norm(dvec)
+    # fall back on the neighbours along the path
+    i = int(run[0])
+    a = path[max(i - 2, 0)].astype(float)
+    b = path[min(i + 2, path.shape[0] - 1)].astype(float)
+    dvec = b - a
+    n = np.linalg.norm(dvec)
+    return dvec / n if n else np.array([1.0, 0.0])
+
+
+def intersection_points(candidates, obstacle: np.ndarray, *, max_px: float):
+    """Set ``ip1``, ``ip2``: the first obstacle cell along each perpendicular ray.
+
+    Parameters
+    ----------
+    candidates : list of Candidate
+    obstacle : (M, N) ndarray of bool
+        Cells that stop a ray (occupied, and unknown: everything not free).
+    max_px : float
+        Longest ray, pixels. A ray that leaves the map or meets no obstacle
+        within it leaves the candidate without intersection points.
+    """
+    H, W = obstacle.shape
+    steps = np.arange(0.5, max_px, 0.5)
+    for cand in candidates:
+        nrm = np.array([-cand.direction[1], cand.direction[0]])
+        ips = []
+        for sgn in (1.0, -1.0):
+            pts = cand.centroid[None, :] + sgn * steps[:, None] * nrm[None, :]
+            rc = np.rint(pts).astype(int)
+            inside = (rc[:, 0] >= 0) & (rc[:, 0] < H) & (rc[:, 1] >= 0) & (rc[:, 1] < W)
+            stop = np.flatnonzero(~inside | obstacle[np.clip(rc[:, 0], 0, H - 1), np.clip(rc[:, 1], 0, W - 1)])
+            if stop.size == 0 or not inside[stop[0]]:
+                ips.append(None)
+            else:
+                ips.append(rc[stop[0]].astype(float))
+        cand.ip1, cand.ip2 = ips
+    return candidates
+
+
+def wall_threshold(occ_dist: np.ndarray, occ_skeleton_pixels: np.ndarray) -> float:
+    """The paper's map-dependent threshold, pixels: 2 × mean distance-to-free
+    over the occupied-space skeleton pixels (the mean wall thickness)."""
+    if occ_skeleton_pixels.shape[0] == 0:
+        return 0.0
+    vals = occ_dist[occ_skeleton_pixels[:, 0], occ_skeleton_pixels[:, 1]]
+    return float(2.0 * vals.mean())
+
+
+def segment_crosses(lines, p, q, *, trim_px: float = 1.5) -> bool:
+    """Whether segment ``p``–``q`` (pixels), shortened by ``trim_px`` at both
+    ends, intersects the shapely geometry ``lines`` (in (col, row) order)."""
+    from shapely.geometry import LineString
+
+    p = np.asarray(p, float)
+    q = np.asarray(q, float)
+    d = q - p
+    n = np.linalg.norm(d)
+    if n <= 2 * trim_px:
+        return False
+    a = p + d / n * trim_px
+    b = q - d / n * trim_px
+    seg = LineString([(a[1], a[0]), (b[1], b[0])])
+    return bool(lines.intersects(seg))
+
+
+def select_doors(candidates, endpoints: np.ndarray, threshold: float, occ_lines):
+    """Apply the paper's door conditions; returns the accepted candidates.
+
+    For each candidate with both intersection points, EP1 and EP2 are the
+    endpoints nearest to IP1 and IP2. It is a door when
+    ``d(IP1, EP1) <= thr``, ``d(IP2, EP2) <= thr``, the distance between the
+    centres of IP1–IP2 and EP1–EP2 is ``<= thr / 2`` (the paper's Figure 8;
+    its printed third condition repeats IP1/EP1), and neither segment crosses
+    an occupied-space skeleton. Every candidate gets a ``status`` saying why
+    it was kept or refused.
+    """
+    kept = []
+    if endpoints.shape[0] == 0:
+        for c in candidates:
+            c.status = "no endpoints"
+        return kept
+    from scipy.spatial import cKDTree
+
+    tree = cKDTree(endpoints)
+    for c in candidates:
+        if c.ip1 is None or c.ip2 is None:
+            c.status = "no wall on both sides"
+            continue
+        d1, i1 = tree.query(c.ip1)
+        d2, i2 = tree.query(c.ip2)
+        c.ep1, c.ep2 = endpoints[i1], endpoints[i2]
+        if d1 > threshold or d2 > threshold:
+            c.status = "no protruding wall near"
+            continue
+        ipc = (c.ip1 + c.ip2) / 2
+        epc = (c.ep1 + c.ep2) / 2
+        if np.linalg.norm(ipc - epc) > threshold / 2:
+            c.status = "centres apart"
+            continue
+        if occ_lines is not None and (segment_crosses(occ_lines, c.ip1, c.ip2)
+                                      or segment_crosses(occ_lines, c.ep1, c.ep2)):
+            c.status = "crosses a wall skeleton"
+            continue
+        c.status = "door"
+        kept.append(c)
+    return kept

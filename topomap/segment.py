@@ -1,0 +1,348 @@
+"""Segmentation pipelines and their common result.
+
+``segment(grid, method=...)`` runs one of the registered methods and returns a
+:class:`Segmentation`: the label image, the doors, the skeleton graphs and the
+per-stage timings. Methods:
+
+``"paper"``
+    The method of Mora, Prados & Barber (ICAART 2023), step by step:
+    :func:`segment_paper`.
+``"watershed"``, ``"morphological"``, ``"distance"``, ``"voronoi"``
+    The comparison methods of :mod:`topomap.baselines`.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from typing import Optional
+
+import numpy as np
+
+from .errors import ParameterError
+from .io import OccupancyGrid
+
+log = logging.getLogger("topomap")
+
+__all__ = ["Segmentation", "segment", "segment_paper", "METHODS", "DEFAULT_METHOD"]
+
+
+@dataclass
+class Segmentation:
+    """The result of a segmentation.
+
+    Attributes
+    ----------
+    grid : OccupancyGrid
+        The input map.
+    labels : (M, N) ndarray of int32
+        Room label per cell: ``1..N`` on every free cell, ``0`` elsewhere.
+    doors : list of Door
+        Doors between two different rooms (see :class:`topomap.doors.Door`).
+    method : str
+        Name of the method that produced the result.
+    params : dict
+        The method's parameters (metres where they are lengths).
+    threshold : float or None
+        The map's own door threshold (metres), for the Voronoi methods.
+    free_graph, occupied_graph : networkx.MultiGraph or None
+        Skeleton graphs of free and occupied space (pixel paths, metres).
+    candidates : list
+        Every narrow-passage candidate with the reason it was kept or not.
+    timings : dict
+        Seconds per pipeline stage.
+    """
+
+    grid: OccupancyGrid
+    labels: np.ndarray
+    doors: list
+    method: str
+    params: dict = field(default_factory=dict)
+    threshold: Optional[float] = None
+    free_graph: object = None
+    occupied_graph: object = None
+    candidates: list = field(default_factory=list)
+    timings: dict = field(default_factory=dict)
+    _room_graph: object = field(default=None, repr=False)
+
+    @property
+    def n_rooms(self) -> int:
+        """Number of rooms (labels ``1..n_rooms``)."""
+        return int(self.labels.max()) if self.labels.size else 0
+
+    @property
+    def room_graph(self):
+        """The room–door graph (:func:`topomap.roomgraph.room_graph`), built once."""
+        if self._room_graph is None:
+            from .roomgraph import room_graph
+
+            t = time.perf_counter()
+            self._room_graph = room_graph(self)
+            self.timings["room_graph"] = time.perf_counter() - t
+        return self._room_graph
+
+    def room_at(self, x: float, y: float) -> int:
+        """Room label at map-frame point ``(x, y)`` metres (0 = not in a room)."""
+        r, c = self.grid.world_to_pixel(x, y)
+        r, c = int(np.rint(r)), int(np.rint(c))
+        if 0 <= r < self.labels.shape[0] and 0 <= c < self.labels.shape[1]:
+            return int(self.labels[r, c])
+        return 0
+
+
+class _Timer:
+    def __init__(self):
+        self.t = {}
+
+    @contextmanager
+    def __call__(self, name):
+        t0 = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.t[name] = self.t.get(name, 0.0) + time.perf_counter() - t0
+
+
+def _px(metres: float, resolution: float, name: str, minimum: int = 0) -> int:
+    try:
+        m = float(metres)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} must be a length in metres, got {metres!r}") from None
+    if not np.isfinite(m) or m < 0:
+        raise ParameterError(f"{name} must be a length >= 0 m, got {metres!r}")
+    return max(int(round(m / resolution)), minimum)
+
+
+def _disk(r: int) -> np.ndarray:
+    y, x = np.ogrid[-r:r + 1, -r:r + 1]
+    return (x * x + y * y <= r * r).astype(np.uint8)
+
+
+def segment_paper(grid: OccupancyGrid, *, erosion_radius: float = 0.10, median_size: float = 0.25,
+                  dilation_size: float = 0.15, wall_band: float = 0.5,
+                  min_free_branch: float = 0.5, min_occupied_branch: float = 1.0,
+                  max_door_search: float = 3.0) -> Segmentation:
+    """Segment ``grid`` with the paper's method (Mora, Prados & Barber).
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+    erosion_radius : float
+        Radius (m) of the disk free space is eroded with before its skeleton
+        is taken. 0.10 m (2 px at 0.05 m/px) removes free-space speckle and
+        one-cell slits, which would otherwise add skeleton branches; it is
+        far below any door's half width.
+    median_size : float
+        Side (m) of the median filter that rounds corners after the erosion.
+        0.25 m (5 px): the smallest window that rounds a right-angled corner
+        by more than one cell.
+    dilation_size : float
+        Side (m) of the square occupied space is dilated with. 0.15 m (3 px)
+        closes one-cell gaps in scanned walls without rounding corners.
+    wall_band : float
+        Occupied cells farther than this (m) from free space are left out of
+        the occupied-space analysis: what lies beyond is the outside of the
+        building (or solid rock), not wall shape. 0.5 m keeps any wall up to
+        1 m thick whole.
+    min_free_branch : float
+        Free-space branches shorter than this (m) are not analysed: the
+        paper's 10 px at 0.05 m/px.
+    min_occupied_branch : float
+        Occupied-space end branches shorter than this (m) are pruned: the
+        paper's 20 px at 0.05 m/px.
+    max_door_search : float
+        Longest ray (m) searched for a wall on either side of a passage.
+
+    Returns
+    -------
+    Segmentation
+    """
+    import cv2
+    from shapely.geometry import MultiLineString
+
+    from . import doors as D
+    from . import skeleton as S
+    from ._fast import edt
+
+    res = grid.resolution
+    T = _Timer()
+    params = dict(erosion_radius=erosion_radius, median_size=median_size, dilation_size=dilation_size,
+                  wall_band=wall_band, min_free_branch=min_free_branch,
+                  min_occupied_branch=min_occupied_branch, max_door_search=max_door_search)
+    er = _px(erosion_radius, res, "erosion_radius")
+    med = _px(median_size, res, "median_size")
+    dil = _px(dilation_size, res, "dilation_size")
+    band = _px(wall_band, res, "wall_band", 1)
+    free = grid.free
+    with T("preprocess"):
+        f = free.astype(np.uint8)
+        if er > 0:
+            f = cv2.erode(f, _disk(er), borderType=cv2.BORDER_CONSTANT, borderValue=0)
+        if med >= 3:
+            k = med if med % 2 else med + 1
+            f = cv2.medianBlur(f * 255, k) > 127
+        else:
+            f = f.astype(bool)
+        nonfree = ~free
+        d_free = edt(free)  # clearance of free cells, px
+        occ = grid.occupied & (d_free <= 0)  # occupied cells
+        dist_out = edt(nonfree)  # distance of non-free cells to free space
+        occ = occ & (dist_out <= band)
+        if dil > 1:
+            occ = cv2.dilate(occ.astype(np.uint8), np.ones((dil, dil), np.uint8)) > 0
+    with T("skeletons"):
+        fs = S.skeletonize(f)
+        os_ = S.skeletonize(occ)
+    with T("graphs"):
+        Gf = S.skeleton_graph(fs, radius=d_free, resolution=res, to_world=grid.pixel_to_world)
+        Gf = S.prune_spurs(Gf, min_free_branch)
+        d_occ = edt(occ)
+        Go = S.skeleton_graph(os_, radius=d_occ, resolution=res, to_world=grid.pixel_to_world)
+        Go = S.prune_spurs(Go, min_occupied_branch)
+    with T("doors"):
+        thr_px = D.wall_threshold(d_occ, S.graph_pixels(Go))
+        cands = D.passage_candidates(Gf, min_branch_px=min_free_branch / res)
+        D.intersection_points(cands, nonfree, max_px=max_door_search / res)
+        paths = [d["path"][:, ::-1].astype(float) for _, _, d in Go.edges(data=True) if d["path"].shape[0] >= 2]
+        lines = MultiLineString([p.tolist() for p in paths]) if paths else None
+        kept = D.select_doors(cands, S.graph_endpoints(Go), thr_px, lines)
+        segs = [(c.ip1, c.ip2) for c in kept]
+    with T("rooms"):
+        labels, door_objs = cut_rooms(grid, segs)
+    seg = Segmentation(grid=grid, labels=labels, doors=door_objs, method="paper", params=params,
+                       threshold=thr_px * res, free_graph=Gf, occupied_graph=Go,
+                       candidates=cands, timings=T.t)
+    log.info("%s: %d rooms, %d doors, threshold %.3f m (%d candidates)", grid.name, seg.n_rooms,
+             len(door_objs), thr_px * res, len(cands))
+    return seg
+
+
+def _line_px(p, q, shape):
+    from skimage.draw import line
+
+    H, W = shape
+    r0, c0 = np.clip(np.rint(p), 0, [H - 1, W - 1]).astype(int)
+    r1, c1 = np.clip(np.rint(q), 0, [H - 1, W - 1]).astype(int)
+    return line(r0, c0, r1, c1)
+
+
+def cut_rooms(grid: OccupancyGrid, segments):
+    """Cut free space along door segments and label the pieces.
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+    segments : list of ((r1, c1), (r2, c2))
+        Door segments in pixels.
+
+    Returns
+    -------
+    labels : (M, N) ndarray of int32
+        4-connected pieces of free space between the cuts, each a room
+        (``1..N``, deterministic order); the cut cells themselves and any free
+        cell the pieces miss are given to the nearest room.
+    doors : list of Door
+        See :func:`doors_between_rooms`.
+    """
+    from ._fast import label as cc_label
+    from .rooms import fill_unlabeled
+
+    free = grid.free
+    cut = np.zeros_like(free)
+    for p, q in segments:
+        cut[_line_px(p, q, free.shape)] = True
+    pieces, _ = cc_label(free & ~cut, 4)
+    labels = fill_unlabeled(pieces, free)
+    return labels, doors_between_rooms(grid, labels, segments)
+
+
+_NR = np.array([-1, -1, -1, 0, 0, 1, 1, 1])
+_NC = np.array([-1, 0, 1, -1, 1, -1, 0, 1])
+
+
+def doors_between_rooms(grid: OccupancyGrid, labels: np.ndarray, segments) -> list:
+    """The segments that separate two different rooms, as :class:`Door` objects.
+
+    A segment's rooms are the two labels most frequent among the 8-neighbours
+    of its pixels; a segment with fewer than two labels around it separates
+    nothing and is dropped, and so is a repeat of a kept segment.
+    """
+    from .doors import Door
+
+    H, W = labels.shape
+    doors, seen = [], set()
+    for p, q in segments:
+        rr, cc = _line_px(p, q, labels.shape)
+        labs = labels[np.clip(rr[:, None] + _NR, 0, H - 1), np.clip(cc[:, None] + _NC, 0, W - 1)].ravel()
+        vals, counts = np.unique(labs[labs > 0], return_counts=True)
+        if vals.size < 2:
+            continue
+        a, b = sorted(int(v) for v in vals[np.argsort(-counts, kind="stable")[:2]])
+        p = tuple(float(v) for v in p)
+        q = tuple(float(v) for v in q)
+        key = (a, b) + tuple(int(round(v)) for v in p + q)
+        if key in seen:
+            continue
+        seen.add(key)
+        x1, y1 = grid.pixel_to_world(*p)
+        x2, y2 = grid.pixel_to_world(*q)
+        doors.append(Door(id=len(doors), p1=p, p2=q, xy1=(float(x1), float(y1)), xy2=(float(x2), float(y2)),
+                          width=float(np.hypot(p[0] - q[0], p[1] - q[1]) * grid.resolution), rooms=(a, b)))
+    return doors
+
+
+def _baseline(name):
+    def run(grid: OccupancyGrid, **params) -> Segmentation:
+        from . import baselines
+        from .rooms import fill_unlabeled
+
+        T = _Timer()
+        with T("segment"):
+            labels, segs = getattr(baselines, name)(grid.free, resolution=grid.resolution, **params)
+        with T("rooms"):
+            labels = fill_unlabeled(labels, grid.free)
+            doors = doors_between_rooms(grid, labels, segs)
+        return Segmentation(grid=grid, labels=labels, doors=doors, method=name, params=params, timings=T.t)
+
+    run.__name__ = f"segment_{name}"
+    run.__doc__ = f"Segment with :func:`topomap.baselines.{name}` and wrap the result."
+    return run
+
+
+METHODS = {
+    "paper": segment_paper,
+    "watershed": _baseline("watershed"),
+    "morphological": _baseline("morphological"),
+    "distance": _baseline("distance"),
+    "voronoi": _baseline("voronoi"),
+}
+DEFAULT_METHOD = "paper"
+
+
+def segment(grid: OccupancyGrid, *, method: str = None, **params) -> Segmentation:
+    """Segment an occupancy grid into rooms and doors.
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+        The map (see :func:`topomap.io.load_map`).
+    method : str, optional
+        One of :data:`METHODS` (default :data:`DEFAULT_METHOD`).
+    **params
+        Keyword options of the method, lengths in metres.
+
+    Returns
+    -------
+    Segmentation
+    """
+    method = method or DEFAULT_METHOD
+    if method not in METHODS:
+        raise ParameterError(f"unknown method {method!r}; choose from {', '.join(sorted(METHODS))}")
+    if not isinstance(grid, OccupancyGrid):
+        raise ParameterError(f"segment() needs an OccupancyGrid (see topomap.load_map), got {type(grid).__name__}")
+    t0 = time.perf_counter()
+    seg = METHODS[method](grid, **params)
+    seg.timings["total"] = time.perf_counter() - t0
+    return seg
