@@ -13,6 +13,7 @@ import math
 import os
 import re
 import tempfile
+import threading
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -445,26 +446,55 @@ def _check_file(name, path: Path, what="map file"):
         raise MapFileError(_msg(name, f"{what} is not readable (permission denied)"))
 
 
+_PIL_LIMIT_LOCK = threading.Lock()
+
+
+def _open_decode(path: Path, name: str, lift_pillow_limit: bool = False):
+    from PIL import Image
+
+    if lift_pillow_limit:
+        with _PIL_LIMIT_LOCK:
+            saved = Image.MAX_IMAGE_PIXELS
+            Image.MAX_IMAGE_PIXELS = None
+            try:
+                img = Image.open(path)
+            finally:
+                Image.MAX_IMAGE_PIXELS = saved
+    else:
+        img = Image.open(path)
+    with img:
+        cols, rows = img.size
+        _check_size(name, rows, cols)
+        if rows == 0 or cols == 0:
+            raise MapError(_msg(name, f"image has zero size ({cols} x {rows} px)"))
+        img.load()
+        return _to_gray(name, img)
+
+
 def _read_image(path: Path, name: str):
-    """Read any Pillow image as ``(gray uint8 (M, N), transparent or None)``."""
+    """Read any Pillow image as ``(gray uint8 (M, N), transparent or None)``.
+
+    The size limit is :data:`MAX_CELLS`, checked from the header. Pillow's
+    own decompression-bomb check is silenced (warning) or turned into
+    :class:`MapTooLargeError` (error) when the image also exceeds
+    ``MAX_CELLS``; an image within ``MAX_CELLS`` is decoded regardless.
+    """
     from PIL import Image, UnidentifiedImageError
 
     _check_file(name, path, "image file")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", Image.DecompressionBombWarning)
         try:
-            with Image.open(path) as img:
-                cols, rows = img.size
-                _check_size(name, rows, cols)
-                if rows == 0 or cols == 0:
-                    raise MapError(_msg(name, f"image has zero size ({cols} x {rows} px)"))
-                img.load()
-                return _to_gray(name, img)
-        except Image.DecompressionBombError as exc:
-            m = re.search(r"\((\d+) pixels\)", str(exc))
-            size = f"{int(m.group(1)):,} cells" if m else "too many cells"
-            raise MapTooLargeError(_msg(
-                name, f"image is {size}, more than topomap.io.MAX_CELLS = {MAX_CELLS:,}")) from None
+            try:
+                return _open_decode(path, name)
+            except Image.DecompressionBombError as exc:
+                m = re.search(r"\((\d+) pixels\)", str(exc))
+                count = int(m.group(1)) if m else None
+                if count is None or count > MAX_CELLS:
+                    size = f"{count:,} cells" if count is not None else "too many cells"
+                    raise MapTooLargeError(_msg(
+                        name, f"image is {size}, more than topomap.io.MAX_CELLS = {MAX_CELLS:,}")) from None
+                return _open_decode(path, name, lift_pillow_limit=True)
         except (MapError, MapFileError):
             raise
         except UnidentifiedImageError:

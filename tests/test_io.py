@@ -1,0 +1,500 @@
+"""Tests of topomap.io: loading, saving, classification and error messages."""
+
+import os
+import re
+import struct
+import zlib
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from topomap import io as tio
+from topomap.errors import (
+    MapError,
+    MapFileError,
+    MapFileNotFoundError,
+    MapTooLargeError,
+    ParameterError,
+    TopomapError,
+)
+from topomap.io import FREE, OCCUPIED, UNKNOWN, OccupancyGrid, from_array, load_map, save_map
+
+GRAY3 = np.array([[0, 254, 205], [254, 0, 205]], np.uint8)
+CELLS3 = np.array([[OCCUPIED, FREE, UNKNOWN], [FREE, OCCUPIED, UNKNOWN]], np.int8)
+
+
+def write_pgm(path, gray):
+    path.write_bytes(tio.pgm_bytes(gray))
+    return path
+
+
+def write_yaml(path, text):
+    path.write_text(text)
+    return path
+
+
+def good_yaml(image="map.pgm", **over):
+    meta = {"image": image, "resolution": "0.05", "origin": "[1.0, 2.0, 0.0]", "negate": "0",
+            "occupied_thresh": "0.65", "free_thresh": "0.196"}
+    meta.update({k: v for k, v in over.items()})
+    return "".join(f"{k}: {v}\n" for k, v in meta.items() if v is not None)
+
+
+def assert_one_line(excinfo, fname):
+    msg = str(excinfo.value)
+    assert "\n" not in msg and "\r" not in msg, msg
+    assert fname in msg, msg
+    return msg
+
+
+@pytest.fixture
+def mapdir(tmp_path):
+    write_pgm(tmp_path / "map.pgm", GRAY3)
+    return tmp_path
+
+
+# --------------------------------------------------------------------------
+# Bad files
+# --------------------------------------------------------------------------
+
+def _truncated_png(tmp):
+    p = tmp / "trunc.png"
+    Image.fromarray(np.full((50, 60), 254, np.uint8)).save(tmp / "full.png")
+    data = (tmp / "full.png").read_bytes()
+    p.write_bytes(data[: len(data) // 2])
+    return p
+
+
+def _zero_size_pgm(tmp):
+    p = tmp / "zero.pgm"
+    p.write_bytes(b"P5\n0 0\n255\n")
+    return p
+
+
+BAD_FILES = [
+    ("missing.pgm", lambda t: t / "missing.pgm", MapFileNotFoundError, "not found"),
+    ("missing.yaml", lambda t: t / "missing.yaml", MapFileNotFoundError, "not found"),
+    ("adir.png", lambda t: (t / "adir.png").mkdir() or t / "adir.png", MapFileError, "directory"),
+    ("empty.pgm", lambda t: (t / "empty.pgm").write_bytes(b"") and None or t / "empty.pgm",
+     MapError, "empty"),
+    ("empty.yaml", lambda t: (t / "empty.yaml").write_bytes(b"") and None or t / "empty.yaml",
+     MapError, "empty"),
+    ("text.png", lambda t: write_yaml(t / "text.png", "hello, I am text\n"), MapError, "not an image"),
+    ("trunc.png", _truncated_png, MapError, "truncated|cannot decode"),
+    ("zero.pgm", _zero_size_pgm, MapError, "zero size|cannot decode|not an image"),
+    ("notyaml.yaml", lambda t: write_yaml(t / "notyaml.yaml", "image: [unclosed\n  - : :\n"),
+     MapError, "not valid YAML"),
+    ("list.yaml", lambda t: write_yaml(t / "list.yaml", "- 1\n- 2\n"), MapError, "mapping"),
+    ("scalar.yml", lambda t: write_yaml(t / "scalar.yml", "just a string\n"), MapError, "mapping"),
+    ("binary.yaml", lambda t: (t / "binary.yaml").write_bytes(b"\xff\xfe\x00\x81garbage")
+     and None or t / "binary.yaml", MapError, "not valid YAML"),
+]
+
+
+@pytest.mark.parametrize("fname, make, exc, pattern", BAD_FILES, ids=[b[0] for b in BAD_FILES])
+def test_bad_files(tmp_path, fname, make, exc, pattern):
+    path = make(tmp_path)
+    with pytest.raises(exc, match=pattern) as ei:
+        load_map(path)
+    assert_one_line(ei, fname)
+    assert isinstance(ei.value, TopomapError)
+
+
+def test_missing_is_file_not_found(tmp_path):
+    with pytest.raises(FileNotFoundError):
+        load_map(tmp_path / "nope.png")
+    with pytest.raises(OSError):
+        load_map(tmp_path / "nope.png")
+
+
+BAD_YAML = [
+    ("no-image", {"image": None}, MapError, "'image'"),
+    ("no-resolution", {"resolution": None}, MapError, "'resolution'"),
+    ("no-origin", {"origin": None}, MapError, "'origin'"),
+    ("res-abc", {"resolution": "abc"}, ParameterError, "resolution must be a number.*abc"),
+    ("res-zero", {"resolution": "0"}, ParameterError, "resolution must be > 0"),
+    ("res-neg", {"resolution": "-0.05"}, ParameterError, "resolution must be > 0"),
+    ("res-nan", {"resolution": ".nan"}, ParameterError, "resolution must be finite"),
+    ("res-inf", {"resolution": ".inf"}, ParameterError, "resolution must be finite"),
+    ("res-list", {"resolution": "[1, 2]"}, ParameterError, "resolution"),
+    ("res-bool", {"resolution": "true"}, ParameterError, "resolution"),
+    ("origin-short", {"origin": "[1]"}, ParameterError, r"origin.*\[1\]"),
+    ("origin-long", {"origin": "[1, 2, 3, 4]"}, ParameterError, "origin"),
+    ("origin-str", {"origin": "here"}, ParameterError, "origin"),
+    ("origin-nan", {"origin": "[.nan, 0, 0]"}, ParameterError, "origin"),
+    ("origin-mixed", {"origin": "[1, abc, 0]"}, ParameterError, "origin"),
+    ("image-missing", {"image": "nothere.pgm"}, MapFileNotFoundError, "nothere.pgm"),
+    ("image-number", {"image": "42"}, MapError, "image"),
+    ("image-list", {"image": "[a, b]"}, MapError, "image"),
+    ("image-dir", {"image": "."}, MapFileError, "directory"),
+    ("occ-big", {"occupied_thresh": "1.5"}, ParameterError, r"occupied_thresh must be in \[0, 1\]"),
+    ("free-neg", {"free_thresh": "-0.1"}, ParameterError, r"free_thresh must be in \[0, 1\]"),
+    ("free-ge-occ", {"free_thresh": "0.7"}, ParameterError, "free_thresh .* must be < occupied_thresh"),
+    ("thresh-str", {"occupied_thresh": "high"}, ParameterError, "occupied_thresh must be a number"),
+    ("negate-2", {"negate": "2"}, ParameterError, "negate must be 0 or 1"),
+    ("mode-bad", {"mode": "fancy"}, ParameterError, "mode must be one of"),
+]
+
+
+@pytest.mark.parametrize("case, over, exc, pattern", BAD_YAML, ids=[b[0] for b in BAD_YAML])
+def test_bad_yaml(mapdir, case, over, exc, pattern):
+    path = write_yaml(mapdir / f"{case}.yaml", good_yaml(**over))
+    with pytest.raises(exc, match=pattern) as ei:
+        load_map(path)
+    assert_one_line(ei, f"{case}.yaml")
+
+
+def test_yaml_image_not_an_image(mapdir):
+    write_yaml(mapdir / "junk.pgm", "not a picture\n")
+    path = write_yaml(mapdir / "m.yaml", good_yaml(image="junk.pgm"))
+    with pytest.raises(MapError, match="not an image") as ei:
+        load_map(path)
+    msg = assert_one_line(ei, "m.yaml")
+    assert "junk.pgm" in msg
+
+
+@pytest.mark.parametrize("kwargs, pattern", [
+    ({"resolution": 0}, "resolution must be > 0"),
+    ({"resolution": float("nan")}, "resolution must be finite"),
+    ({"resolution": "x"}, "resolution must be a number"),
+    ({"origin": (1,)}, "origin"),
+    ({"occupied_thresh": 0.1}, "free_thresh .* must be < occupied_thresh"),
+    ({"free_thresh": 2}, r"free_thresh must be in \[0, 1\]"),
+    ({"mode": 3}, "mode must be one of"),
+    ({"negate": "maybe"}, "negate must be 0 or 1"),
+])
+def test_bad_keyword_arguments(mapdir, kwargs, pattern):
+    with pytest.raises(ParameterError, match=pattern) as ei:
+        load_map(mapdir / "map.pgm", **kwargs)
+    assert "\n" not in str(ei.value)
+
+
+def test_too_large_checked_from_header(tmp_path, monkeypatch):
+    # header claims 30000 x 20000 but the data is tiny: refused before decoding
+    p = tmp_path / "huge.pgm"
+    p.write_bytes(b"P5\n30000 20000\n255\n" + b"\x00" * 100)
+    with pytest.raises(MapTooLargeError, match="600,000,000 cells") as ei:
+        load_map(p)
+    assert_one_line(ei, "huge.pgm")
+    p = tmp_path / "big.pgm"
+    p.write_bytes(b"P5\n3000 2000\n255\n" + b"\x00" * 100)
+    monkeypatch.setattr(tio, "MAX_CELLS", 1_000_000)
+    with pytest.raises(MapTooLargeError, match="3000 x 2000 px = 6,000,000 cells") as ei:
+        load_map(p)
+    assert_one_line(ei, "big.pgm")
+    monkeypatch.setattr(tio, "MAX_CELLS", 5)
+    with pytest.raises(MapTooLargeError, match="MAX_CELLS") as ei:
+        load_map(write_pgm(tmp_path / "six.pgm", GRAY3))
+    assert_one_line(ei, "six.pgm")
+
+
+def test_decompression_bomb_becomes_our_error(tmp_path, monkeypatch):
+    monkeypatch.setattr(Image, "MAX_IMAGE_PIXELS", 2)
+    monkeypatch.setattr(tio, "MAX_CELLS", 5)
+    p = write_pgm(tmp_path / "bomb.pgm", GRAY3)
+    with pytest.raises(MapTooLargeError, match="6 cells") as ei:
+        load_map(p)
+    assert_one_line(ei, "bomb.pgm")
+    # within our limit, Pillow's stricter limit does not stop the load
+    monkeypatch.setattr(tio, "MAX_CELLS", 100)
+    assert load_map(p).shape == (2, 3)
+    assert Image.MAX_IMAGE_PIXELS == 2
+    monkeypatch.setattr(Image, "MAX_IMAGE_PIXELS", 5)  # warning zone: ignored, loads
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert load_map(p).shape == (2, 3)
+
+
+def test_truncated_png_chunk(tmp_path):
+    # a PNG whose IDAT is corrupt (bad zlib stream)
+    def chunk(tag, data):
+        return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data))
+    ihdr = struct.pack(">IIBBBBB", 4, 4, 8, 0, 0, 0, 0)
+    png = b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) + chunk(b"IDAT", b"\x78\x9cgarbage") + chunk(b"IEND", b"")
+    p = tmp_path / "corrupt.png"
+    p.write_bytes(png)
+    with pytest.raises(MapError) as ei:
+        load_map(p)
+    assert_one_line(ei, "corrupt.png")
+
+
+# --------------------------------------------------------------------------
+# Valid edge cases
+# --------------------------------------------------------------------------
+
+@pytest.mark.parametrize("value, state", [(254, FREE), (0, OCCUPIED), (205, UNKNOWN), (255, FREE)])
+@pytest.mark.parametrize("shape", [(1, 1), (3, 5)])
+def test_uniform_maps_are_valid(tmp_path, value, state, shape):
+    p = write_pgm(tmp_path / "u.pgm", np.full(shape, value, np.uint8))
+    g = load_map(p)
+    assert g.shape == shape
+    assert (g.cells == state).all()
+    assert g.gray.dtype == np.uint8 and (g.gray == value).all()
+    assert g.resolution == 0.05 and g.origin == (0.0, 0.0, 0.0)
+    assert g.source == str(p) and g.name == str(p)
+
+
+def test_trinary_thresholds_exact():
+    v = np.arange(256, dtype=np.uint8).reshape(16, 16)
+    cells = tio.classify_gray(v)
+    p = (255 - np.arange(256)) / 255.0
+    expect = np.where(p > 0.65, OCCUPIED, np.where(p < 0.196, FREE, UNKNOWN)).reshape(16, 16)
+    np.testing.assert_array_equal(cells, expect)
+    # map_saver's values round-trip
+    assert tio.classify_gray(np.array([[254, 0, 205]], np.uint8)).tolist() == [[FREE, OCCUPIED, UNKNOWN]]
+
+
+def test_pgm_and_png_and_yaml_agree(mapdir):
+    Image.fromarray(GRAY3).save(mapdir / "map.png")
+    a = load_map(mapdir / "map.pgm")
+    b = load_map(mapdir / "map.png")
+    c = load_map(write_yaml(mapdir / "map.yaml", good_yaml()))
+    for g in (a, b, c):
+        np.testing.assert_array_equal(g.cells, CELLS3)
+        np.testing.assert_array_equal(g.gray, GRAY3)
+    assert c.origin == (1.0, 2.0, 0.0) and c.resolution == 0.05
+    assert c.source == str(mapdir / "map.yaml")
+
+
+def test_image_kwargs(mapdir):
+    g = load_map(mapdir / "map.pgm", resolution=0.1, origin=(1, 2))
+    assert g.resolution == 0.1 and g.origin == (1.0, 2.0, 0.0)
+
+
+def test_keywords_override_yaml(mapdir):
+    p = write_yaml(mapdir / "map.yaml", good_yaml())
+    g = load_map(p, resolution=0.2, origin=(5, 6, 0.5), negate=True)
+    assert g.resolution == 0.2 and g.origin == (5.0, 6.0, 0.5)
+    np.testing.assert_array_equal(g.cells[0], [FREE, OCCUPIED, OCCUPIED])
+    # missing keys are fine when given as arguments
+    p2 = write_yaml(mapdir / "bare.yaml", "image: map.pgm\n")
+    g2 = load_map(p2, resolution=0.1, origin=(0, 0, 0))
+    assert g2.resolution == 0.1
+
+
+def test_yaml_with_absolute_image_path_and_subdir(tmp_path):
+    (tmp_path / "sub").mkdir()
+    write_pgm(tmp_path / "sub" / "m.pgm", GRAY3)
+    p = write_yaml(tmp_path / "a.yaml", good_yaml(image=str(tmp_path / "sub" / "m.pgm")))
+    np.testing.assert_array_equal(load_map(p).cells, CELLS3)
+    p = write_yaml(tmp_path / "b.yml", good_yaml(image="sub/m.pgm"))
+    np.testing.assert_array_equal(load_map(str(p)).cells, CELLS3)
+
+
+def test_negate(mapdir):
+    p = write_yaml(mapdir / "neg.yaml", good_yaml(negate=1))
+    g = load_map(p)
+    # p = v / 255: 0 -> free, 254 -> occupied, 205 -> p = 0.80 -> occupied
+    np.testing.assert_array_equal(g.cells, [[FREE, OCCUPIED, OCCUPIED], [OCCUPIED, FREE, OCCUPIED]])
+    np.testing.assert_array_equal(g.gray, GRAY3)
+
+
+def test_mode_raw(tmp_path):
+    gray = np.array([[0, 1, 50], [100, 101, 255]], np.uint8)
+    write_pgm(tmp_path / "raw.pgm", gray)
+    g = load_map(write_yaml(tmp_path / "raw.yaml", good_yaml(image="raw.pgm", mode="raw")))
+    np.testing.assert_array_equal(g.cells, [[0, 1, 50], [100, UNKNOWN, UNKNOWN]])
+
+
+def test_mode_scale_is_trinary(mapdir):
+    g = load_map(write_yaml(mapdir / "s.yaml", good_yaml(mode="scale")))
+    np.testing.assert_array_equal(g.cells, CELLS3)
+
+
+def test_16bit_pgm(tmp_path):
+    v16 = GRAY3.astype(np.uint16) * 257
+    p = tmp_path / "deep.pgm"
+    p.write_bytes(b"P5\n3 2\n65535\n" + v16.astype(">u2").tobytes())
+    g = load_map(p)
+    np.testing.assert_array_equal(g.gray, GRAY3)
+    np.testing.assert_array_equal(g.cells, CELLS3)
+
+
+def test_16bit_png(tmp_path):
+    v16 = GRAY3.astype(np.uint16) * 257
+    Image.fromarray(v16).save(tmp_path / "deep.png")
+    g = load_map(tmp_path / "deep.png")
+    np.testing.assert_array_equal(g.gray, GRAY3)
+
+
+def test_rgba_transparency(tmp_path):
+    rgba = np.zeros((2, 3, 4), np.uint8)
+    rgba[..., :3] = GRAY3[..., None]
+    rgba[..., 3] = 255
+    rgba[0, 1, 3] = 0     # transparent free pixel -> unknown
+    rgba[1, 0, 3] = 128   # half transparent: keeps its value
+    Image.fromarray(rgba, "RGBA").save(tmp_path / "a.png")
+    g = load_map(tmp_path / "a.png")
+    expect = CELLS3.copy()
+    expect[0, 1] = UNKNOWN
+    np.testing.assert_array_equal(g.cells, expect)
+    np.testing.assert_array_equal(g.gray, GRAY3)
+
+
+@pytest.mark.parametrize("mode", ["1", "L", "LA", "RGB", "RGBA", "P", "I", "I;16", "F"])
+def test_image_modes(tmp_path, mode):
+    img = Image.fromarray(GRAY3).convert("RGB").convert(mode) if mode not in ("I;16",) else \
+        Image.fromarray(GRAY3.astype(np.uint16) * 257)
+    ext = "tiff" if mode in ("I", "F") else "png"
+    path = tmp_path / f"m.{ext}"
+    img.save(path)
+    g = load_map(path)
+    assert g.shape == (2, 3) and g.gray.dtype == np.uint8
+    if mode == "1":
+        np.testing.assert_array_equal(g.cells, np.where(GRAY3 > 127, FREE, OCCUPIED))
+    elif mode == "I":  # 32-bit integer images are taken as 16-bit data
+        assert (g.gray <= 1).all()
+    else:
+        np.testing.assert_array_equal(g.cells, CELLS3)
+
+
+# --------------------------------------------------------------------------
+# Coordinates
+# --------------------------------------------------------------------------
+
+def test_pixel_world_round_trip_with_origin(tmp_path):
+    write_pgm(tmp_path / "m.pgm", np.full((40, 60), 254, np.uint8))
+    g = load_map(write_yaml(tmp_path / "m.yaml", good_yaml(image="m.pgm", origin="[-3.0, 2.0, 0.0]")))
+    # lower-left pixel centre
+    x, y = g.pixel_to_world(39, 0)
+    assert x == pytest.approx(-3.0 + 0.025) and y == pytest.approx(2.0 + 0.025)
+    # top-right pixel centre
+    x, y = g.pixel_to_world(0, 59)
+    assert x == pytest.approx(-3.0 + 2.975) and y == pytest.approx(2.0 + 1.975)
+    rows, cols = np.mgrid[0:40, 0:60]
+    r, c = g.world_to_pixel(*g.pixel_to_world(rows, cols))
+    np.testing.assert_allclose(r, rows, atol=1e-9)
+    np.testing.assert_allclose(c, cols, atol=1e-9)
+    assert g.world_to_pixel(-3.0, 2.0) == pytest.approx((39.5, -0.5))
+
+
+def test_pixel_world_round_trip_with_yaw(tmp_path):
+    write_pgm(tmp_path / "m.pgm", np.full((10, 20), 254, np.uint8))
+    g = load_map(write_yaml(tmp_path / "m.yaml", good_yaml(image="m.pgm", origin=f"[1.0, -2.0, {np.pi / 2!r}]")))
+    # yaw 90 deg: image +col axis points to world +y
+    x, y = g.pixel_to_world(9, 0)
+    assert x == pytest.approx(1.0 - 0.025) and y == pytest.approx(-2.0 + 0.025)
+    x2, y2 = g.pixel_to_world(9, 4)
+    assert x2 == pytest.approx(x) and y2 == pytest.approx(y + 0.2)
+    rows, cols = np.mgrid[0:10, 0:20]
+    r, c = g.world_to_pixel(*g.pixel_to_world(rows + 0.3, cols - 0.2))
+    np.testing.assert_allclose(r, rows + 0.3, atol=1e-9)
+    np.testing.assert_allclose(c, cols - 0.2, atol=1e-9)
+
+
+# --------------------------------------------------------------------------
+# Saving
+# --------------------------------------------------------------------------
+
+def test_save_load_round_trip(tmp_path):
+    g = OccupancyGrid(CELLS3, 0.1, (1.5, -2.0, 0.25))
+    out = save_map(g, tmp_path / "out")
+    assert out == tmp_path / "out.yaml"
+    assert (tmp_path / "out.pgm").read_bytes().startswith(b"P5\n3 2\n255\n")
+    h = load_map(out)
+    np.testing.assert_array_equal(h.cells, g.cells)
+    assert h.resolution == 0.1 and h.origin == g.origin
+    np.testing.assert_array_equal(h.gray, [[0, 254, 205], [254, 0, 205]])
+    assert not [p for p in os.listdir(tmp_path) if p.endswith(".tmp")]
+
+
+def test_save_raw_labels_round_trip(tmp_path):
+    labels = np.array([[0, 1, 2], [3, 99, 100]], np.uint8)
+    out = save_map(labels, tmp_path / "labels.yaml", mode="raw", resolution=0.05)
+    g = load_map(out)
+    np.testing.assert_array_equal(g.cells, labels)
+    np.testing.assert_array_equal(g.gray, labels)
+    # raw from cells: unknown written as 255
+    out = save_map(CELLS3, tmp_path / "cells", mode="raw")
+    np.testing.assert_array_equal(load_map(out).cells, CELLS3)
+
+
+def test_save_bool_and_overwrite(tmp_path):
+    free = np.array([[True, False], [False, True]])
+    out = save_map(free, tmp_path / "b", origin=(1, 1))
+    out2 = save_map(free, tmp_path / "b", origin=(1, 1))
+    assert out == out2
+    g = load_map(out)
+    np.testing.assert_array_equal(g.free, free)
+    assert g.origin == (1.0, 1.0, 0.0)
+
+
+def test_save_failure_leaves_nothing(tmp_path, monkeypatch):
+    with pytest.raises(MapFileNotFoundError, match="does not exist") as ei:
+        save_map(CELLS3, tmp_path / "nodir" / "m")
+    assert "\n" not in str(ei.value)
+
+    def boom(src, dst):
+        raise PermissionError(13, "Permission denied")
+    monkeypatch.setattr(tio.os, "replace", boom)
+    with pytest.raises(MapFileError, match="cannot write map") as ei:
+        save_map(CELLS3, tmp_path / "m")
+    assert_one_line(ei, "m")
+    assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.parametrize("bad, pattern", [
+    (np.zeros((2, 2, 2), np.int8), "2-D"),
+    (np.zeros((0, 3), np.int8), "empty"),
+    (np.zeros((2, 2), np.float64), "dtype float64"),
+])
+def test_save_bad_arrays(tmp_path, bad, pattern):
+    with pytest.raises(MapError, match=pattern):
+        save_map(bad, tmp_path / "x")
+
+
+# --------------------------------------------------------------------------
+# from_array
+# --------------------------------------------------------------------------
+
+def test_from_array_uint8_gray():
+    g = from_array(GRAY3)
+    np.testing.assert_array_equal(g.cells, CELLS3)
+    assert g.gray is not None and g.name == "<array>"
+    g = from_array(GRAY3, negate=True)
+    assert g.cells[0, 0] == FREE
+
+
+def test_from_array_bool_and_int():
+    np.testing.assert_array_equal(from_array(np.array([[True, False]])).cells, [[FREE, OCCUPIED]])
+    np.testing.assert_array_equal(from_array(np.array([[0, 100, -1, 64, 65]], np.int16)).cells,
+                                  [[FREE, OCCUPIED, UNKNOWN, FREE, OCCUPIED]])
+
+
+@pytest.mark.parametrize("bad, pattern", [
+    (np.zeros(5, np.uint8), r"ndim=1 \(shape \(5,\)\)"),
+    (np.zeros((2, 2, 3), np.uint8), r"ndim=3 \(shape \(2, 2, 3\)\)"),
+    (np.zeros((0, 4), np.int8), r"empty \(shape \(0, 4\)\)"),
+    (np.zeros((2, 2), np.float32), "dtype float32"),
+    (np.zeros((2, 2), np.uint16), "dtype uint16"),
+    (np.array([["a", "b"]]), "dtype <U1"),
+    ([[1, 2], [3]], "cannot convert list"),
+])
+def test_from_array_errors(bad, pattern):
+    with pytest.raises(MapError, match=pattern) as ei:
+        from_array(bad, source="mine.npy")
+    assert_one_line(ei, "mine.npy")
+
+
+@pytest.mark.parametrize("kwargs, pattern", [
+    ({"resolution": -1}, "resolution must be > 0"),
+    ({"resolution": "abc"}, "resolution must be a number"),
+    ({"origin": (1,)}, "origin"),
+    ({"origin": ("a", 2)}, "origin"),
+    ({"origin": (float("nan"), 0)}, "origin must be finite"),
+])
+def test_from_array_bad_params(kwargs, pattern):
+    with pytest.raises(ParameterError, match=pattern):
+        from_array(GRAY3, **kwargs)
+
+
+def test_messages_name_the_file_in_one_line_even_with_weird_exceptions(tmp_path):
+    # Pillow's own messages may span lines; ours never do
+    p = tmp_path / "x.pgm"
+    p.write_bytes(b"P5\n3 2\n255\n\x00")  # too little pixel data
+    with pytest.raises(MapError) as ei:
+        load_map(p)
+    msg = assert_one_line(ei, "x.pgm")
+    assert re.match(re.escape(str(p)) + ": ", msg)
