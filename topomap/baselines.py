@@ -249,8 +249,16 @@ def distance(free, *, resolution=0.05, room_area_min=0.35, room_area_max=163.0):
     er = cv2.erode(f.astype(np.uint8), _EIGHT, borderType=cv2.BORDER_CONSTANT, borderValue=0)
     dist = np.rint(edt(er.astype(bool))).astype(np.int32) if er.any() else np.zeros(f.shape, np.int32)
     best_t, best_n = None, 0
+    # each threshold only needs the bounding box of dist > t (shrinks fast)
+    rowmax, colmax = dist.max(axis=1), dist.max(axis=0)
+    hist = np.bincount(dist.ravel())
+    above = hist[::-1].cumsum()[::-1]  # above[k] = #pixels with dist >= k
     for t in range(1, int(dist.max())):
-        _, _, area = _components_with_area(dist > t, 8)
+        if above[t + 1] < (best_n + 1) * amin:
+            break  # not enough pixels left for more rooms than the best so far
+        rows, cols = np.flatnonzero(rowmax > t), np.flatnonzero(colmax > t)
+        sub = dist[rows[0]:rows[-1] + 1, cols[0]:cols[-1] + 1] > t
+        _, _, area = _components_with_area(sub, 8)
         cnt = int(np.count_nonzero((area[1:] >= amin) & (area[1:] <= amax)))
         if cnt > best_n:
             best_t, best_n = t, cnt

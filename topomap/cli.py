@@ -1,0 +1,141 @@
+"""The ``topomap`` command line: a thin layer over the public functions.
+
+Exit codes: 0 success; 1 a map or input could not be processed (one line on
+stderr, the other maps of a batch still complete); 2 bad usage (unknown
+option, missing argument); 3 an unexpected internal error. ``--debug`` prints
+the traceback of any error.
+"""
+
+from __future__ import annotations
+
+import logging
+import sys
+import traceback
+from pathlib import Path
+
+import click
+
+EXIT_OK, EXIT_INPUT, EXIT_USAGE, EXIT_INTERNAL = 0, 1, 2, 3
+
+log = logging.getLogger("topomap")
+
+
+def _method_names():
+    # kept in sync with topomap.segment.METHODS without importing numpy at start-up
+    return ["paper", "watershed", "morphological", "distance", "voronoi"]
+
+
+class _State:
+    debug = False
+
+
+def _fail(exc, what="") -> int:
+    """Print one line for ``exc`` on stderr; return the exit code to use."""
+    from .errors import TopomapError
+
+    if _State.debug:
+        traceback.print_exception(exc)
+    prefix = f"{what}: " if what else ""
+    if isinstance(exc, (TopomapError, OSError, ValueError)):
+        msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        click.echo(f"error: {prefix}{msg}", err=True)
+        return EXIT_INPUT
+    click.echo(f"internal error: {prefix}{type(exc).__name__}: {exc} (rerun with --debug for the traceback)",
+               err=True)
+    return EXIT_INTERNAL
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.option("--debug", is_flag=True, help="Print tracebacks of errors.")
+@click.option("-v", "--verbose", count=True, help="More log output (-v info, -vv debug).")
+@click.version_option(package_name="topomap")
+def main(debug, verbose):
+    """Rooms, doors and a room-door graph from occupancy grid maps."""
+    _State.debug = debug
+    level = logging.WARNING - 10 * min(verbose, 2)
+    logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
+
+
+def _segment_one(path, outdir, resolution, method, skeletons):
+    from . import io
+    from .export import write_outputs
+    from .segment import segment
+
+    grid = io.load_map(path, resolution=resolution)
+    seg = segment(grid, method=method)
+    write_outputs(seg, outdir, skeletons=skeletons)
+    return seg
+
+
+@main.command("segment")
+@click.argument("maps", nargs=-1, required=True, type=click.Path(path_type=Path))
+@click.option("-o", "--out", "outdir", required=True, type=click.Path(path_type=Path),
+              help="Output directory (one subfolder per map stem when several maps are given).")
+@click.option("--resolution", type=float, default=None,
+              help="Metres per pixel for image maps without YAML (default 0.05).")
+@click.option("--method", type=click.Choice(_method_names()), default=None,
+              help="Segmentation method (default: the library's default).")
+@click.option("--skeletons", is_flag=True, help="Draw both skeleton graphs in overlay.png.")
+def segment_cmd(maps, outdir, resolution, method, skeletons):
+    """Segment MAP files (ROS YAML, PGM or PNG) into rooms and doors.
+
+    Writes labels.png (16-bit, 0 = not a room), rooms.graphml, rooms.json
+    (node-link) and overlay.png per map.
+    """
+    from .errors import ParameterError
+
+    if resolution is not None and not resolution > 0:
+        sys.exit(_fail(ParameterError(f"--resolution must be > 0 m/px, got {resolution!r}")))
+    many = len(maps) > 1
+    failed = 0
+    code = EXIT_OK
+    items = list(maps)
+    with click.progressbar(items, label="segmenting", file=sys.stderr,
+                           show_pos=True, item_show_func=lambda p: p and p.name) if many else _nullbar(items) as bar:
+        for path in bar:
+            target = outdir / path.stem if many else outdir
+            try:
+                seg = _segment_one(path, target, resolution, method, skeletons)
+                log.info("%s: %d rooms, %d doors -> %s", path, seg.n_rooms, len(seg.doors), target)
+                if not many:
+                    click.echo(f"{path}: {seg.n_rooms} rooms, {len(seg.doors)} doors -> {target}")
+            except Exception as exc:  # noqa: BLE001 - reported, batch goes on
+                failed += 1
+                code = max(code, _fail(exc))
+    if many:
+        click.echo(f"{len(items) - failed} of {len(items)} maps segmented -> {outdir}")
+    sys.exit(code)
+
+
+class _nullbar:
+    def __init__(self, items):
+        self.items = items
+
+    def __enter__(self):
+        return self.items
+
+    def __exit__(self, *a):
+        return False
+
+
+@main.command("demo")
+@click.option("-o", "--out", "outdir", default="demo_out", show_default=True, type=click.Path(path_type=Path),
+              help="Output directory.")
+@click.option("--method", type=click.Choice(_method_names()), default=None)
+def demo_cmd(outdir, method):
+    """Segment the embedded example office map and write the outputs."""
+    from ._example import example_map_path
+
+    try:
+        seg = _segment_one(example_map_path(), outdir, None, method, True)
+    except Exception as exc:  # noqa: BLE001
+        sys.exit(_fail(exc))
+    click.echo(f"example office: {seg.n_rooms} rooms, {len(seg.doors)} doors "
+               f"(threshold {seg.threshold if seg.threshold is not None else float('nan'):.2f} m) -> {outdir}")
+    for d in seg.doors:
+        click.echo(f"  door {d.id}: rooms {d.rooms[0]}-{d.rooms[1]}, width {d.width:.2f} m, "
+                   f"midpoint ({d.midpoint[0]:.2f}, {d.midpoint[1]:.2f}) m")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,128 @@
+"""The room–door graph: rooms as nodes, doors as edges.
+
+:func:`room_graph` turns a :class:`~topomap.segment.Segmentation` into a
+:class:`networkx.MultiGraph` (two rooms can share several doors, each its own
+edge, keyed by the door id). Every attribute, with its unit, is listed on the
+"Graph attributes" page of the documentation.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import networkx as nx
+from scipy import ndimage as ndi
+
+__all__ = ["room_graph", "room_polygons"]
+
+
+def room_polygons(labels: np.ndarray, to_world=None) -> dict:
+    """Outline of every room as a shapely (Multi)Polygon.
+
+    Parameters
+    ----------
+    labels : (M, N) ndarray of int
+        Room labels, 0 = no room.
+    to_world : callable, optional
+        ``(rows, cols) -> (x, y)``; without it the polygons are in pixel
+        ``(col, row)`` coordinates.
+
+    Returns
+    -------
+    dict
+        ``label -> shapely geometry``. The outline follows the outer edges of
+        the room's cells (a cell is a unit square centred on its pixel).
+    """
+    import cv2
+    from shapely.geometry import MultiPolygon, Polygon
+    from shapely.ops import unary_union
+
+    out = {}
+    objs = ndi.find_objects(labels)
+    for i, sl in enumerate(objs, start=1):
+        if sl is None:
+            continue
+        r0, c0 = sl[0].start, sl[1].start
+        m = (labels[sl] == i).astype(np.uint8)
+        # upsample x2 so contours run along cell edges rather than centres
+        m2 = np.kron(m, np.ones((2, 2), np.uint8))
+        m2 = np.pad(m2, 1)
+        contours, hier = cv2.findContours(m2, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_SIMPLE)
+        polys = []
+        if hier is not None:
+            hier = hier[0]
+            for k, cnt in enumerate(contours):
+                if hier[k][3] != -1:
+                    continue  # a hole, handled with its parent
+                shell = _to_coords(cnt, r0, c0, to_world)
+                holes = []
+                child = hier[k][2]
+                while child != -1:
+                    holes.append(_to_coords(contours[child], r0, c0, to_world))
+                    child = hier[child][0]
+                if len(shell) >= 3:
+                    polys.append(Polygon(shell, [h for h in holes if len(h) >= 3]))
+        geom = unary_union([p.buffer(0) for p in polys]) if polys else Polygon()
+        if geom.geom_type == "GeometryCollection":
+            geom = MultiPolygon([g for g in geom.geoms if g.geom_type == "Polygon"])
+        out[i] = geom
+    return out
+
+
+def _to_coords(cnt, r0, c0, to_world):
+    pts = cnt[:, 0, :].astype(float)  # (x=col2, y=row2) in the x2, padded grid
+    cols = (pts[:, 0] - 1) / 2.0 - 0.5 + c0
+    rows = (pts[:, 1] - 1) / 2.0 - 0.5 + r0
+    if to_world is not None:
+        x, y = to_world(rows, cols)
+        return list(zip(np.asarray(x).tolist(), np.asarray(y).tolist()))
+    return list(zip(cols.tolist(), rows.tolist()))
+
+
+def room_graph(seg) -> nx.MultiGraph:
+    """Build the room–door graph of a segmentation.
+
+    Nodes are room labels (``int``, 1..N) with ``area`` (m²), ``x``, ``y``
+    (centroid, m), ``row``, ``col`` (centroid, pixels), ``cells`` (count) and
+    ``polygon`` (shapely geometry in map-frame metres). Edges are doors,
+    keyed by door id, with ``door`` (id), ``width`` (m), ``x``, ``y``
+    (midpoint, m), ``x1``, ``y1``, ``x2``, ``y2`` (end points, m) and ``p1``,
+    ``p2`` (end points, pixels). Graph attributes: ``resolution`` (m/px),
+    ``origin`` (x, y, yaw), ``method``, ``threshold`` (m or None), ``map``
+    (source file), ``shape`` (rows, cols).
+
+    Parameters
+    ----------
+    seg : Segmentation
+
+    Returns
+    -------
+    networkx.MultiGraph
+    """
+    grid = seg.grid
+    labels = seg.labels
+    n = int(labels.max()) if labels.size else 0
+    G = nx.MultiGraph(resolution=grid.resolution, origin=tuple(grid.origin), method=seg.method,
+                      threshold=seg.threshold, map=grid.name, shape=tuple(labels.shape))
+    if n == 0:
+        return G
+    flat = labels.ravel()
+    cnt = np.bincount(flat, minlength=n + 1).astype(float)
+    rr, cc = np.indices(labels.shape)
+    sr = np.bincount(flat, weights=rr.ravel(), minlength=n + 1)
+    sc = np.bincount(flat, weights=cc.ravel(), minlength=n + 1)
+    polys = room_polygons(labels, grid.pixel_to_world)
+    area_cell = grid.resolution ** 2
+    for i in range(1, n + 1):
+        if cnt[i] == 0:
+            continue
+        r, c = sr[i] / cnt[i], sc[i] / cnt[i]
+        x, y = grid.pixel_to_world(r, c)
+        G.add_node(i, area=float(cnt[i] * area_cell), cells=int(cnt[i]), x=float(x), y=float(y),
+                   row=float(r), col=float(c), polygon=polys.get(i))
+    for d in seg.doors:
+        a, b = d.rooms
+        mx, my = d.midpoint
+        G.add_edge(a, b, key=d.id, door=d.id, width=float(d.width), x=float(mx), y=float(my),
+                   x1=float(d.xy1[0]), y1=float(d.xy1[1]), x2=float(d.xy2[0]), y2=float(d.xy2[1]),
+                   p1=tuple(d.p1), p2=tuple(d.p2))
+    return G
