@@ -79,7 +79,7 @@ def _uncrop(sub_labels, box, shape):
 
 
 # --------------------------------------------------------------------------- watershed
-def watershed(free, *, resolution=0.05, min_distance=1.0):
+def watershed(free, *, resolution=0.05, min_distance=1.75):
     """Distance-transform watershed (Fabrizi & Saffiotti 2000).
 
     The Euclidean distance transform of free space is flooded from its local
