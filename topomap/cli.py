@@ -137,5 +137,67 @@ def demo_cmd(outdir, method):
                    f"midpoint ({d.midpoint[0]:.2f}, {d.midpoint[1]:.2f}) m")
 
 
+@main.command("benchmark")
+@click.argument("dataset_dir", type=click.Path(path_type=Path))
+@click.option("--methods", default=None,
+              help="Comma-separated methods (default: every method of topomap.segment.METHODS).")
+@click.option("--variant", type=click.Choice(["unfurnished", "furnished", "both"]), default="both",
+              show_default=True, help="Which maps: without furniture, with furniture, or both.")
+@click.option("--jobs", type=click.IntRange(min=1), default=1, show_default=True,
+              help="Parallel worker processes (timings are only fully comparable with 1).")
+@click.option("--out", "out", type=click.Path(path_type=Path), default=None,
+              help="Write per-map rows to this .csv or .json file.")
+def benchmark_cmd(dataset_dir, methods, variant, jobs, out):
+    """Run every method on the maps of DATASET_DIR and print the score table.
+
+    DATASET_DIR holds NAME.png, NAME_furnitures.png and
+    NAME_gt_segmentation.png per map (the layout of Bormann et al. 2016).
+    Runtimes are of the segmentation call only.
+    """
+    from .benchmark import _check_methods, format_table, run_benchmark, write_rows
+
+    try:
+        names = _check_methods(methods)
+        if out is not None and out.suffix.lower() not in (".csv", ".json"):
+            from .errors import ParameterError
+
+            raise ParameterError(f"--out must end in .csv or .json, got {out.name!r}")
+    except Exception as exc:  # noqa: BLE001
+        sys.exit(_fail(exc))
+    variants = ("unfurnished", "furnished") if variant == "both" else (variant,)
+    state = {}
+
+    def progress(done, total, row):
+        bar = state.get("bar")
+        if bar is None:
+            bar = state["bar"] = click.progressbar(length=total, label="benchmark", file=sys.stderr,
+                                                   show_pos=True, item_show_func=lambda s: s)
+            bar.__enter__()
+        bar.current_item = f"{row['method']} {row['variant']} {row['map']}"
+        bar.update(1)
+        if row.get("error"):
+            log.warning("%s %s %s: %s", row["method"], row["variant"], row["map"], row["error"])
+
+    try:
+        rows = run_benchmark(dataset_dir, methods=names, variants=variants, jobs=jobs, progress=progress)
+    except Exception as exc:  # noqa: BLE001
+        if state.get("bar") is not None:
+            state["bar"].__exit__(None, None, None)
+        sys.exit(_fail(exc))
+    if state.get("bar") is not None:
+        state["bar"].__exit__(None, None, None)
+    click.echo(format_table(rows), nl=False)
+    failed = sum(1 for r in rows if r.get("error"))
+    if out is not None:
+        try:
+            write_rows(rows, out)
+        except Exception as exc:  # noqa: BLE001
+            sys.exit(_fail(exc))
+        click.echo(f"{len(rows)} rows -> {out}")
+    if failed:
+        click.echo(f"error: {failed} of {len(rows)} runs failed (see the 'error' column)", err=True)
+        sys.exit(EXIT_INPUT)
+
+
 if __name__ == "__main__":
     main()
