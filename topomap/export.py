@@ -118,20 +118,26 @@ def save_json(G: nx.Graph, path) -> Path:
 def write_outputs(seg, outdir, *, overlay: bool = True, skeletons: bool = False) -> dict:
     """Write ``labels.png``, ``rooms.graphml``, ``rooms.json`` and ``overlay.png``.
 
-    Returns ``{name: path}``. Each file is written atomically.
+    Returns ``{name: path}``. All files are first written to temporary names
+    and renamed into place only once every one of them has been written, so
+    a failure in any writer leaves no partial file and keeps every earlier
+    output of ``outdir`` as it was.
     """
+    from contextlib import ExitStack
+
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
     G = seg.room_graph
-    out = {
-        "labels": save_labels(seg.labels, outdir / "labels.png"),
-        "graphml": save_graphml(G, outdir / "rooms.graphml"),
-        "json": save_json(G, outdir / "rooms.json"),
-    }
+    names = {"labels": "labels.png", "graphml": "rooms.graphml", "json": "rooms.json"}
     if overlay:
-        from .plot import save_overlay
+        names["overlay"] = "overlay.png"
+    with ExitStack() as stack:  # on success renames every temporary file; on error removes them all
+        tmp = {k: stack.enter_context(atomic_write(outdir / f, None)) for k, f in names.items()}
+        save_labels(seg.labels, tmp["labels"])
+        save_graphml(G, tmp["graphml"])
+        save_json(G, tmp["json"])
+        if overlay:
+            from .plot import save_overlay
 
-        with atomic_write(outdir / "overlay.png", None) as tmp:
-            save_overlay(seg, tmp, skeletons=skeletons)
-        out["overlay"] = outdir / "overlay.png"
-    return out
+            save_overlay(seg, tmp["overlay"], skeletons=skeletons)
+    return {k: outdir / f for k, f in names.items()}
