@@ -34,6 +34,7 @@ from topomap.rooms import fill_unlabeled, relabel_sequential
 __all__ = ["watershed", "morphological", "distance", "voronoi"]
 
 _EIGHT = np.ones((3, 3), np.uint8)
+_SKEL = "medial"
 
 
 # --------------------------------------------------------------------------- helpers
@@ -488,7 +489,7 @@ def voronoi(free, *, resolution=0.05, neighborhood=1.0, max_door_width=1.5, prun
     import cv2
     from scipy.spatial import cKDTree
     from skimage.draw import line
-    from skimage.morphology import skeletonize
+    from skimage.morphology import medial_axis, skeletonize
 
     free = _check(free, resolution, neighborhood=neighborhood, max_door_width=max_door_width,
                   prune_length=prune_length, room_area_min=room_area_min,
@@ -502,7 +503,7 @@ def voronoi(free, *, resolution=0.05, neighborhood=1.0, max_door_width=1.5, prun
 
     # 1. Voronoi graph = pruned skeleton of the opened free space
     opened = cv2.morphologyEx(f.astype(np.uint8), cv2.MORPH_OPEN, _EIGHT).astype(bool)
-    skel = skeletonize(opened) & f
+    skel = (medial_axis(opened, rng=0) if _SKEL == "medial" else skeletonize(opened)) & f
     skel = _prune(skel, max(int(round(prune_length / resolution)), 1))
 
     # 2. critical points
