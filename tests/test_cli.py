@@ -1,0 +1,225 @@
+"""The ``topomap`` command line on bad input, batches and failed writes.
+
+Exit codes (topomap/cli.py, docs/errors.md): 0 success; 1 a map or input
+could not be processed; 2 bad usage; 3 an internal error. An error is ONE
+line on stderr (``error: <file>: <problem>``); a traceback only with --debug.
+"""
+
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from PIL import Image
+
+import _testdata as T
+from test_bad_input import CASES, ERROR_CASES, OK_CASES, build, png
+from topomap import cli
+from topomap.cli import main
+
+
+def invoke(*args):
+    return CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
+
+
+def stderr_lines(result):
+    return [ln for ln in result.stderr.splitlines() if ln.strip()]
+
+
+@pytest.fixture(autouse=True)
+def _reset_debug():
+    yield
+    cli._State.debug = False
+
+
+@pytest.mark.parametrize("name", ERROR_CASES)
+def test_bad_map_one_line_exit_1(tmp_path, name):
+    path, _ = build(tmp_path, name)
+    out = tmp_path / "out"
+    r = invoke("segment", path, "-o", out)
+    assert r.exit_code == 1, (r.stdout, r.stderr)
+    lines = stderr_lines(r)
+    assert len(lines) == 1, r.stderr
+    assert lines[0].startswith("error: ") and name in lines[0], lines
+    assert "Traceback" not in r.stderr
+    assert r.stdout == ""
+    assert not out.exists() or not any(out.iterdir())
+
+
+@pytest.mark.parametrize("name", ["missing.png", "text.png", "not_yaml.yaml", "huge.png"])
+def test_debug_prints_traceback(tmp_path, name):
+    path, _ = build(tmp_path, name)
+    r = invoke("--debug", "segment", path, "-o", tmp_path / "out")
+    assert r.exit_code == 1
+    assert "Traceback (most recent call last)" in r.stderr
+    assert stderr_lines(r)[-1].startswith("error: ")
+
+
+@pytest.mark.parametrize("name", OK_CASES)
+def test_odd_but_valid_map_exit_0(tmp_path, name):
+    path, (_, n_rooms, n_doors) = build(tmp_path, name)
+    out = tmp_path / "out"
+    r = invoke("segment", path, "-o", out)
+    assert r.exit_code == 0, r.stderr
+    assert f"{n_rooms} rooms, {n_doors} doors" in r.stdout
+    assert sorted(p.name for p in out.iterdir()) == ["labels.png", "overlay.png", "rooms.graphml", "rooms.json"]
+    labels = np.asarray(Image.open(out / "labels.png"))
+    assert labels.max() == n_rooms
+    data = json.loads((out / "rooms.json").read_text())
+    assert len(data["nodes"]) == n_rooms and len(data["edges"]) == n_doors
+
+
+@pytest.mark.parametrize("res", ["0", "-0.05", "nan"])
+def test_bad_resolution_option(tmp_path, res):
+    path = png(tmp_path, "ok.png", T.gray(T.two_rooms().array))
+    r = invoke("segment", path, "--resolution", res, "-o", tmp_path / "out")
+    assert r.exit_code == 1
+    lines = stderr_lines(r)
+    assert len(lines) == 1 and "--resolution must be > 0" in lines[0], r.stderr
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("args", [["segment"], ["segment", "x.png"], ["segment", "x.png", "-o", "o", "--method", "magic"],
+                                  ["segment", "x.png", "-o", "o", "--resolution", "abc"], ["nosuchcommand"]])
+def test_usage_errors_exit_2(tmp_path, args):
+    r = CliRunner().invoke(main, args)
+    assert r.exit_code == 2, (r.stdout, r.stderr)
+    assert "Traceback" not in r.stderr
+
+
+def test_internal_error_exit_3(tmp_path, monkeypatch):
+    path = png(tmp_path, "ok.png", T.gray(T.two_rooms().array))
+
+    def bug(*a, **k):
+        raise KeyError("oops")
+
+    monkeypatch.setattr("topomap.segment.segment", bug)
+    r = invoke("segment", path, "-o", tmp_path / "out")
+    assert r.exit_code == 3
+    lines = stderr_lines(r)
+    assert len(lines) == 1 and lines[0].startswith("internal error:") and "--debug" in lines[0]
+
+
+# --------------------------------------------------------------------------
+# Batches and half-written outputs
+# --------------------------------------------------------------------------
+
+def test_batch_skips_the_bad_map(tmp_path):
+    a = png(tmp_path, "a.png", T.gray(T.two_rooms().array))
+    bad = tmp_path / "bad.png"
+    bad.write_text("not a picture")
+    c = png(tmp_path, "c.png", T.gray(T.corridor_with_rooms().array))
+    out = tmp_path / "out"
+    r = invoke("segment", a, bad, c, "-o", out)
+    assert r.exit_code == 1
+    errors = [ln for ln in stderr_lines(r) if ln.startswith("error")]
+    assert len(errors) == 1 and "bad.png" in errors[0] and "not an image" in errors[0]
+    assert "Traceback" not in r.stderr
+    assert "2 of 3 maps segmented" in r.stdout
+    assert sorted(p.name for p in out.iterdir()) == ["a", "c"]
+    for stem, n in (("a", 2), ("c", 4)):
+        assert np.asarray(Image.open(out / stem / "labels.png")).max() == n
+        assert (out / stem / "overlay.png").stat().st_size > 0
+
+
+def test_batch_all_good_exit_0(tmp_path):
+    a = png(tmp_path, "a.png", T.gray(T.two_rooms().array))
+    b = png(tmp_path, "b.png", T.gray(T.one_room().array))
+    r = invoke("segment", a, b, "-o", tmp_path / "out")
+    assert r.exit_code == 0 and "2 of 2 maps segmented" in r.stdout
+
+
+def _snapshot(d):
+    return {p.name: p.read_bytes() for p in sorted(d.iterdir())}
+
+
+def test_failed_overlay_leaves_no_partial_file_and_keeps_earlier_outputs(tmp_path, monkeypatch):
+    out = tmp_path / "out"
+    first = png(tmp_path, "first.png", T.gray(T.two_rooms().array))
+    assert invoke("segment", first, "-o", out).exit_code == 0
+    before = _snapshot(out)
+
+    def broken_overlay(seg, path, **kw):
+        with open(path, "wb") as fh:  # half a picture, then a crash
+            fh.write(b"\x89PNG\r\n")
+        raise OSError("disk full")
+
+    monkeypatch.setattr("topomap.plot.save_overlay", broken_overlay)
+    second = png(tmp_path, "second.png", T.gray(T.corridor_with_rooms().array))
+    r = invoke("segment", second, "-o", out)
+    assert r.exit_code == 1
+    lines = stderr_lines(r)
+    assert len(lines) == 1 and "disk full" in lines[0], r.stderr
+    assert _snapshot(out) == before  # nothing clobbered, no temporary file left
+    assert [p.name for p in out.iterdir() if p.name.startswith(".")] == []
+
+
+@pytest.mark.parametrize("victim", ["save_labels", "save_graphml", "save_json"])
+def test_any_failed_writer_keeps_earlier_outputs(tmp_path, monkeypatch, victim):
+    from topomap import export
+
+    out = tmp_path / "out"
+    assert invoke("segment", png(tmp_path, "first.png", T.gray(T.two_rooms().array)), "-o", out).exit_code == 0
+    before = _snapshot(out)
+
+    def broken(*a, **k):
+        raise OSError(f"{victim} failed")
+
+    monkeypatch.setattr(export, victim, broken)
+    r = invoke("segment", png(tmp_path, "second.png", T.gray(T.one_room().array)), "-o", out)
+    assert r.exit_code == 1
+    assert _snapshot(out) == before
+
+
+def test_batch_with_failed_write_goes_on(tmp_path, monkeypatch):
+    from topomap import export
+
+    real = export.save_json
+
+    def flaky(G, path):
+        if G.graph["map"].endswith("b.png"):
+            raise OSError("no space left on device")
+        return real(G, path)
+
+    monkeypatch.setattr(export, "save_json", flaky)
+    paths = [png(tmp_path, f"{s}.png", T.gray(T.two_rooms().array)) for s in "abc"]
+    out = tmp_path / "out"
+    r = invoke("segment", *paths, "-o", out)
+    assert r.exit_code == 1
+    assert "2 of 3 maps segmented" in r.stdout
+    assert not (out / "b").exists() or list((out / "b").iterdir()) == []
+    for s in "ac":
+        assert (out / s / "rooms.json").exists()
+
+
+# --------------------------------------------------------------------------
+# A real process (entry point, stderr, exit status)
+# --------------------------------------------------------------------------
+
+def _run(*args, cwd):
+    exe = os.path.join(os.path.dirname(sys.executable), "topomap")
+    cmd = [exe] if os.path.exists(exe) else [sys.executable, "-m", "topomap.cli"]
+    return subprocess.run(cmd + [str(a) for a in args], cwd=cwd, capture_output=True, text=True, timeout=120)
+
+
+def test_subprocess_missing_file(tmp_path):
+    p = _run("segment", "nothere.png", "-o", "out", cwd=tmp_path)
+    assert p.returncode == 1
+    assert p.stderr.strip() == "error: nothere.png: image file not found"
+    assert not (tmp_path / "out").exists()
+
+
+def test_subprocess_batch_and_debug(tmp_path):
+    png(tmp_path, "a.png", T.gray(T.two_rooms().array))
+    (tmp_path / "bad.png").write_bytes(b"")
+    p = _run("segment", "a.png", "bad.png", "-o", "out", cwd=tmp_path)
+    assert p.returncode == 1
+    assert [ln for ln in p.stderr.splitlines() if ln.startswith("error")] == [
+        "error: bad.png: image file is empty (0 bytes)"]
+    assert "Traceback" not in p.stderr
+    assert (tmp_path / "out" / "a" / "labels.png").exists()
+    p = _run("--debug", "segment", "bad.png", "-o", "out2", cwd=tmp_path)
+    assert p.returncode == 1 and "Traceback (most recent call last)" in p.stderr
