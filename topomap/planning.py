@@ -1,0 +1,559 @@
+"""Queries and topological path planning on the room–door graph.
+
+Stateless functions in the style of networkx: the graph (or segmentation)
+comes first. Every function that takes ``seg_or_G`` accepts either a
+:class:`~topomap.segment.Segmentation` or a room–door graph as built by
+:func:`topomap.roomgraph.room_graph` (also one loaded back with
+:func:`topomap.export.load_graphml` / :func:`~topomap.export.load_json` /
+:func:`~topomap.export.load_geojson`). A graph carries everything planning
+needs: room polygons that follow cell edges exactly (so the room cells are
+recovered by rasterising them at the graph's ``resolution``, ``origin`` and
+``shape``), doors with their end points, and, once :func:`travel_graph` has
+annotated it, the in-room door-to-door travel distances.
+
+Room IDs
+--------
+Room IDs are the labels ``1..N`` of the label image and are deterministic:
+:func:`topomap.rooms.relabel_sequential` numbers rooms in order of their
+first cell in a row-major scan of the map image (top row first, left to
+right), so room 1 holds the top-most, then left-most free cell of the image
+(rows count down from the top of the image, which is the largest map-frame
+``y`` when the origin has no yaw). The same map and method give the same IDs.
+Door IDs are ``0..K-1`` in the order the segmentation method found them.
+
+Travel distances
+----------------
+Distances are geodesic, through free space, never straight lines through
+walls: inside a room ``r`` the traversable cells are the cells labelled ``r``
+plus the cells of the door segments of ``r`` (a door's cells belong to one of
+the two rooms it joins). Each door is represented by the free door-segment
+cell closest to its midpoint. Distances are computed with
+:class:`skimage.graph.MCP_Geometric` (8-connected, steps of 1 and √2 cells)
+on the room's bounding box and converted to metres. A route is a sequence of
+legs: start → first door (in the start room), door → door (in the room
+between them), last door → goal (in the goal room), so its length is the
+length of a real path through free space. Waypoints are the start, the door
+midpoints and the goal.
+
+All coordinates are map-frame metres ``(x, y)``, the frame of the map YAML's
+``origin``; all lengths and widths are metres.
+"""
+
+from __future__ import annotations
+
+import numbers
+
+import numpy as np
+import networkx as nx
+
+from .errors import TopomapError
+
+__all__ = ["PlanningError", "NotInRoomError", "NoPathError", "room_at", "neighbors", "doors_between",
+           "room_distances", "travel_graph", "door_graph", "plan_path"]
+
+
+class PlanningError(TopomapError, ValueError):
+    """A query or plan cannot be answered (base of the planning errors)."""
+
+
+class NotInRoomError(PlanningError):
+    """A start or goal point is not in the free space of any room, or a room ID does not exist."""
+
+
+class NoPathError(PlanningError):
+    """No route joins the start and the goal (walls, or every door too narrow)."""
+
+
+# --------------------------------------------------------------------------
+# Context: labels and frame of a segmentation or a room graph
+# --------------------------------------------------------------------------
+
+#: Offset (px) of the point at which a cell is tested against room polygons.
+#: Room outlines (:func:`topomap.roomgraph.room_polygons`) run along cell
+#: edges on the top/left side of a room and may run through the cell centres
+#: on its bottom/right side; a point a quarter cell up and left of the centre
+#: is inside every cell of the room under either convention and outside the
+#: cells of its neighbours, so rasterising the polygons gives back the label
+#: image exactly (checked by the tests for every segmentation method).
+_PROBE = -0.25
+
+
+class _Ctx:
+    """Room cells, doors and the pixel <-> metre frame of ``seg_or_G``."""
+
+    def __init__(self, seg_or_G):
+        from .io import OccupancyGrid
+
+        if isinstance(seg_or_G, nx.Graph):
+            G = seg_or_G
+            self.seg = None
+            try:
+                shape = tuple(int(v) for v in G.graph["shape"])
+                res = float(G.graph["resolution"])
+                origin = tuple(float(v) for v in G.graph["origin"])
+            except (KeyError, TypeError, ValueError):
+                raise PlanningError("room graph lacks the map frame (graph attributes 'shape', 'resolution', "
+                                    "'origin'); build it with topomap.room_graph or load it with "
+                                    "topomap.export.load_graph") from None
+            # frame only: a read-only all-zero view of the map's shape (no memory)
+            self.grid = OccupancyGrid(np.broadcast_to(np.int8(0), shape), res, origin)
+        elif hasattr(seg_or_G, "labels") and hasattr(seg_or_G, "grid"):
+            self.seg = seg_or_G
+            G = seg_or_G.room_graph
+            self.grid = seg_or_G.grid
+        else:
+            raise PlanningError(f"expected a Segmentation or a room graph, got {type(seg_or_G).__name__}")
+        self.G = G
+        self.shape = tuple(self.grid.shape)
+        self.res = self.grid.resolution
+        self.doors = {}  # id -> (a, b, p1, p2, width, (x, y))
+        for a, b, k, d in G.edges(keys=True, data=True):
+            did = int(d.get("door", k))
+            p1 = tuple(float(v) for v in d["p1"])
+            p2 = tuple(float(v) for v in d["p2"])
+            self.doors[did] = (int(a), int(b), p1, p2, float(d["width"]), (float(d["x"]), float(d["y"])))
+        self._bbox = None
+
+    # -- rooms ------------------------------------------------------------
+    def room_bbox(self, r):
+        """(r0, r1, c0, c1) half-open pixel box of room ``r``'s cells."""
+        if self.seg is not None:
+            if self._bbox is None:
+                from scipy import ndimage as ndi
+
+                self._bbox = ndi.find_objects(self.seg.labels)
+            sl = self._bbox[r - 1] if 0 < r <= len(self._bbox) else None
+            if sl is None:
+                return None
+            return sl[0].start, sl[0].stop, sl[1].start, sl[1].stop
+        poly = self.G.nodes[r].get("polygon")
+        if poly is None or poly.is_empty:
+            return None
+        x0, y0, x1, y1 = poly.bounds
+        rows, cols = self.grid.world_to_pixel(np.array([x0, x0, x1, x1]), np.array([y0, y1, y0, y1]))
+        H, W = self.shape
+        r0 = max(int(np.floor(rows.min())), 0)
+        c0 = max(int(np.floor(cols.min())), 0)
+        r1 = min(int(np.ceil(rows.max())) + 1, H)
+        c1 = min(int(np.ceil(cols.max())) + 1, W)
+        return r0, r1, c0, c1
+
+    def window_labels(self, rooms, win):
+        """Labels of ``rooms`` (others 0) in the window ``(r0, r1, c0, c1)``."""
+        r0, r1, c0, c1 = win
+        if self.seg is not None:
+            L = self.seg.labels[r0:r1, c0:c1]
+            return np.where(np.isin(L, list(rooms)), L, 0).astype(np.int32)
+        import shapely
+
+        out = np.zeros((r1 - r0, c1 - c0), np.int32)
+        rr, cc = np.mgrid[r0:r1, c0:c1]
+        xs, ys = self.grid.pixel_to_world(rr + _PROBE, cc + _PROBE)
+        for r in rooms:
+            poly = self.G.nodes[r].get("polygon")
+            if poly is None or poly.is_empty:
+                continue
+            inside = shapely.contains_xy(poly, xs, ys)
+            out[inside & (out == 0)] = r
+        return out
+
+    def label_at_pixel(self, row, col):
+        H, W = self.shape
+        if not (0 <= row < H and 0 <= col < W):
+            return 0
+        if self.seg is not None:
+            return int(self.seg.labels[row, col])
+        import shapely
+
+        x, y = self.grid.pixel_to_world(row + _PROBE, col + _PROBE)
+        for r, d in self.G.nodes(data=True):
+            poly = d.get("polygon")
+            if poly is not None and not poly.is_empty and shapely.contains_xy(poly, float(x), float(y)):
+                return int(r)
+        return 0
+
+    def doors_of(self, r):
+        return sorted(k for k, v in self.doors.items() if r in (v[0], v[1]))
+
+    def door_cells(self, did):
+        from skimage.draw import line
+
+        _, _, p1, p2, _, _ = self.doors[did]
+        H, W = self.shape
+        a = np.clip(np.rint(p1), 0, [H - 1, W - 1]).astype(int)
+        b = np.clip(np.rint(p2), 0, [H - 1, W - 1]).astype(int)
+        return line(a[0], a[1], b[0], b[1])
+
+
+def _pixel(ctx, x, y):
+    r, c = ctx.grid.world_to_pixel(x, y)
+    return int(np.rint(r)), int(np.rint(c))
+
+
+class _RoomSpace:
+    """Traversable cells of one room (its cells plus its doors' cells) and its door cells."""
+
+    def __init__(self, ctx: _Ctx, r: int, doors=None):
+        self.ctx, self.r = ctx, r
+        doors = ctx.doors_of(r) if doors is None else doors
+        H, W = ctx.shape
+        box = ctx.room_bbox(r)
+        lines = {d: ctx.door_cells(d) for d in doors}
+        rows = [box[0], box[1] - 1] if box else []
+        cols = [box[2], box[3] - 1] if box else []
+        for rr, cc in lines.values():
+            rows += [rr.min(), rr.max()]
+            cols += [cc.min(), cc.max()]
+        if not rows:
+            self.win, self.mask, self.door_px = (0, 0, 0, 0), np.zeros((0, 0), bool), {}
+            return
+        r0, r1 = max(min(rows) - 1, 0), min(max(rows) + 2, H)
+        c0, c1 = max(min(cols) - 1, 0), min(max(cols) + 2, W)
+        self.win = (r0, r1, c0, c1)
+        rooms = {r} | {x for d in doors for x in ctx.doors[d][:2]}
+        L = ctx.window_labels(rooms, self.win)
+        mask = L == r
+        self.door_px = {}
+        for d, (rr, cc) in lines.items():
+            rr, cc = rr - r0, cc - c0
+            ok = L[rr, cc] > 0
+            if not ok.any():
+                continue
+            rr, cc = rr[ok], cc[ok]
+            mask[rr, cc] = True
+            _, _, p1, p2, _, _ = ctx.doors[d]
+            mr, mc = (p1[0] + p2[0]) / 2 - r0, (p1[1] + p2[1]) / 2 - c0
+            i = int(np.argmin((rr - mr) ** 2 + (cc - mc) ** 2))
+            self.door_px[d] = (int(rr[i]), int(cc[i]))
+        self.mask = mask
+
+    def local(self, row, col):
+        r0, r1, c0, c1 = self.win
+        if r0 <= row < r1 and c0 <= col < c1 and self.mask[row - r0, col - c0]:
+            return row - r0, col - c0
+        return None
+
+    def distances(self, src, targets):
+        """Geodesic distances (m) from local pixel ``src`` to local pixels ``targets`` (inf if unreachable)."""
+        from skimage.graph import MCP_Geometric
+
+        if not targets:
+            return []
+        costs = np.where(self.mask, 1.0, np.inf)
+        mcp = MCP_Geometric(costs, fully_connected=True)
+        cum, _ = mcp.find_costs([src], targets)
+        return [float(cum[t]) * self.ctx.res for t in targets]
+
+
+# --------------------------------------------------------------------------
+# Queries
+# --------------------------------------------------------------------------
+
+def _graph(seg_or_G):
+    return seg_or_G if isinstance(seg_or_G, nx.Graph) else seg_or_G.room_graph
+
+
+def room_at(seg_or_G, x: float, y: float) -> int:
+    """The room at map-frame point ``(x, y)``.
+
+    Parameters
+    ----------
+    seg_or_G : Segmentation or networkx.MultiGraph
+        A segmentation or a room–door graph (rooms are found from their
+        polygons, which follow cell edges, so both give the same answer).
+    x, y : float
+        Map-frame coordinates in metres.
+
+    Returns
+    -------
+    int
+        Room ID (``1..N``) of the cell that holds the point; ``0`` when the
+        point is outside the map or not on a room's cell (wall, unknown).
+    """
+    ctx = _Ctx(seg_or_G)
+    return ctx.label_at_pixel(*_pixel(ctx, x, y))
+
+
+def neighbors(G, room: int) -> list:
+    """Rooms that share at least one door with ``room``.
+
+    Parameters
+    ----------
+    G : networkx.MultiGraph or Segmentation
+        The room–door graph (or a segmentation, whose ``room_graph`` is used).
+    room : int
+        Room ID.
+
+    Returns
+    -------
+    list of int
+        Neighbouring room IDs, ascending.
+    """
+    G = _graph(G)
+    if room not in G:
+        raise NotInRoomError(f"no room {room!r} in the graph (rooms 1..{G.number_of_nodes()})")
+    return sorted(int(n) for n in G.neighbors(room) if n != room)
+
+
+def doors_between(G, a: int, b: int) -> list:
+    """Doors joining rooms ``a`` and ``b``.
+
+    Parameters
+    ----------
+    G : networkx.MultiGraph or Segmentation
+    a, b : int
+        Room IDs.
+
+    Returns
+    -------
+    list of int
+        Door IDs, ascending (empty when the rooms are not adjacent). Each
+        door's attributes (``width`` m, midpoint ``x``, ``y`` m, ...) are
+        ``G.edges[a, b, door_id]``.
+    """
+    G = _graph(G)
+    for r in (a, b):
+        if r not in G:
+            raise NotInRoomError(f"no room {r!r} in the graph (rooms 1..{G.number_of_nodes()})")
+    if not G.has_edge(a, b):
+        return []
+    return sorted(int(d.get("door", k)) for k, d in G[a][b].items())
+
+
+# --------------------------------------------------------------------------
+# Travel distances
+# --------------------------------------------------------------------------
+
+def room_distances(seg_or_G, room: int) -> dict:
+    """In-room travel distances between every pair of the room's doors.
+
+    Parameters
+    ----------
+    seg_or_G : Segmentation or networkx.MultiGraph
+    room : int
+        Room ID.
+
+    Returns
+    -------
+    dict
+        ``{(door_i, door_j): metres}`` for ``door_i < door_j``, geodesic
+        distance through the room's free cells between the two doors'
+        midpoint cells; pairs not connected inside the room are left out.
+    """
+    ctx = _Ctx(seg_or_G)
+    if room not in ctx.G:
+        raise NotInRoomError(f"no room {room!r} in the graph")
+    return _room_distances(ctx, room)
+
+
+def _room_distances(ctx, room):
+    space = _RoomSpace(ctx, room)
+    ids = sorted(space.door_px)
+    out = {}
+    for i, di in enumerate(ids[:-1]):
+        rest = ids[i + 1:]
+        dist = space.distances(space.door_px[di], [space.door_px[d] for d in rest])
+        for dj, L in zip(rest, dist):
+            if np.isfinite(L):
+                out[(di, dj)] = L
+    return out
+
+
+def travel_graph(seg_or_G) -> nx.MultiGraph:
+    """A copy of the room–door graph with in-room door-to-door distances.
+
+    Every room node gets ``door_distances``: a tuple of
+    ``(door_i, door_j, metres)`` triples (``door_i < door_j``), the geodesic
+    travel distance inside that room between the two doors' midpoints (see
+    the module notes). :func:`topomap.export.write_outputs` saves this graph,
+    so ``topomap plan`` works from the saved graph file alone, and
+    :func:`door_graph` / :func:`plan_path` reuse the stored distances instead
+    of recomputing them.
+
+    Parameters
+    ----------
+    seg_or_G : Segmentation or networkx.MultiGraph
+
+    Returns
+    -------
+    networkx.MultiGraph
+        The annotated copy (the input is not modified); the graph attribute
+        ``travel_distances`` is ``"geodesic"``.
+    """
+    ctx = _Ctx(seg_or_G)
+    G = ctx.G.copy()
+    for r in G.nodes:
+        dist = _room_distances(ctx, r)
+        G.nodes[r]["door_distances"] = tuple((int(i), int(j), float(L)) for (i, j), L in sorted(dist.items()))
+    G.graph["travel_distances"] = "geodesic"
+    return G
+
+
+def _annotated(seg_or_G):
+    G = _graph(seg_or_G)
+    if G.number_of_nodes() and all("door_distances" in d for _, d in G.nodes(data=True)):
+        return G
+    return travel_graph(seg_or_G)
+
+
+def door_graph(seg_or_G, *, min_width: float = 0.0) -> nx.Graph:
+    """The door-level graph: doors as nodes, in-room travel between them as edges.
+
+    Parameters
+    ----------
+    seg_or_G : Segmentation or networkx.MultiGraph
+        A segmentation or a room–door graph (stored ``door_distances`` from
+        :func:`travel_graph` are used when present, else computed).
+    min_width : float
+        Doors narrower than this (m) are left out.
+
+    Returns
+    -------
+    networkx.Graph
+        Nodes: door IDs with ``x``, ``y`` (midpoint, m), ``width`` (m) and
+        ``rooms`` (the two room IDs). Edges join two doors of the same room,
+        with ``length`` (m, in-room geodesic travel distance between the
+        midpoints) and ``room`` (the room crossed); when two doors share two
+        rooms the shorter crossing is kept.
+    """
+    G = _annotated(seg_or_G)
+    D = nx.Graph(min_width=float(min_width))
+    for a, b, k, d in G.edges(keys=True, data=True):
+        if float(d["width"]) < min_width:
+            continue
+        D.add_node(int(d.get("door", k)), x=float(d["x"]), y=float(d["y"]), width=float(d["width"]),
+                   rooms=(int(a), int(b)))
+    for r, nd in G.nodes(data=True):
+        for i, j, L in nd.get("door_distances", ()):
+            i, j, L = int(i), int(j), float(L)
+            if i in D and j in D and (not D.has_edge(i, j) or D.edges[i, j]["length"] > L):
+                D.add_edge(i, j, length=L, room=int(r))
+    return D
+
+
+# --------------------------------------------------------------------------
+# Planning
+# --------------------------------------------------------------------------
+
+def _is_room_id(v):
+    return isinstance(v, numbers.Integral) and not isinstance(v, bool)
+
+
+def _endpoint(ctx, G, v, what):
+    """(room, (x, y), (row, col)) of a start/goal given as a room ID or a point."""
+    if _is_room_id(v):
+        r = int(v)
+        if r not in G:
+            raise NotInRoomError(f"{what} room {r} does not exist (rooms: "
+                                 f"{', '.join(str(n) for n in sorted(G.nodes))})")
+        x, y = float(G.nodes[r]["x"]), float(G.nodes[r]["y"])
+        row, col = _pixel(ctx, x, y)
+        if ctx.label_at_pixel(row, col) == r:
+            return r, (x, y), (row, col)
+        # centroid outside the room (L shape, ring): nearest cell of the room
+        space = _RoomSpace(ctx, r, doors=[])
+        r0, _, c0, _ = space.win
+        rr, cc = np.nonzero(space.mask)
+        if rr.size == 0:
+            raise NotInRoomError(f"{what} room {r} has no cells")
+        i = int(np.argmin((rr + r0 - row) ** 2 + (cc + c0 - col) ** 2))
+        row, col = int(rr[i] + r0), int(cc[i] + c0)
+        x, y = ctx.grid.pixel_to_world(row, col)
+        return r, (float(x), float(y)), (row, col)
+    try:
+        x, y = (float(t) for t in v)
+    except (TypeError, ValueError):
+        raise PlanningError(f"{what} must be (x, y) in metres or a room ID, got {v!r}") from None
+    if not (np.isfinite(x) and np.isfinite(y)):
+        raise PlanningError(f"{what} must be finite, got ({x}, {y})")
+    row, col = _pixel(ctx, x, y)
+    H, W = ctx.shape
+    if not (0 <= row < H and 0 <= col < W):
+        raise NotInRoomError(f"{what} ({x:g}, {y:g}) m is outside the map")
+    r = ctx.label_at_pixel(row, col)
+    if r == 0:
+        raise NotInRoomError(f"{what} ({x:g}, {y:g}) m is not in the free space of any room")
+    return r, (x, y), (row, col)
+
+
+def plan_path(seg_or_G, start, goal, *, robot_width: float = 0.0) -> dict:
+    """Plan a route from ``start`` to ``goal`` through rooms and doors.
+
+    Edge costs are real travel distances through free space (see the module
+    notes); the route minimises the total length with Dijkstra on the door
+    graph plus the start and the goal.
+
+    Parameters
+    ----------
+    seg_or_G : Segmentation or networkx.MultiGraph
+        A segmentation, or a room–door graph (best one annotated by
+        :func:`travel_graph`, such as ``rooms.graphml``/``rooms.json`` written
+        by ``topomap segment``, so door-to-door distances are not recomputed).
+    start, goal : (float, float) or int
+        A map-frame point ``(x, y)`` in metres, or a room ID; a room stands
+        for its centroid (or, when the centroid lies outside the room, the
+        room's cell nearest to it).
+    robot_width : float
+        Doors narrower than this (m) are not used.
+
+    Returns
+    -------
+    dict
+        ``rooms`` (list of int): the rooms passed, from the start room to
+        the goal room; ``doors`` (list of int): the doors passed, in order;
+        ``waypoints`` ((K, 2) ndarray, m): the start, the door midpoints and
+        the goal; ``length`` (float, m): travel distance through free space;
+        ``legs`` (list of float, m): the length of each piece between two
+        waypoints; ``start_room``, ``goal_room`` (int).
+
+    Raises
+    ------
+    NotInRoomError
+        The start or goal is outside the map, not on a room's free cell, or
+        an unknown room ID.
+    NoPathError
+        The goal cannot be reached (separated by walls, or every connecting
+        door is narrower than ``robot_width``).
+    """
+    try:
+        robot_width = float(robot_width)
+    except (TypeError, ValueError):
+        raise PlanningError(f"robot_width must be a width in metres, got {robot_width!r}") from None
+    if not np.isfinite(robot_width) or robot_width < 0:
+        raise PlanningError(f"robot_width must be >= 0 m, got {robot_width!r}")
+    ctx = _Ctx(seg_or_G)
+    G = _annotated(seg_or_G)
+    rs, ps, pxs = _endpoint(ctx, G, start, "start")
+    rg, pg, pxg = _endpoint(ctx, G, goal, "goal")
+    H = door_graph(G, min_width=robot_width)
+    S, T = ("start",), ("goal",)
+    H.add_node(S)
+    H.add_node(T)
+    same = rs == rg
+    for r, p, node in ((rs, pxs, S), (rg, pxg, T)):
+        usable = [d for d in ctx.doors_of(r) if d in H]
+        space = _RoomSpace(ctx, r, doors=usable)
+        src = space.local(*p)
+        targets = [d for d in usable if d in space.door_px]
+        dist = space.distances(src, [space.door_px[d] for d in targets]) if src else []
+        for d, L in zip(targets, dist):
+            if np.isfinite(L):
+                H.add_edge(node, d, length=L, room=r)
+        if same and node is S and src:
+            q = space.local(*pxg)
+            if q is not None:
+                (L,) = space.distances(src, [q])
+                if np.isfinite(L):
+                    H.add_edge(S, T, length=L, room=r)
+    try:
+        length, path = nx.single_source_dijkstra(H, S, T, weight="length")
+    except nx.NetworkXNoPath:
+        why = f" with doors at least {robot_width:g} m wide" if robot_width > 0 else ""
+        raise NoPathError(f"no path from room {rs} ({ps[0]:g}, {ps[1]:g}) to room {rg} "
+                          f"({pg[0]:g}, {pg[1]:g}){why}") from None
+    doors = [int(n) for n in path[1:-1]]
+    rooms = [int(H.edges[u, v]["room"]) for u, v in zip(path[:-1], path[1:])]
+    legs = [float(H.edges[u, v]["length"]) for u, v in zip(path[:-1], path[1:])]
+    pts = [ps] + [ctx.doors[d][5] for d in doors] + [pg]
+    return {"rooms": rooms, "doors": doors, "waypoints": np.asarray(pts, float).reshape(-1, 2),
+            "length": float(length), "legs": legs, "start_room": rs, "goal_room": rg}
