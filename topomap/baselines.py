@@ -34,7 +34,6 @@ from topomap.rooms import fill_unlabeled, relabel_sequential
 __all__ = ["watershed", "morphological", "distance", "voronoi"]
 
 _EIGHT = np.ones((3, 3), np.uint8)
-_SKEL = "medial"
 
 
 # --------------------------------------------------------------------------- helpers
@@ -95,11 +94,15 @@ def watershed(free, *, resolution=0.05, min_distance=1.75):
         Free space.
     resolution : float, default 0.05
         Metres per pixel.
-    min_distance : float, default 1.0
-        Minimum distance (metres) between two markers. 1 m is about the width
-        of a door plus its frame: two maxima closer than that lie in the same
-        space, so it suppresses the plateau maxima of wide corridors without
-        merging neighbouring small rooms (offices are >= ~2 m wide).
+    min_distance : float, default 1.75
+        Minimum distance (metres) between two markers. Clearance maxima closer
+        than that are taken to lie in the same space; this suppresses most
+        of the plateau maxima along corridors while neighbouring small rooms
+        (offices are >= ~2.5 m wide, so their maxima are farther apart) keep
+        a marker each. On the 14 ipa benchmark maps it reproduces the
+        reference watershed's operating point (precision / recall 96.9 /
+        83.3 % against 98.8 / 84.2 %; 1.0 m gives 98.8 / 73.0, 2.0 m
+        96.7 / 88.4).
 
     Returns
     -------
@@ -424,14 +427,18 @@ def _basis_points(cp, d, occ_rc, tree):
     return pts[i1], pts[i2]
 
 
-def voronoi(free, *, resolution=0.05, neighborhood=1.0, max_door_width=1.5, prune_length=5.0,
+def voronoi(free, *, resolution=0.05, neighborhood=1.0, max_door_width=2.5, prune_length=5.0,
             room_area_min=0.1, max_area_for_merging=12.5, min_room_area=2.0):
     """Voronoi-graph critical-point segmentation (Thrun 1998; ipa's voronoi).
 
-    1. The Voronoi graph is the skeleton (:func:`skimage.morphology.skeletonize`)
+    1. The Voronoi graph is the medial axis (:func:`skimage.morphology.medial_axis`)
        of the free space after a 3x3 opening, as ipa smooths the map before
        building the diagram; end branches are pruned back to their first
-       junction (``prune_length``).
+       junction (``prune_length``). The medial axis, like ipa's generalised
+       Voronoi diagram, has a branch to every convex corner, so a dead-end
+       room keeps its junctions and its branch survives the pruning (a
+       thinning skeleton, :func:`skimage.morphology.skeletonize`, is a bare
+       path there and would be pruned away with the room's door).
     2. Critical points are skeleton pixels of degree 2 whose clearance (the
        distance transform) is the minimum over all skeleton pixels within
        ``neighborhood`` metres, and at most ``max_door_width / 2``.
@@ -457,10 +464,13 @@ def voronoi(free, *, resolution=0.05, neighborhood=1.0, max_door_width=1.5, prun
         ``280 / clearance_px`` pixels are found, about 1.5 m of graph at a
         0.45 m door clearance, i.e. about 0.75 m each side; 1.0 m plus the
         merging step gives about the same cut density.
-    max_door_width : float, default 1.5
-        Critical points whose clearance exceeds half this width are not cut
-        (ipa has no such limit but relies on merging to undo cuts in open
-        space; 1.5 m keeps double doors and corridor narrowings).
+    max_door_width : float, default 2.5
+        Critical points whose clearance exceeds half this width are not cut.
+        ipa has no such limit and relies on its merging to undo cuts in open
+        space; 2.5 m keeps double doors and corridor narrowings and, on the
+        14 ipa benchmark maps, reproduces the operating point of the C++
+        implementation (precision / recall 96.3 / 94.5 % against 96.0 /
+        94.6 %; 2.0 m gives 95.6 / 96.0, 3.0 m 96.6 / 93.5).
     prune_length : float, default 5.0
         Maximal spur length pruned (metres): ipa peels end points 100 times,
         5 m at 0.05 m/px.
@@ -489,7 +499,7 @@ def voronoi(free, *, resolution=0.05, neighborhood=1.0, max_door_width=1.5, prun
     import cv2
     from scipy.spatial import cKDTree
     from skimage.draw import line
-    from skimage.morphology import medial_axis, skeletonize
+    from skimage.morphology import medial_axis
 
     free = _check(free, resolution, neighborhood=neighborhood, max_door_width=max_door_width,
                   prune_length=prune_length, room_area_min=room_area_min,
@@ -503,7 +513,7 @@ def voronoi(free, *, resolution=0.05, neighborhood=1.0, max_door_width=1.5, prun
 
     # 1. Voronoi graph = pruned skeleton of the opened free space
     opened = cv2.morphologyEx(f.astype(np.uint8), cv2.MORPH_OPEN, _EIGHT).astype(bool)
-    skel = (medial_axis(opened, rng=0) if _SKEL == "medial" else skeletonize(opened)) & f
+    skel = medial_axis(opened, rng=0) & f  # rng: deterministic tie-breaking
     skel = _prune(skel, max(int(round(prune_length / resolution)), 1))
 
     # 2. critical points
