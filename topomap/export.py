@@ -1,4 +1,29 @@
-"""Saving results: label image, room graph (GraphML, JSON), overlay picture.
+"""Saving and loading results: label image, room graph, overlay picture.
+
+Formats of the room–door graph (:func:`topomap.roomgraph.room_graph`,
+usually annotated by :func:`topomap.planning.travel_graph`):
+
+GraphML (:func:`save_graphml`, :func:`load_graphml`)
+    Readable by ``networkx.read_graphml``, Gephi, igraph, yEd: only scalar
+    attributes (str, int, float, bool). Geometry is a WKT string (written
+    with the shortest exact decimal of every coordinate, so it reads back
+    bit for bit), tuples and lists are JSON strings, ``None`` is ``""``.
+    :func:`load_graphml` restores the types from :data:`GRAPH_TYPES`,
+    :data:`NODE_TYPES` and :data:`EDGE_TYPES` (floats, int room IDs and door
+    keys, tuples, shapely geometry), osmnx style.
+JSON (:func:`save_json`, :func:`load_json`)
+    networkx node-link data (``"edges"`` key) with the same scalar encoding;
+    loading gives a graph equal to the original.
+GeoJSON (:func:`to_geojson`, :func:`save_geojson`, :func:`load_geojson`)
+    A FeatureCollection in **map-frame metres** (the frame of the map YAML's
+    ``origin``, not WGS84 longitude/latitude as RFC 7946 assumes; GIS tools
+    should treat it as a local Cartesian CRS): one Polygon/MultiPolygon
+    feature per room (``"kind": "room"``) and one LineString per door
+    (``"kind": "door"``), every attribute in ``properties`` as plain JSON
+    (tuples as arrays); the graph attributes are the collection's foreign
+    member ``"properties"``. :func:`load_geojson` rebuilds the graph.
+
+The label image is also written as a ROS map pair (:func:`save_label_map`).
 
 Every file is written to a temporary name in the target directory and renamed
 into place (:func:`atomic_write`), so a failed run never leaves a partial file
@@ -16,8 +41,12 @@ from pathlib import Path
 import numpy as np
 import networkx as nx
 
+from .errors import GraphFormatError
+
 __all__ = ["atomic_write", "save_labels", "save_graphml", "save_json", "to_graphml_graph",
-           "node_link", "write_outputs"]
+           "node_link", "write_outputs", "geometry_wkt", "restore_types", "load_graphml", "load_json",
+           "to_geojson", "from_geojson", "save_geojson", "load_geojson", "save_label_map", "load_label_map",
+           "save_graph", "load_graph", "GRAPH_TYPES", "NODE_TYPES", "EDGE_TYPES", "FORMATS"]
 
 
 @contextmanager
@@ -61,22 +90,197 @@ def save_labels(labels: np.ndarray, path) -> Path:
     return Path(path)
 
 
+# --------------------------------------------------------------------------
+# Scalar encoding and type restoration
+# --------------------------------------------------------------------------
+
+def _num(v) -> str:
+    """Shortest decimal that reads back as exactly ``v`` (no exponent)."""
+    return np.format_float_positional(float(v), unique=True, trim="-")
+
+
+def _ring(coords) -> str:
+    return "(" + ", ".join(f"{_num(c[0])} {_num(c[1])}" for c in coords) + ")"
+
+
+def _poly_wkt(p) -> str:
+    return "(" + ", ".join(_ring(r.coords) for r in [p.exterior, *p.interiors]) + ")"
+
+
+def geometry_wkt(geom) -> str:
+    """WKT of a shapely geometry with every coordinate exact.
+
+    shapely's own ``wkt`` rounds to a fixed number of decimals; this writer
+    uses the shortest decimal that reads back to the same float, so
+    ``shapely.wkt.loads(geometry_wkt(g)) == g``. 2-D Point, LineString,
+    Polygon and MultiPolygon are written this way, anything else by
+    ``shapely.to_wkt``.
+    """
+    import shapely
+
+    t = geom.geom_type
+    if geom.is_empty:
+        return f"{t.upper()} EMPTY"
+    if geom.has_z:
+        return shapely.to_wkt(geom, rounding_precision=-1)
+    if t == "Point":
+        return f"POINT ({_num(geom.x)} {_num(geom.y)})"
+    if t == "LineString":
+        return "LINESTRING " + _ring(geom.coords)
+    if t == "Polygon":
+        return "POLYGON " + _poly_wkt(geom)
+    if t == "MultiPolygon":
+        return "MULTIPOLYGON (" + ", ".join(_poly_wkt(p) for p in geom.geoms) + ")"
+    return shapely.to_wkt(geom, rounding_precision=-1)
+
+
+def _is_geom(v) -> bool:
+    return hasattr(v, "geom_type") and hasattr(v, "wkt")
+
+
+def _plain(v):
+    """Plain JSON value of ``v``: tuples/arrays as lists, numpy scalars as Python, geometry as WKT."""
+    if v is None or isinstance(v, (bool, str)):
+        return v
+    if isinstance(v, (int, np.integer)):
+        return int(v)
+    if isinstance(v, (float, np.floating)):
+        return float(v)
+    if _is_geom(v):
+        return geometry_wkt(v)
+    if isinstance(v, np.ndarray):
+        return _plain(v.tolist())
+    if isinstance(v, dict):
+        return {str(k): _plain(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_plain(x) for x in v]
+    return str(v)
+
+
 def _scalar(v):
-    """GraphML-safe value: scalars stay, tuples/lists become JSON, geometry WKT."""
+    """GraphML-safe value: scalars stay, tuples/lists/arrays become JSON, geometry exact WKT, None ''."""
     if v is None:
         return ""
-    if isinstance(v, (bool, int, float, str)):
+    if isinstance(v, (bool, str)):
         return v
-    if isinstance(v, (np.integer,)):
+    if isinstance(v, (int, np.integer)) and not isinstance(v, np.bool_):
         return int(v)
-    if isinstance(v, (np.floating,)):
+    if isinstance(v, (float, np.floating)):
         return float(v)
-    if hasattr(v, "wkt"):
-        return v.wkt
-    if isinstance(v, np.ndarray):
-        return json.dumps(v.tolist())
-    return json.dumps(v, default=float)
+    if isinstance(v, np.bool_):
+        return bool(v)
+    if _is_geom(v):
+        return geometry_wkt(v)
+    return json.dumps(_plain(v))
 
+
+def _none(v):
+    return v is None or (isinstance(v, str) and v.strip() in ("", "None", "null"))
+
+
+def _json(v):
+    return json.loads(v) if isinstance(v, str) else v
+
+
+def _opt(f):
+    def conv(v):
+        return None if _none(v) else f(v)
+    conv.__name__ = f"optional_{f.__name__}"
+    return conv
+
+
+def _float_tuple(v):
+    return tuple(float(x) for x in _json(v))
+
+
+def _int_tuple(v):
+    return tuple(int(x) for x in _json(v))
+
+
+def _int_pair(v):
+    return tuple(int(x) for x in _json(v))
+
+
+def _geometry(v):
+    if _is_geom(v):
+        return v
+    if isinstance(v, dict):
+        from shapely.geometry import shape
+
+        return shape(v)
+    from shapely import wkt
+
+    return wkt.loads(v)
+
+
+def _door_distances(v):
+    return tuple((int(i), int(j), float(L)) for i, j, L in _json(v))
+
+
+#: Types of the graph attributes (converter per attribute name).
+GRAPH_TYPES = {"resolution": float, "origin": _float_tuple, "method": _opt(str), "threshold": _opt(float),
+               "map": _opt(str), "shape": _int_tuple, "travel_distances": _opt(str)}
+#: Types of the room (node) attributes.
+NODE_TYPES = {"area": float, "cells": int, "x": float, "y": float, "row": float, "col": float,
+              "polygon": _opt(_geometry), "door_distances": _door_distances}
+#: Types of the door (edge) attributes.
+EDGE_TYPES = {"door": int, "width": float, "x": float, "y": float, "x1": float, "y1": float, "x2": float,
+              "y2": float, "p1": _float_tuple, "p2": _float_tuple, "rooms": _int_pair}
+
+
+def _restore(d: dict, table: dict, where: str) -> dict:
+    out = {}
+    for k, v in d.items():
+        f = table.get(k)
+        if f is None:
+            out[k] = v
+            continue
+        try:
+            out[k] = f(v)
+        except Exception as exc:  # noqa: BLE001 - reported as a format error
+            raise GraphFormatError(f"{where}: attribute {k!r} = {str(v)[:60]!r} is not valid: {exc}") from None
+    return out
+
+
+def _node_id(n):
+    if isinstance(n, str):
+        try:
+            return int(n)
+        except ValueError:
+            return n
+    return n
+
+
+def restore_types(G: nx.Graph, name: str = "<graph>") -> nx.MultiGraph:
+    """A room graph with attribute types restored after reading a file.
+
+    Node IDs that look like integers become ``int``; every attribute listed in
+    :data:`GRAPH_TYPES`, :data:`NODE_TYPES`, :data:`EDGE_TYPES` is converted
+    (JSON strings to tuples, WKT to shapely geometry, ``""`` to ``None``);
+    other attributes are kept as read. Edge keys become the door IDs.
+
+    Raises
+    ------
+    GraphFormatError
+        An attribute cannot be converted.
+    """
+    H = nx.MultiGraph()
+    gattr = {k: v for k, v in G.graph.items() if k not in ("node_default", "edge_default")}  # GraphML reader's
+    H.graph.update(_restore(gattr, GRAPH_TYPES, f"{name}: graph"))
+    for n, d in G.nodes(data=True):
+        H.add_node(_node_id(n), **_restore(d, NODE_TYPES, f"{name}: node {n}"))
+    edges = G.edges(keys=True, data=True) if G.is_multigraph() else ((u, v, None, d) for u, v, d in G.edges(data=True))
+    for u, v, k, d in edges:
+        d = _restore(d, EDGE_TYPES, f"{name}: edge {u}-{v}")
+        d.pop("id", None)
+        key = d.get("door", _node_id(k) if k is not None else None)
+        H.add_edge(_node_id(u), _node_id(v), key=key, **d)
+    return H
+
+
+# --------------------------------------------------------------------------
+# GraphML and JSON
+# --------------------------------------------------------------------------
 
 def to_graphml_graph(G: nx.Graph) -> nx.Graph:
     """A copy of ``G`` whose attributes are all GraphML scalars (str, int, float, bool)."""
@@ -94,29 +298,404 @@ def to_graphml_graph(G: nx.Graph) -> nx.Graph:
 
 
 def save_graphml(G: nx.Graph, path) -> Path:
-    """Write the room graph as GraphML (geometry as WKT strings)."""
+    """Write the room graph as GraphML (scalars only; geometry WKT, tuples JSON).
+
+    Parameters
+    ----------
+    G : networkx.Graph
+        Room–door graph.
+    path : str or os.PathLike
+        Output file, written atomically.
+
+    Returns
+    -------
+    pathlib.Path
+    """
     H = to_graphml_graph(G)
     with atomic_write(path) as fh:
         nx.write_graphml(H, fh)
     return Path(path)
 
 
+def _bad(path, what, exc=None) -> GraphFormatError:
+    msg = f"{path}: {what}"
+    if exc is not None:
+        msg += f": {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}"
+    return GraphFormatError(msg)
+
+
+def _check_file(path) -> Path:
+    from .errors import MapFileNotFoundError
+
+    path = Path(path)
+    if not path.is_file():
+        raise MapFileNotFoundError(f"{path}: no such file" if not path.exists() else f"{path}: not a file")
+    return path
+
+
+def load_graphml(path) -> nx.MultiGraph:
+    """Read a room graph written by :func:`save_graphml`, with types restored.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    networkx.MultiGraph
+        Nodes are int room IDs, edges keyed by int door ID; attributes as in
+        :func:`topomap.roomgraph.room_graph` (see :func:`restore_types`).
+
+    Raises
+    ------
+    GraphFormatError
+        The file is not GraphML or an attribute cannot be restored.
+    """
+    path = _check_file(path)
+    try:
+        G = nx.read_graphml(path, force_multigraph=True)
+    except Exception as exc:  # noqa: BLE001 - ParseError, NetworkXError, ...
+        raise _bad(path, "not a valid GraphML file", exc) from None
+    return restore_types(G, str(path))
+
+
 def node_link(G: nx.Graph) -> dict:
-    """JSON-ready node-link data of ``G`` (geometry as WKT, arrays as lists)."""
+    """JSON-ready node-link data of ``G`` (geometry as WKT, tuples as JSON strings)."""
     H = to_graphml_graph(G)
     return nx.node_link_data(H, edges="edges")
 
 
 def save_json(G: nx.Graph, path) -> Path:
-    """Write the room graph as node-link JSON."""
+    """Write the room graph as node-link JSON (atomically); see :func:`node_link`."""
     data = node_link(G)
     with atomic_write(path, "w") as fh:
         json.dump(data, fh, indent=1)
     return Path(path)
 
 
+def load_json(path) -> nx.MultiGraph:
+    """Read node-link JSON written by :func:`save_json`, with types restored.
+
+    Returns a graph equal to the one saved: same nodes, edges (keys) and
+    attributes (see :func:`restore_types`).
+
+    Raises
+    ------
+    GraphFormatError
+        Not JSON, or not node-link data of a graph.
+    """
+    path = _check_file(path)
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise _bad(path, "not valid JSON", exc) from None
+    if not isinstance(data, dict) or "nodes" not in data:
+        raise _bad(path, "not node-link graph data (no 'nodes')")
+    try:
+        G = nx.node_link_graph(data, edges="edges" if "edges" in data else "links")
+    except Exception as exc:  # noqa: BLE001
+        raise _bad(path, "not node-link graph data", exc) from None
+    return restore_types(G, str(path))
+
+
+# --------------------------------------------------------------------------
+# GeoJSON
+# --------------------------------------------------------------------------
+
+def to_geojson(G: nx.Graph) -> dict:
+    """GeoJSON FeatureCollection of the rooms and doors, map-frame metres.
+
+    Parameters
+    ----------
+    G : networkx.MultiGraph
+        Room–door graph.
+
+    Returns
+    -------
+    dict
+        ``{"type": "FeatureCollection", "properties": {graph attributes},
+        "features": [...]}``. A room is a Feature with its ``polygon`` as
+        geometry (Polygon/MultiPolygon, ``null`` if it has none) and
+        ``properties`` ``{"kind": "room", "room": id, "area": m², ...}``; a
+        door is a LineString from ``(x1, y1)`` to ``(x2, y2)`` with
+        ``{"kind": "door", "door": id, "rooms": [a, b], "width": m, ...}``.
+        Coordinates are map-frame metres (not WGS84).
+    """
+    from shapely.geometry import mapping
+
+    feats = []
+    for n, d in G.nodes(data=True):
+        geom = d.get("polygon")
+        props = {"kind": "room", "room": _plain(n)}
+        props.update({k: _plain(v) for k, v in d.items() if k != "polygon"})
+        feats.append({"type": "Feature", "id": f"room-{n}",
+                      "geometry": _plain_geom(mapping(geom)) if geom is not None else None,
+                      "properties": props})
+    edges = G.edges(keys=True, data=True) if G.is_multigraph() else ((u, v, None, d) for u, v, d in G.edges(data=True))
+    for u, v, k, d in edges:
+        did = d.get("door", k)
+        props = {"kind": "door", "door": _plain(did), "rooms": [_plain(u), _plain(v)]}
+        props.update({a: _plain(b) for a, b in d.items() if a not in ("door", "rooms")})
+        line = [[float(d["x1"]), float(d["y1"])], [float(d["x2"]), float(d["y2"])]]
+        feats.append({"type": "Feature", "id": f"door-{did}",
+                      "geometry": {"type": "LineString", "coordinates": line}, "properties": props})
+    return {"type": "FeatureCollection", "properties": {k: _plain(v) for k, v in G.graph.items()},
+            "features": feats}
+
+
+def _plain_geom(m):
+    if isinstance(m, dict):
+        return {k: _plain_geom(v) for k, v in m.items()}
+    if isinstance(m, (list, tuple)):
+        return [_plain_geom(v) for v in m]
+    return _plain(m)
+
+
+def from_geojson(data: dict, name: str = "<geojson>") -> nx.MultiGraph:
+    """Rebuild the room graph from :func:`to_geojson` data (types restored).
+
+    Raises
+    ------
+    GraphFormatError
+        Not a FeatureCollection of topomap rooms and doors.
+    """
+    if not isinstance(data, dict) or data.get("type") != "FeatureCollection" or \
+            not isinstance(data.get("features"), list):
+        raise GraphFormatError(f"{name}: not a GeoJSON FeatureCollection")
+    G = nx.MultiGraph()
+    G.graph.update(_restore(data.get("properties") or {}, GRAPH_TYPES, f"{name}: collection"))
+    doors = []
+    for i, f in enumerate(data["features"]):
+        props = dict((f or {}).get("properties") or {})
+        kind = props.pop("kind", None)
+        if kind == "room":
+            n = _node_id(props.pop("room"))
+            geom = f.get("geometry")
+            if geom is not None:
+                try:
+                    props["polygon"] = _geometry(geom)
+                except Exception as exc:  # noqa: BLE001
+                    raise GraphFormatError(f"{name}: feature {i}: bad geometry: {exc}") from None
+            else:
+                props["polygon"] = None
+            G.add_node(n, **_restore(props, NODE_TYPES, f"{name}: room {n}"))
+        elif kind == "door":
+            doors.append((i, props))
+        # other features (annotations added by a GIS tool) are ignored
+    for i, props in doors:
+        try:
+            a, b = (_node_id(r) for r in props.pop("rooms"))
+        except Exception:  # noqa: BLE001
+            raise GraphFormatError(f"{name}: feature {i}: a door needs 'rooms' [a, b]") from None
+        d = _restore(props, EDGE_TYPES, f"{name}: door feature {i}")
+        G.add_edge(a, b, key=d.get("door"), **d)
+    return G
+
+
+def save_geojson(G: nx.Graph, path) -> Path:
+    """Write :func:`to_geojson` of ``G`` to ``path`` (atomically)."""
+    data = to_geojson(G)
+    with atomic_write(path, "w") as fh:
+        json.dump(data, fh)
+    return Path(path)
+
+
+def load_geojson(path) -> nx.MultiGraph:
+    """Read a GeoJSON file written by :func:`save_geojson` back into a room graph."""
+    path = _check_file(path)
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise _bad(path, "not valid JSON", exc) from None
+    return from_geojson(data, str(path))
+
+
+# --------------------------------------------------------------------------
+# Any format by extension
+# --------------------------------------------------------------------------
+
+#: File extension -> format name.
+FORMATS = {".graphml": "graphml", ".xml": "graphml", ".json": "json", ".geojson": "geojson"}
+
+
+def _format(path) -> str:
+    ext = Path(path).suffix.lower()
+    if ext not in FORMATS:
+        raise GraphFormatError(f"{path}: unknown graph format {ext or '(no extension)'!r}; "
+                               f"use one of {', '.join(sorted(FORMATS))}")
+    return FORMATS[ext]
+
+
+def load_graph(path) -> nx.MultiGraph:
+    """Load a room graph from ``.graphml``, ``.json`` (node-link) or ``.geojson``."""
+    fmt = _format(path)
+    if fmt == "json":
+        path = _check_file(path)
+        try:
+            head = json.loads(path.read_text(encoding="utf-8"))
+        except (ValueError, UnicodeDecodeError) as exc:
+            raise _bad(path, "not valid JSON", exc) from None
+        if isinstance(head, dict) and head.get("type") == "FeatureCollection":
+            return from_geojson(head, str(path))
+    return {"graphml": load_graphml, "json": load_json, "geojson": load_geojson}[fmt](path)
+
+
+def save_graph(G: nx.Graph, path) -> Path:
+    """Save a room graph as ``.graphml``, ``.json`` (node-link) or ``.geojson`` by extension."""
+    fmt = _format(path)
+    return {"graphml": save_graphml, "json": save_json, "geojson": save_geojson}[fmt](G, path)
+
+
+# --------------------------------------------------------------------------
+# Label image as a ROS map pair
+# --------------------------------------------------------------------------
+
+def save_label_map(seg, stem, *, resolution=None, origin=None) -> Path:
+    """Write the label image as a map_server PGM + YAML pair aligned with the map.
+
+    The pair has the input map's size, ``resolution`` and ``origin``, so it
+    overlays the map in RViz and other ROS tools. The PGM holds the room
+    labels as raw values (``0`` = not a room) and the YAML says
+    ``mode: raw``, so no threshold changes them:
+
+    * an 8-bit PGM (maxval 255) when the map has at most 255 rooms; ROS
+      map_server in raw mode then gives every cell its room ID as value;
+    * a 16-bit PGM (maxval 65535, big-endian as Netpbm specifies) for more
+      rooms; :func:`load_label_map` reads both back exactly.
+
+    Parameters
+    ----------
+    seg : Segmentation or (M, N) ndarray of int
+        A segmentation (its labels and grid frame), or a label image with
+        ``resolution``/``origin`` given.
+    stem : str or os.PathLike
+        Output path without suffix (``.yaml``/``.pgm`` suffixes are
+        stripped): ``<stem>.pgm`` and ``<stem>.yaml`` are written, both
+        renamed into place only after both were written.
+    resolution : float, optional
+        m/px; default the segmentation's grid's (0.05 for an array).
+    origin : (x, y, yaw), optional
+        Default the segmentation's grid's (``(0, 0, 0)`` for an array).
+
+    Returns
+    -------
+    pathlib.Path
+        The YAML file.
+    """
+    from contextlib import ExitStack
+
+    from .errors import ParameterError
+    from .io import FREE_THRESH, OCCUPIED_THRESH, yaml_text
+
+    if hasattr(seg, "labels") and hasattr(seg, "grid"):
+        labels = np.asarray(seg.labels)
+        resolution = seg.grid.resolution if resolution is None else resolution
+        origin = seg.grid.origin if origin is None else origin
+    else:
+        labels = np.asarray(seg)
+    if labels.ndim != 2 or labels.size == 0:
+        raise ParameterError(f"{stem}: a label image must be a non-empty 2-D array, got shape {labels.shape}")
+    if labels.min(initial=0) < 0 or labels.max(initial=0) > 65535:
+        raise ParameterError(f"{stem}: labels must be in 0..65535 to fit a 16-bit PGM")
+    res = float(0.05 if resolution is None else resolution)
+    org = [float(v) for v in ((0.0, 0.0, 0.0) if origin is None else origin)]
+    if len(org) == 2:
+        org.append(0.0)
+    stem = Path(stem)
+    if stem.suffix.lower() in (".yaml", ".yml", ".pgm"):
+        stem = stem.with_suffix("")
+    pgm, yml = stem.parent / (stem.name + ".pgm"), stem.parent / (stem.name + ".yaml")
+    H, W = labels.shape
+    if labels.max(initial=0) <= 255:
+        data = b"P5\n%d %d\n255\n" % (W, H) + labels.astype(np.uint8).tobytes()
+    else:
+        data = b"P5\n%d %d\n65535\n" % (W, H) + labels.astype(">u2").tobytes()
+    meta = {"image": pgm.name, "mode": "raw", "resolution": res, "origin": org, "negate": 0,
+            "occupied_thresh": OCCUPIED_THRESH, "free_thresh": FREE_THRESH}
+    with ExitStack() as stack:
+        fp = stack.enter_context(atomic_write(pgm))
+        fy = stack.enter_context(atomic_write(yml))
+        fp.write(data)
+        fy.write(yaml_text(meta).encode())
+    return yml
+
+
+def _pgm_tokens(buf: bytes, n: int, name):
+    toks, i = [], 0
+    while len(toks) < n:
+        while i < len(buf) and (buf[i:i + 1].isspace() or buf[i:i + 1] == b"#"):
+            if buf[i:i + 1] == b"#":
+                j = buf.find(b"\n", i)
+                i = len(buf) if j < 0 else j + 1
+            else:
+                i += 1
+        j = i
+        while j < len(buf) and not buf[j:j + 1].isspace() and buf[j:j + 1] != b"#":
+            j += 1
+        if j == i:
+            raise GraphFormatError(f"{name}: truncated PGM header")
+        toks.append(buf[i:j])
+        i = j
+    return toks, i + 1  # one whitespace byte after maxval
+
+
+def load_label_map(path):
+    """Read a label map pair written by :func:`save_label_map`.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The YAML file (or the PGM, or the stem).
+
+    Returns
+    -------
+    labels : (M, N) ndarray of int32
+    resolution : float
+        m/px.
+    origin : tuple of float
+        ``(x, y, yaw)``.
+    """
+    import yaml
+
+    path = Path(path)
+    if path.suffix.lower() not in (".yaml", ".yml"):
+        path = path.with_suffix(".yaml")
+    path = _check_file(path)
+    try:
+        meta = yaml.safe_load(path.read_text(encoding="utf-8"))
+        img = _check_file(path.parent / meta["image"])
+        res = float(meta["resolution"])
+        org = tuple(float(v) for v in meta["origin"])
+    except GraphFormatError:
+        raise
+    except OSError:
+        raise
+    except Exception as exc:  # noqa: BLE001
+        raise _bad(path, "not a label map YAML", exc) from None
+    buf = img.read_bytes()
+    if buf[:2] != b"P5":
+        raise GraphFormatError(f"{img}: not a binary PGM (P5)")
+    (w, h, maxval), off = _pgm_tokens(buf[2:], 3, img)
+    w, h, maxval = int(w), int(h), int(maxval)
+    dt = np.uint8 if maxval < 256 else np.dtype(">u2")
+    n = w * h * np.dtype(dt).itemsize
+    raw = buf[2 + off:2 + off + n]
+    if len(raw) != n:
+        raise GraphFormatError(f"{img}: PGM data truncated ({len(raw)} of {n} bytes)")
+    return np.frombuffer(raw, dt).reshape(h, w).astype(np.int32), res, org
+
+
+# --------------------------------------------------------------------------
+# All outputs of a segmentation
+# --------------------------------------------------------------------------
+
 def write_outputs(seg, outdir, *, overlay: bool = True, skeletons: bool = False) -> dict:
-    """Write ``labels.png``, ``rooms.graphml``, ``rooms.json`` and ``overlay.png``.
+    """Write ``labels.png``, ``rooms.graphml``, ``rooms.json``, ``rooms.geojson`` and ``overlay.png``.
+
+    The saved graph is :func:`topomap.planning.travel_graph` of ``seg``: the
+    room–door graph with the in-room door-to-door travel distances on every
+    room (``door_distances``), so ``topomap plan`` works from
+    ``rooms.graphml`` or ``rooms.json`` alone.
 
     Returns ``{name: path}``. All files are first written to temporary names
     and renamed into place only once every one of them has been written, so
@@ -127,8 +706,11 @@ def write_outputs(seg, outdir, *, overlay: bool = True, skeletons: bool = False)
 
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
-    G = seg.room_graph
-    names = {"labels": "labels.png", "graphml": "rooms.graphml", "json": "rooms.json"}
+    from .planning import travel_graph
+
+    G = travel_graph(seg)
+    names = {"labels": "labels.png", "graphml": "rooms.graphml", "json": "rooms.json",
+             "geojson": "rooms.geojson"}
     if overlay:
         names["overlay"] = "overlay.png"
     with ExitStack() as stack:  # on success renames every temporary file; on error removes them all
@@ -136,6 +718,7 @@ def write_outputs(seg, outdir, *, overlay: bool = True, skeletons: bool = False)
         save_labels(seg.labels, tmp["labels"])
         save_graphml(G, tmp["graphml"])
         save_json(G, tmp["json"])
+        save_geojson(G, tmp["geojson"])
         if overlay:
             from .plot import save_overlay
 
