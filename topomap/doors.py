@@ -247,3 +247,133 @@ def select_doors(candidates, endpoints: np.ndarray, threshold: float, occ_lines)
         c.status = "door"
         kept.append(c)
     return kept
+
+
+def passage_minima(G, *, window_px: float, rise_px: float, reach_px: float, min_branch_px: float = 3):
+    """Bottlenecks of free space: local clearance minima along skeleton branches.
+
+    A pixel of a branch is a bottleneck when its clearance is the smallest
+    within ``window_px`` along the branch and the clearance rises by at least
+    ``rise_px`` on *both* sides within ``reach_px`` along the skeleton
+    (continuing one branch past the end node): a door is a narrowing between
+    two wider spaces, not a stretch of uniform corridor. A plateau of equal
+    minima gives one candidate at its middle.
+
+    Returns
+    -------
+    list of Candidate
+        With ``centroid`` at the bottleneck pixel and ``direction`` along the
+        branch there.
+    """
+    from scipy.ndimage import minimum_filter1d
+
+    res = G.graph.get("resolution", 1.0)
+    out = []
+    w = max(int(round(window_px)), 1)
+    # per edge: radius (px) and arc length from its first pixel (px)
+    info = {}
+    for u, v, k, d in G.edges(keys=True, data=True):
+        p = d["path"].astype(float)
+        arc = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(p, axis=0).T))])
+        info[(u, v, k)] = (d["radius"] / res, arc)
+
+    def beyond(node, edge, rem):
+        """Largest clearance within ``rem`` px past ``node`` on its other branches."""
+        best = 0.0
+        if rem <= 0:
+            return best
+        for a, b, kk in G.edges(node, keys=True):
+            key = (a, b, kk) if (a, b, kk) in info else (b, a, kk)
+            if key == edge and a != b:
+                continue
+            rad, arc = info[key]
+            if key[0] == node:
+                sel = arc <= rem
+            else:
+                sel = arc[-1] - arc <= rem
+            if sel.any():
+                best = max(best, float(rad[sel].max()))
+        return best
+
+    for u, v, k in sorted(info):
+        rad, arc = info[(u, v, k)]
+        n = rad.size
+        if n < min_branch_px:
+            continue
+        mn = minimum_filter1d(rad, 2 * w + 1, mode="nearest")
+        is_min = rad <= mn + 1e-6
+        if not is_min.any():
+            continue
+        idx = np.flatnonzero(is_min)
+        runs = np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1)
+        path = G.edges[u, v, k]["path"]
+        for run in runs:
+            i = int(run[len(run) // 2])
+            r = rad[i]
+            # side towards u
+            sel = (arc[i] - arc <= reach_px) & (np.arange(n) < i)
+            left = rad[sel].max() if sel.any() else 0.0
+            if arc[i] < reach_px:
+                left = max(left, beyond(u, (u, v, k), reach_px - arc[i]))
+            sel = (arc - arc[i] <= reach_px) & (np.arange(n) > i)
+            right = rad[sel].max() if sel.any() else 0.0
+            if arc[-1] - arc[i] < reach_px:
+                right = max(right, beyond(v, (u, v, k), reach_px - (arc[-1] - arc[i])))
+            if left < r + rise_px or right < r + rise_px:
+                continue
+            a = path[max(i - 3, 0)].astype(float)
+            b = path[min(i + 3, n - 1)].astype(float)
+            dvec = b - a
+            nrm = np.linalg.norm(dvec)
+            dvec = dvec / nrm if nrm else np.array([1.0, 0.0])
+            out.append(Candidate(edge=(u, v, k), centroid=path[i].astype(float), direction=dvec,
+                                 radius=float(r)))
+    return out
+
+
+def protrusion(obstacle_like_free: np.ndarray, radius_px: float) -> np.ndarray:
+    """Fraction of free cells in a disk of ``radius_px`` around every cell.
+
+    On an obstacle cell this measures how far the obstacle protrudes into
+    free space: about 0.5 on a straight wall, 0.75 at a right-angled convex
+    corner, close to 1 at the end of a thin wall, below 0.5 in a concave
+    corner.
+    """
+    import cv2
+
+    r = max(int(round(radius_px)), 1)
+    y, x = np.ogrid[-r:r + 1, -r:r + 1]
+    k = (x * x + y * y <= r * r).astype(np.float32)
+    k /= k.sum()
+    return cv2.filter2D(obstacle_like_free.astype(np.float32), -1, k, borderType=cv2.BORDER_CONSTANT)
+
+
+def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float):
+    """Set ``ip1``, ``ip2``: the nearest obstacle cell to each bottleneck, and
+    the nearest one on the opposite side (angle of at least 90° between them,
+    seen from the bottleneck).
+
+    At a door these are the two door posts, wherever along the passage the
+    skeleton's minimum lies. Cells farther than ``max_px`` are not searched.
+    """
+    H, W = obstacle.shape
+    for c in candidates:
+        R = int(np.ceil(min(c.radius * 1.5 + 3, max_px)))
+        r0, c0 = int(round(c.centroid[0])), int(round(c.centroid[1]))
+        ra, rb = max(r0 - R, 0), min(r0 + R + 1, H)
+        ca, cb = max(c0 - R, 0), min(c0 + R + 1, W)
+        rr, cc = np.nonzero(obstacle[ra:rb, ca:cb])
+        if rr.size == 0:
+            c.ip1 = c.ip2 = None
+            continue
+        q = np.stack([rr + ra, cc + ca], 1).astype(float)
+        v = q - c.centroid
+        d = np.hypot(v[:, 0], v[:, 1])
+        i = int(np.argmin(d))
+        opp = (v @ v[i]) <= 0
+        if not opp.any():
+            c.ip1, c.ip2 = q[i], None
+            continue
+        j = np.flatnonzero(opp)[np.argmin(d[opp])]
+        c.ip1, c.ip2 = q[i], q[j]
+    return candidates

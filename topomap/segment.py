@@ -219,6 +219,145 @@ def segment_paper(grid: OccupancyGrid, *, erosion_radius: float = 0.10, median_s
     return seg
 
 
+def _free_and_occupied(grid, *, erosion_radius, median_size, dilation_size, wall_band):
+    """Preprocessed free mask, clearance, occupied mask for the skeletons."""
+    import cv2
+
+    from ._fast import edt
+
+    res = grid.resolution
+    er = _px(erosion_radius, res, "erosion_radius")
+    med = _px(median_size, res, "median_size")
+    dil = _px(dilation_size, res, "dilation_size")
+    band = _px(wall_band, res, "wall_band", 1)
+    free = grid.free
+    f = free.astype(np.uint8)
+    if er > 0:
+        f = cv2.erode(f, _disk(er), borderType=cv2.BORDER_CONSTANT, borderValue=0)
+    if med >= 3:
+        k = med if med % 2 else med + 1
+        f = cv2.medianBlur(f * 255, k) > 127
+    else:
+        f = f.astype(bool)
+    d_free = edt(free)
+    dist_out = edt(~free)
+    occ = ~free & (dist_out <= band)
+    if dil > 1:
+        occ = cv2.dilate(occ.astype(np.uint8), np.ones((dil, dil), np.uint8)) > 0
+    return f, d_free, occ
+
+
+def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median_size: float = 0.25,
+                    dilation_size: float = 0.15, wall_band: float = 0.5,
+                    min_occupied_branch: float = 0.3, min_door_width: float = 0.5,
+                    max_door_width: float = 2.0, window: float = 0.5, rise: float = 0.15, reach: float = 1.5,
+                    protrusion_min: float = 0.6, rule: str = "either") -> Segmentation:
+    """Segment ``grid`` with topomap's method: the paper's two skeletons and
+    map-measured threshold, with bottleneck candidates and a protrusion test.
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+    min_door_width, max_door_width : float
+        Range of door widths (m): 0.5 m is narrower than any door a person
+        uses; 2.0 m is a double door.
+    window : float
+        A bottleneck is the narrowest point within this distance (m) along
+        the skeleton.
+    rise : float
+        Clearance must grow by this much (m) on both sides of a bottleneck:
+        doors lead from one space into another.
+    protrusion_min : float
+        Fraction of free cells within the map's wall-thickness threshold of
+        an intersection point above which the wall there protrudes.
+    """
+    from shapely.geometry import MultiLineString
+
+    from . import doors as D
+    from . import skeleton as S
+    from ._fast import edt
+
+    res = grid.resolution
+    T = _Timer()
+    params = dict(erosion_radius=erosion_radius, median_size=median_size, dilation_size=dilation_size,
+                  wall_band=wall_band, min_occupied_branch=min_occupied_branch,
+                  min_door_width=min_door_width, max_door_width=max_door_width, window=window, rise=rise, reach=reach,
+                  protrusion_min=protrusion_min, rule=rule)
+    free = grid.free
+    with T("preprocess"):
+        f, d_free, occ = _free_and_occupied(grid, erosion_radius=erosion_radius, median_size=median_size,
+                                            dilation_size=dilation_size, wall_band=wall_band)
+    with T("skeletons"):
+        fs = S.skeletonize(f)
+        os_ = S.skeletonize(occ)
+    with T("graphs"):
+        Gf = S.skeleton_graph(fs, radius=d_free, resolution=res, to_world=grid.pixel_to_world)
+        d_occ = edt(occ)
+        Go = S.skeleton_graph(os_, radius=d_occ, resolution=res, to_world=grid.pixel_to_world)
+        Go = S.prune_spurs(Go, min_occupied_branch)
+    with T("doors"):
+        thr_px = D.wall_threshold(d_occ, S.graph_pixels(Go))
+        cands = D.passage_minima(Gf, window_px=window / res, rise_px=rise / res, reach_px=reach / res)
+        D.nearest_wall_points(cands, ~free, max_px=max_door_width / res)
+        frac = D.protrusion(free, max(thr_px, 0.25 / res))
+        # the protrusion of a wall end: the most protruding obstacle cell near the IP
+        import cv2
+
+        look = max(int(round(thr_px / 2)), 1)
+        frac = cv2.dilate(np.where(free, 0, frac).astype(np.float32),
+                          np.ones((2 * look + 1, 2 * look + 1), np.uint8))
+        ends = S.graph_endpoints(Go)
+        from scipy.spatial import cKDTree
+
+        tree = cKDTree(ends) if ends.shape[0] else None
+        accepted = []
+        for c in cands:
+            if c.ip1 is None or c.ip2 is None:
+                c.status = "no wall on both sides"
+                continue
+            width = np.linalg.norm(c.ip1 - c.ip2) * res
+            if not (min_door_width <= width <= max_door_width):
+                c.status = "width out of range"
+                continue
+            p1 = frac[int(c.ip1[0]), int(c.ip1[1])] >= protrusion_min
+            p2 = frac[int(c.ip2[0]), int(c.ip2[1])] >= protrusion_min
+            e_ok = False
+            if tree is not None:
+                d1, _ = tree.query(c.ip1)
+                d2, _ = tree.query(c.ip2)
+                e_ok = d1 <= thr_px and d2 <= thr_px
+            f_ok = p1 and p2
+            ok = {"either": e_ok or f_ok, "ep": e_ok, "frac": f_ok, "one": (p1 or p2)}[rule]
+            if not ok:
+                c.status = "no protruding wall"
+                continue
+            c.status = "door"
+            accepted.append((width, c))
+        accepted.sort(key=lambda t: t[0])
+        segs = []
+        for width, c in accepted:
+            mid = (c.ip1 + c.ip2) / 2
+            if any(_point_segment_distance(mid, a, b) < 0.5 * width / res for a, b in segs):
+                c.status = "duplicate"
+                continue
+            segs.append((c.ip1, c.ip2))
+    with T("rooms"):
+        labels, door_objs = cut_rooms(grid, segs)
+    seg = Segmentation(grid=grid, labels=labels, doors=door_objs, method="topomap", params=params,
+                       threshold=thr_px * res, free_graph=Gf, occupied_graph=Go,
+                       candidates=cands, timings=T.t)
+    log.info("%s: %d rooms, %d doors, threshold %.3f m (%d candidates)", grid.name, seg.n_rooms,
+             len(door_objs), thr_px * res, len(cands))
+    return seg
+
+
+def _point_segment_distance(p, a, b) -> float:
+    p, a, b = (np.asarray(v, float) for v in (p, a, b))
+    ab = b - a
+    t = 0.0 if not ab.any() else float(np.clip(np.dot(p - a, ab) / np.dot(ab, ab), 0, 1))
+    return float(np.linalg.norm(p - (a + t * ab)))
+
+
 def _line_px(p, q, shape):
     from skimage.draw import line
 
@@ -312,13 +451,14 @@ def _baseline(name):
 
 
 METHODS = {
+    "topomap": segment_topomap,
     "paper": segment_paper,
     "watershed": _baseline("watershed"),
     "morphological": _baseline("morphological"),
     "distance": _baseline("distance"),
     "voronoi": _baseline("voronoi"),
 }
-DEFAULT_METHOD = "paper"
+DEFAULT_METHOD = "topomap"
 
 
 def segment(grid: OccupancyGrid, *, method: str = None, **params) -> Segmentation:
