@@ -193,18 +193,17 @@ def morphological(free, *, resolution=0.05, room_area_min=0.8, room_area_max=47.
     nxt = 1
     for _ in range(steps):
         work = cv2.erode(work, _EIGHT, borderType=cv2.BORDER_CONSTANT, borderValue=0)
-        if not work.any():
+        n, lab, stats, _ = cv2.connectedComponentsWithStats(work, connectivity=8, ltype=cv2.CV_32S)
+        if n <= 1:
             break
-        lab, n, area = _components_with_area(work, 8)
+        area = stats[:, cv2.CC_STAT_AREA]
         ok = np.flatnonzero((area > amin) & (area < amax))
-        ok = ok[ok > 0]
-        if ok.size:
-            lut = np.zeros(n + 1, np.int32)
-            lut[ok] = np.arange(nxt, nxt + ok.size, dtype=np.int32)
-            nxt += ok.size
-            hit = lut[lab]
-            seeds = np.where(hit > 0, hit, seeds)
-            work[hit > 0] = 0
+        for k in ok[ok > 0].tolist():  # one room per accepted component
+            x, y, w, h = stats[k, :4]
+            sub = lab[y:y + h, x:x + w] == k
+            seeds[y:y + h, x:x + w][sub] = nxt
+            work[y:y + h, x:x + w][sub] = 0
+            nxt += 1
     return fill_unlabeled(_uncrop(seeds, box, free.shape), free), []
 
 
