@@ -199,5 +199,67 @@ def benchmark_cmd(dataset_dir, methods, variant, jobs, out):
         sys.exit(EXIT_INPUT)
 
 
+@main.command("plan")
+@click.argument("graph", type=click.Path(path_type=Path))
+@click.option("--from", "start", nargs=2, type=float, required=True, metavar="X Y",
+              help="Start point, map-frame metres.")
+@click.option("--to", "goal", nargs=2, type=float, required=True, metavar="X Y",
+              help="Goal point, map-frame metres.")
+@click.option("--robot-width", type=float, default=0.0, show_default=True,
+              help="Doors narrower than this (m) are not used.")
+@click.option("--json", "as_json", is_flag=True, help="Print the route as JSON.")
+def plan_cmd(graph, start, goal, robot_width, as_json):
+    """Plan a route through rooms and doors of GRAPH.
+
+    GRAPH is rooms.graphml, rooms.json or rooms.geojson as written by
+    ``topomap segment``: it holds the room outlines and the in-room
+    door-to-door travel distances, so no map is needed. Prints the room
+    sequence, the doors with their midpoints (m) and the travel length.
+    """
+    import json
+
+    from .export import load_graph
+    from .planning import plan_path
+
+    try:
+        G = load_graph(graph)
+        route = plan_path(G, tuple(start), tuple(goal), robot_width=robot_width)
+    except Exception as exc:  # noqa: BLE001
+        sys.exit(_fail(exc))
+    if as_json:
+        out = dict(route, waypoints=route["waypoints"].tolist())
+        click.echo(json.dumps(out))
+        return
+    doors = {int(d.get("door", k)): (a, b, d) for a, b, k, d in G.edges(keys=True, data=True)}
+    click.echo("rooms: " + " -> ".join(str(r) for r in route["rooms"]))
+    click.echo(f"length: {route['length']:.2f} m")
+    wp = route["waypoints"]
+    click.echo(f"  start   ({wp[0, 0]:.2f}, {wp[0, 1]:.2f}) m  room {route['start_room']}")
+    for i, did in enumerate(route["doors"], start=1):
+        a, b, d = doors[did]
+        click.echo(f"  door {did:<3d}({wp[i, 0]:.2f}, {wp[i, 1]:.2f}) m  rooms {a}-{b}, width {d['width']:.2f} m")
+    click.echo(f"  goal    ({wp[-1, 0]:.2f}, {wp[-1, 1]:.2f}) m  room {route['goal_room']}")
+
+
+@main.command("export")
+@click.argument("source", metavar="INPUT", type=click.Path(path_type=Path))
+@click.argument("target", metavar="OUTPUT", type=click.Path(path_type=Path))
+def export_cmd(source, target):
+    """Convert a room graph between GraphML, JSON and GeoJSON.
+
+    The formats follow the extensions: .graphml (or .xml), .json (node-link
+    data) and .geojson (map-frame metres).
+    """
+    from .export import _format, load_graph, save_graph
+
+    try:
+        _format(target)
+        G = load_graph(source)
+        save_graph(G, target)
+    except Exception as exc:  # noqa: BLE001
+        sys.exit(_fail(exc))
+    click.echo(f"{source} -> {target}: {G.number_of_nodes()} rooms, {G.number_of_edges()} doors")
+
+
 if __name__ == "__main__":
     main()
