@@ -1,0 +1,378 @@
+"""Queries and topological planning on the room–door graph (issue 4)."""
+
+import numpy as np
+import networkx as nx
+import pytest
+
+from topomap import planning as P
+from topomap.errors import TopomapError
+from topomap.io import FREE, OCCUPIED, OccupancyGrid, load_map
+from topomap.segment import METHODS, Segmentation, cut_rooms, segment
+
+RES = 0.05
+
+
+# --------------------------------------------------------------------------
+# Hand-drawn maps with known rooms and doors
+# --------------------------------------------------------------------------
+
+def corridor_of_rooms(widths_px=(16, 20, 12, 20), room=30, wall=3, offsets=None):
+    """Rooms in a row (west to east), joined by doors in the walls between them.
+
+    Returns the segmentation built from the known door segments (no
+    detection involved), so rooms are 1..n west to east and door i joins
+    rooms i+1 and i+2 with width ``widths_px[i] * RES`` metres.
+    """
+    n = len(widths_px) + 1
+    H = room + 2 * wall
+    W = n * room + (n + 1) * wall
+    cells = np.full((H, W), OCCUPIED, np.int8)
+    for i in range(n):
+        c0 = wall + i * (room + wall)
+        cells[wall:wall + room, c0:c0 + room] = FREE
+    segs = []
+    for i, w in enumerate(widths_px):
+        cw = wall + (i + 1) * room + i * wall  # first column of the wall between rooms i and i+1
+        off = 0 if offsets is None else offsets[i]
+        g0 = wall + (room - w) // 2 + off
+        cells[g0:g0 + w, cw:cw + wall] = FREE
+        mid = cw + wall // 2
+        segs.append(((g0 - 1.0, float(mid)), (g0 + w - 1.0, float(mid))))
+    grid = OccupancyGrid(cells, RES, (1.0, -2.0, 0.0))
+    labels, doors = cut_rooms(grid, segs)
+    return Segmentation(grid=grid, labels=labels, doors=doors, method="manual")
+
+
+def room_centre(seg, i, room=30, wall=3):
+    c = wall + (i - 1) * (room + wall) + room / 2 - 0.5
+    r = wall + room / 2 - 0.5
+    x, y = seg.grid.pixel_to_world(r, c)
+    return float(x), float(y)
+
+
+@pytest.fixture(scope="module")
+def row():
+    return corridor_of_rooms()
+
+
+@pytest.fixture(scope="module")
+def example():
+    from topomap._example import example_map_path
+
+    return segment(load_map(example_map_path()))
+
+
+def test_hand_map_is_what_it_claims(row):
+    assert row.n_rooms == 5
+    assert [d.rooms for d in row.doors] == [(1, 2), (2, 3), (3, 4), (4, 5)]
+    np.testing.assert_allclose([d.width for d in row.doors], [0.8, 1.0, 0.6, 1.0])
+
+
+# --------------------------------------------------------------------------
+# Graph invariants
+# --------------------------------------------------------------------------
+
+def _check_invariants(seg):
+    G = seg.room_graph
+    labels = seg.labels
+    present = set(np.unique(labels[labels > 0]).tolist())
+    # every room node has a label region, and every label region a node
+    assert set(G.nodes) == present
+    counts = np.bincount(labels.ravel())
+    for n, d in G.nodes(data=True):
+        assert d["cells"] == counts[n] > 0
+    from skimage.draw import line
+
+    H, W = labels.shape
+    for d in seg.doors:
+        a, b = d.rooms
+        assert a != b and G.has_edge(a, b, key=d.id)
+        # the two rooms' cells touch (4-neighbours) next to the door segment
+        p = np.clip(np.rint(d.p1), 0, [H - 1, W - 1]).astype(int)
+        q = np.clip(np.rint(d.p2), 0, [H - 1, W - 1]).astype(int)
+        rr, cc = line(p[0], p[1], q[0], q[1])
+        near = np.zeros(labels.shape, bool)
+        for dr in (-1, 0, 1):
+            for dc in (-1, 0, 1):
+                near[np.clip(rr + dr, 0, H - 1), np.clip(cc + dc, 0, W - 1)] = True
+        A = near & (labels == a)
+        B = near & (labels == b)
+        touch = (A[:, :-1] & B[:, 1:]) | (B[:, :-1] & A[:, 1:])
+        touch_v = (A[:-1, :] & B[1:, :]) | (B[:-1, :] & A[1:, :])
+        assert touch.any() or touch_v.any(), f"door {d.id}: rooms {a} and {b} do not touch across it"
+
+
+def test_invariants_hand_map(row):
+    _check_invariants(row)
+
+
+@pytest.mark.parametrize("method", sorted(METHODS))
+def test_invariants_example(method):
+    from topomap._example import example_map_path
+
+    _check_invariants(segment(load_map(example_map_path()), method=method))
+
+
+@pytest.mark.parametrize("method", sorted(METHODS))
+@pytest.mark.parametrize("yaw", [0.0, 0.6])
+def test_room_cells_recovered_from_graph_polygons(method, yaw):
+    """A graph alone gives back the label image exactly (planning from a saved graph relies on it)."""
+    from topomap._example import example_map_path
+
+    g = load_map(example_map_path())
+    seg = segment(OccupancyGrid(g.cells, g.resolution, (2.0, -1.0, yaw)), method=method)
+    ctx = P._Ctx(seg.room_graph)
+    H, W = seg.labels.shape
+    got = ctx.window_labels(list(seg.room_graph.nodes), (0, H, 0, W))
+    np.testing.assert_array_equal(got, seg.labels)
+
+
+# --------------------------------------------------------------------------
+# Queries
+# --------------------------------------------------------------------------
+
+def test_room_at(row):
+    G = row.room_graph
+    for i in range(1, 6):
+        x, y = room_centre(row, i)
+        assert P.room_at(row, x, y) == i
+        assert P.room_at(G, x, y) == i
+    x, y = row.grid.pixel_to_world(1, 1)  # outer wall
+    assert P.room_at(row, x, y) == 0 and P.room_at(G, x, y) == 0
+    assert P.room_at(row, -100.0, 0.0) == 0 and P.room_at(G, -100.0, 0.0) == 0
+
+
+def test_room_at_agrees_with_segmentation_everywhere(example):
+    G = example.room_graph
+    rng = np.random.default_rng(0)
+    H, W = example.labels.shape
+    for r, c in rng.uniform([-5, -5], [H + 5, W + 5], size=(300, 2)):
+        x, y = example.grid.pixel_to_world(r, c)
+        assert P.room_at(G, x, y) == P.room_at(example, x, y) == example.room_at(x, y)
+
+
+def test_neighbors_and_doors_between(row):
+    G = row.room_graph
+    assert P.neighbors(G, 1) == [2]
+    assert P.neighbors(G, 3) == [2, 4]
+    assert P.neighbors(row, 5) == [4]
+    assert P.doors_between(G, 2, 3) == [1]
+    assert P.doors_between(G, 3, 2) == [1]
+    assert P.doors_between(G, 1, 3) == []
+    with pytest.raises(P.NotInRoomError):
+        P.neighbors(G, 99)
+    with pytest.raises(P.NotInRoomError):
+        P.doors_between(G, 1, 99)
+
+
+def test_doors_between_several_doors():
+    """Two rooms joined by two doors: both are listed, each its own edge."""
+    cells = np.full((40, 70), OCCUPIED, np.int8)
+    cells[3:37, 3:33] = FREE
+    cells[3:37, 36:67] = FREE
+    cells[6:14, 33:36] = FREE
+    cells[26:34, 33:36] = FREE
+    grid = OccupancyGrid(cells, RES)
+    labels, doors = cut_rooms(grid, [((5.0, 34.0), (13.0, 34.0)), ((25.0, 34.0), (33.0, 34.0))])
+    seg = Segmentation(grid=grid, labels=labels, doors=doors, method="manual")
+    assert P.doors_between(seg.room_graph, 1, 2) == [0, 1]
+    D = P.door_graph(seg)
+    assert D.edges[0, 1]["length"] == pytest.approx(20 * RES, abs=2 * RES)
+
+
+# --------------------------------------------------------------------------
+# Travel distances and the door graph
+# --------------------------------------------------------------------------
+
+def test_room_distances_are_geodesic(row):
+    # doors 0 and 1 both lie on the middle row of room 2: straight across it
+    d = P.room_distances(row, 2)
+    (m0x, _), (m1x, _) = row.doors[0].midpoint, row.doors[1].midpoint
+    assert set(d) == {(0, 1)}
+    assert d[(0, 1)] == pytest.approx(abs(m1x - m0x), abs=2 * RES)
+    assert P.room_distances(row, 1) == {}  # one door only
+
+
+def test_detour_is_not_a_straight_line():
+    """Doors at opposite ends of a wall-split room: the distance goes around, not through."""
+    seg = corridor_of_rooms(widths_px=(8, 8), offsets=(-10, 10))
+    (d01,) = P.room_distances(seg, 2).values()
+    (x0, y0), (x1, y1) = seg.doors[0].midpoint, seg.doors[1].midpoint
+    assert d01 >= np.hypot(x1 - x0, y1 - y0) - 1e-9
+    assert d01 == pytest.approx(max(abs(x1 - x0), abs(y1 - y0)) + (np.sqrt(2) - 1) * min(abs(x1 - x0), abs(y1 - y0)),
+                                abs=2 * RES)  # 8-connected geodesic in an empty room
+
+
+def test_travel_graph_stores_distances(row):
+    G = P.travel_graph(row)
+    assert G.graph["travel_distances"] == "geodesic"
+    assert "door_distances" not in row.room_graph.nodes[2]  # the input is not modified
+    (i, j, L), = G.nodes[2]["door_distances"]
+    assert (i, j) == (0, 1) and isinstance(L, float)
+    assert G.nodes[1]["door_distances"] == ()
+    # the same from the graph alone (room cells rasterised from polygons)
+    H = P.travel_graph(row.room_graph)
+    for n in G:
+        assert H.nodes[n]["door_distances"] == G.nodes[n]["door_distances"]
+
+
+def test_door_graph(row):
+    D = P.door_graph(row)
+    assert sorted(D.nodes) == [0, 1, 2, 3]
+    assert sorted(tuple(sorted(e)) for e in D.edges) == [(0, 1), (1, 2), (2, 3)]
+    assert [D.edges[e]["room"] for e in [(0, 1), (1, 2), (2, 3)]] == [2, 3, 4]
+    assert D.nodes[2]["rooms"] == (3, 4)
+    assert D.nodes[2]["width"] == pytest.approx(0.6)
+    x, y = row.doors[1].midpoint
+    assert (D.nodes[1]["x"], D.nodes[1]["y"]) == pytest.approx((x, y))
+    narrow = P.door_graph(row, min_width=0.7)
+    assert sorted(narrow.nodes) == [0, 1, 3] and sorted(tuple(sorted(e)) for e in narrow.edges) == [(0, 1)]
+
+
+# --------------------------------------------------------------------------
+# Planning
+# --------------------------------------------------------------------------
+
+def test_plan_along_the_row(row):
+    s, g = room_centre(row, 1), room_centre(row, 5)
+    route = P.plan_path(row, s, g)
+    assert route["rooms"] == [1, 2, 3, 4, 5]
+    assert route["doors"] == [0, 1, 2, 3]
+    wp = route["waypoints"]
+    assert wp.shape == (6, 2)
+    np.testing.assert_allclose(wp[0], s)
+    np.testing.assert_allclose(wp[-1], g)
+    np.testing.assert_allclose(wp[1:-1], [d.midpoint for d in row.doors])
+    # doors centred on the rooms' middle row: the way is (nearly) straight
+    assert route["length"] == pytest.approx(g[0] - s[0], abs=3 * RES)
+    assert route["length"] == pytest.approx(sum(route["legs"]))
+    assert (route["start_room"], route["goal_room"]) == (1, 5)
+    back = P.plan_path(row, g, s)
+    assert back["rooms"] == [5, 4, 3, 2, 1] and back["doors"] == [3, 2, 1, 0]
+    assert back["length"] == pytest.approx(route["length"])
+
+
+def test_plan_room_ids(row):
+    route = P.plan_path(row, 2, 4)
+    assert route["rooms"] == [2, 3, 4] and route["doors"] == [1, 2]
+    np.testing.assert_allclose(route["waypoints"][0], [row.room_graph.nodes[2]["x"], row.room_graph.nodes[2]["y"]])
+    same = P.plan_path(row, 3, 3)
+    assert same["rooms"] == [3] and same["doors"] == [] and same["length"] == 0
+
+
+def test_plan_within_one_room(row):
+    x, y = room_centre(row, 3)
+    route = P.plan_path(row, (x - 0.5, y), (x + 0.5, y))
+    assert route["rooms"] == [3] and route["doors"] == []
+    assert route["length"] == pytest.approx(1.0, abs=RES)
+    assert route["waypoints"].shape == (2, 2)
+
+
+def test_plan_same_from_segmentation_graph_and_saved_file(row, tmp_path):
+    from topomap.export import load_graphml, save_graphml
+
+    s, g = room_centre(row, 1), room_centre(row, 4)
+    a = P.plan_path(row, s, g)
+    b = P.plan_path(P.travel_graph(row), s, g)
+    c = P.plan_path(row.room_graph, s, g)  # no stored distances: computed from polygons
+    save_graphml(P.travel_graph(row), tmp_path / "g.graphml")
+    d = P.plan_path(load_graphml(tmp_path / "g.graphml"), s, g)
+    for r in (b, c, d):
+        assert r["rooms"] == a["rooms"] and r["doors"] == a["doors"]
+        assert r["length"] == pytest.approx(a["length"], abs=1e-9)
+        np.testing.assert_allclose(r["waypoints"], a["waypoints"])
+
+
+def test_robot_width_excludes_narrow_doors(row):
+    s, g = room_centre(row, 1), room_centre(row, 5)
+    assert P.plan_path(row, s, g, robot_width=0.6)["doors"] == [0, 1, 2, 3]  # exactly as wide: fits
+    with pytest.raises(P.NoPathError, match="0.7 m wide"):
+        P.plan_path(row, s, g, robot_width=0.7)  # door 2 is 0.6 m
+    assert P.plan_path(row, s, room_centre(row, 3), robot_width=0.7)["rooms"] == [1, 2, 3]
+    with pytest.raises(P.PlanningError):
+        P.plan_path(row, s, g, robot_width=-1)
+
+
+def test_robot_width_takes_the_wider_detour():
+    """Two ways between two rooms: the short one through a narrow door, the long one through a wide door."""
+    cells = np.full((60, 70), OCCUPIED, np.int8)
+    cells[3:57, 3:33] = FREE
+    cells[3:57, 36:67] = FREE
+    cells[26:34, 33:36] = FREE   # narrow door (0.4 m) in the middle
+    cells[4:24, 33:36] = FREE    # wide door (1.0 m) at the top
+    grid = OccupancyGrid(cells, RES)
+    labels, doors = cut_rooms(grid, [((25.0, 34.0), (33.0, 34.0)), ((3.0, 34.0), (23.0, 34.0))])
+    seg = Segmentation(grid=grid, labels=labels, doors=doors, method="manual")
+    s = tuple(float(v) for v in grid.pixel_to_world(45, 10))
+    g = tuple(float(v) for v in grid.pixel_to_world(45, 60))
+    assert P.plan_path(seg, s, g)["doors"] == [0]
+    wide = P.plan_path(seg, s, g, robot_width=0.5)
+    assert wide["doors"] == [1]
+    assert wide["length"] > P.plan_path(seg, s, g)["length"]
+
+
+def test_no_path_across_a_wall():
+    cells = np.full((40, 70), OCCUPIED, np.int8)
+    cells[3:37, 3:33] = FREE
+    cells[3:37, 36:67] = FREE  # a solid wall between, no door
+    grid = OccupancyGrid(cells, RES)
+    labels, doors = cut_rooms(grid, [])
+    seg = Segmentation(grid=grid, labels=labels, doors=doors, method="manual")
+    assert seg.n_rooms == 2 and doors == []
+    s = tuple(float(v) for v in grid.pixel_to_world(20, 10))
+    g = tuple(float(v) for v in grid.pixel_to_world(20, 60))
+    with pytest.raises(P.NoPathError) as ei:
+        P.plan_path(seg, s, g)
+    assert isinstance(ei.value, TopomapError) and isinstance(ei.value, ValueError)
+    assert "no path" in str(ei.value) and "\n" not in str(ei.value)
+
+
+def test_bad_endpoints(row):
+    s = room_centre(row, 1)
+    wall = tuple(float(v) for v in row.grid.pixel_to_world(1, 1))
+    with pytest.raises(P.NotInRoomError, match="not in the free space"):
+        P.plan_path(row, wall, s)
+    with pytest.raises(P.NotInRoomError, match="outside the map"):
+        P.plan_path(row, s, (-100.0, 0.0))
+    with pytest.raises(P.NotInRoomError, match="room 42"):
+        P.plan_path(row, s, 42)
+    with pytest.raises(P.PlanningError):
+        P.plan_path(row, "kitchen", s)
+    with pytest.raises(P.PlanningError):
+        P.plan_path(row, (np.nan, 0.0), s)
+    for cls in (P.PlanningError, P.NotInRoomError, P.NoPathError):
+        assert issubclass(cls, TopomapError) and issubclass(cls, ValueError)
+
+
+def test_room_id_with_centroid_outside_the_room():
+    """An L-shaped room's centroid lies outside it: the nearest cell of the room stands in."""
+    cells = np.full((50, 50), OCCUPIED, np.int8)
+    cells[3:47, 3:13] = FREE
+    cells[37:47, 3:47] = FREE
+    grid = OccupancyGrid(cells, RES)
+    labels, doors = cut_rooms(grid, [])
+    seg = Segmentation(grid=grid, labels=labels, doors=doors, method="manual")
+    n = seg.room_graph.nodes[1]
+    assert P.room_at(seg, n["x"], n["y"]) == 0
+    route = P.plan_path(seg, 1, 1)
+    x, y = route["waypoints"][0]
+    assert P.room_at(seg, x, y) == 1
+
+
+def test_plan_on_example(example):
+    G = P.travel_graph(example)
+    nodes = sorted(G.nodes)
+    for a in nodes:
+        for b in nodes:
+            if not nx.has_path(G, a, b):
+                with pytest.raises(P.NoPathError):
+                    P.plan_path(G, a, b)
+                continue
+            r = P.plan_path(G, a, b)
+            assert r["rooms"][0] == a and r["rooms"][-1] == b
+            # consecutive rooms are joined by the door passed between them
+            for (u, v), d in zip(zip(r["rooms"][:-1], r["rooms"][1:]), r["doors"]):
+                assert d in P.doors_between(G, u, v)
+            # never shorter than the straight line between the waypoints
+            wp = r["waypoints"]
+            assert r["length"] >= np.hypot(*np.diff(wp, axis=0).T).sum() - 1e-6
