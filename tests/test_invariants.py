@@ -9,7 +9,8 @@ Exact, for every generated map:
   segment (all methods);
 * the same input gives the same output, IDs included (default method).
 
-Measured, for the default (paper) method, because its skeletons are
+Measured for the default method (DEFAULT_METHOD; "paper" alike, numbers per
+method in docs/errors.md), because its skeletons are
 discretised on the pixel grid and are not exactly invariant under a 90°
 rotation, a flip or a 2x upscaling (numbers in docs/errors.md):
 
