@@ -287,7 +287,7 @@ def passage_minima(G, *, window_px: float, rise_px: float, reach_px: float, min_
             if key == edge and a != b:
                 continue
             rad, arc = info[key]
-            if key[0] == node:
+            if G.edges[key]["start"] == node:
                 sel = arc <= rem
             else:
                 sel = arc[-1] - arc <= rem

@@ -251,7 +251,7 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
                     dilation_size: float = 0.15, wall_band: float = 0.5,
                     min_occupied_branch: float = 0.3, min_door_width: float = 0.5,
                     max_door_width: float = 2.0, window: float = 0.5, rise: float = 0.15, reach: float = 1.5,
-                    protrusion_min: float = 0.6, rule: str = "either") -> Segmentation:
+                    protrusion_min: float = 0.6, flat_min: float = 0.45, rule: str = "either") -> Segmentation:
     """Segment ``grid`` with topomap's method: the paper's two skeletons and
     map-measured threshold, with bottleneck candidates and a protrusion test.
 
@@ -319,15 +319,17 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
             if not (min_door_width <= width <= max_door_width):
                 c.status = "width out of range"
                 continue
-            p1 = frac[int(c.ip1[0]), int(c.ip1[1])] >= protrusion_min
-            p2 = frac[int(c.ip2[0]), int(c.ip2[1])] >= protrusion_min
+            f1 = frac[int(c.ip1[0]), int(c.ip1[1])]
+            f2 = frac[int(c.ip2[0]), int(c.ip2[1])]
+            p1, p2 = f1 >= protrusion_min, f2 >= protrusion_min
             e_ok = False
             if tree is not None:
                 d1, _ = tree.query(c.ip1)
                 d2, _ = tree.query(c.ip2)
                 e_ok = d1 <= thr_px and d2 <= thr_px
             f_ok = p1 and p2
-            ok = {"either": e_ok or f_ok, "ep": e_ok, "frac": f_ok, "one": (p1 or p2)}[rule]
+            ok = {"either": e_ok or f_ok, "ep": e_ok, "frac": f_ok, "one": (p1 or p2),
+                  "oneflat": e_ok or f_ok or (max(f1, f2) >= protrusion_min and min(f1, f2) >= flat_min)}[rule]
             if not ok:
                 c.status = "no protruding wall"
                 continue
@@ -335,11 +337,15 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
             accepted.append((width, c))
         accepted.sort(key=lambda t: t[0])
         segs = []
+        A = np.zeros((len(accepted), 2))
+        B = np.zeros((len(accepted), 2))
         for width, c in accepted:
             mid = (c.ip1 + c.ip2) / 2
-            if any(_point_segment_distance(mid, a, b) < 0.5 * width / res for a, b in segs):
+            k = len(segs)
+            if k and (_point_segment_distances(mid, A[:k], B[:k]) < 0.5 * width / res).any():
                 c.status = "duplicate"
                 continue
+            A[k], B[k] = c.ip1, c.ip2
             segs.append((c.ip1, c.ip2))
     with T("rooms"):
         labels, door_objs = cut_rooms(grid, segs)
@@ -351,11 +357,14 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
     return seg
 
 
-def _point_segment_distance(p, a, b) -> float:
-    p, a, b = (np.asarray(v, float) for v in (p, a, b))
+def _point_segment_distances(p, a, b) -> np.ndarray:
+    """Distances from point ``p`` (2,) to the segments ``a[i]``-``b[i]`` ((K, 2) arrays)."""
     ab = b - a
-    t = 0.0 if not ab.any() else float(np.clip(np.dot(p - a, ab) / np.dot(ab, ab), 0, 1))
-    return float(np.linalg.norm(p - (a + t * ab)))
+    den = (ab * ab).sum(1)
+    t = np.where(den > 0, ((p - a) * ab).sum(1) / np.where(den > 0, den, 1), 0.0)
+    t = np.clip(t, 0, 1)
+    proj = a + t[:, None] * ab
+    return np.hypot(*(p - proj).T)
 
 
 def _line_px(p, q, shape):

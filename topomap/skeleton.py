@@ -8,7 +8,7 @@ Voronoi diagram) becomes a :class:`networkx.MultiGraph`:
   (metres), ``radius`` (metres, clearance at the node), ``kind``
   (``"endpoint"``, ``"junction"`` or ``"loop"``);
 * edges are branches with ``path`` ((K, 2) int array of pixel ``(row, col)``,
-  from the lower node id to the higher, ends included), ``length`` (metres,
+  ends included, starting at node ``start``), ``length`` (metres,
   along the path), ``radius`` ((K,) float array, metres, clearance along the
   path) and ``radius_min`` (metres).
 
@@ -180,31 +180,53 @@ def skeleton_graph(skel: np.ndarray, *, radius: np.ndarray | None = None,
         touch_px = {}
         for p, nlab in en:
             touch_px.setdefault(int(p), []).append(int(nlab))
+        extra = []
+
+        def new_node(r, c):
+            extra.append((int(r), int(c)))
+            return n_nodes + len(extra)
+
+        def rep_of(n):
+            return rep[n] if n <= n_nodes else np.array(extra[n - n_nodes - 1])
+
         for k in range(bounds.size - 1):
             seg = porder[bounds[k]:bounds[k + 1]]
             a_nodes = touch_px.get(int(seg[0]), [])
             b_nodes = touch_px.get(int(seg[-1]), [])
-            if not a_nodes and not b_nodes:
-                continue
-            if seg.size == 1:
-                ns = sorted(set(a_nodes))
-                if len(ns) >= 2:
-                    u, v = ns[0], ns[1]
-                else:
-                    u = v = ns[0]
-            else:
-                u = a_nodes[0] if a_nodes else None
-                v = b_nodes[0] if b_nodes else None
-                if u is not None and v is not None and len(a_nodes) > 1 and u == v:
-                    alt = [n for n in a_nodes if n != v]
-                    u = alt[0] if alt else u
-                if u is None:
-                    u = v
-                if v is None:
-                    v = u
             path = np.stack([br_r[seg], br_c[seg]], 1)
-            path = np.vstack([rep[u][None], path, rep[v][None]])
+            if seg.size == 1 and len(set(a_nodes)) >= 2:
+                u, v = sorted(set(a_nodes))[:2]
+                path = np.vstack([rep_of(u)[None], path, rep_of(v)[None]])
+            else:
+                # a branch end that touches no node is an endpoint of its own
+                if a_nodes:
+                    u = a_nodes[0]
+                    head = [rep_of(u)[None]]
+                else:
+                    u = new_node(*path[0])
+                    head = []
+                if b_nodes and seg.size > 1:
+                    v = b_nodes[0]
+                    if v == u and len(b_nodes) > 1:
+                        v = b_nodes[1]
+                    tail = [rep_of(v)[None]]
+                elif seg.size > 1:
+                    v = new_node(*path[-1])
+                    tail = []
+                elif a_nodes:
+                    v = new_node(*path[-1])
+                    tail = []
+                else:
+                    v = u
+                    tail = []
+                path = np.vstack(head + [path] + tail)
             edges.append((u, v, path))
+        if extra:
+            ex = np.array(extra, int)
+            rep = np.vstack([rep, ex])
+            mr = np.concatenate([mr, ex[:, 0].astype(float)])
+            mc = np.concatenate([mc, ex[:, 1].astype(float)])
+            n_nodes += len(extra)
     # direct node-node adjacency (no branch pixel between them)
     for dr, dc in _OFFSETS[4:]:
         b = nodelab[max(0, dr):H + min(0, dr), max(0, dc):W + min(0, dc)]
@@ -236,7 +258,7 @@ def skeleton_graph(skel: np.ndarray, *, radius: np.ndarray | None = None,
             u, v = v, u
             path = path[::-1]
         steps = np.hypot(*np.diff(path, axis=0).T)
-        attrs = dict(path=path, length=float(steps.sum()) * res)
+        attrs = dict(path=path, start=u - 1, length=float(steps.sum()) * res)
         if radius is not None:
             rad = radius[path[:, 0], path[:, 1]].astype(float) * res
             attrs["radius"] = rad
@@ -284,25 +306,21 @@ def _contract(H: nx.MultiGraph):
         es = list(H.edges(n, keys=True, data=True))
         if len(es) != 2 or any(u == v for u, v, _, _ in es):
             continue
-        (a, b, k1, d1), (c, d, k2, d2) = es
-        p1 = d1["path"] if a == n else d1["path"][::-1]  # starts at n
-        other1 = b if a == n else a
-        p2 = d2["path"] if c == n else d2["path"][::-1]
-        other2 = d if c == n else c
-        path = np.vstack([p1[::-1], p2[1:]])  # other1 ... n ... other2
-        attrs = dict(path=path, length=d1["length"] + d2["length"])
+        (_, o1, k1, d1), (_, o2, k2, d2) = es
+        # orient both branches to start at n (``start`` is the node at path[0])
+        fwd1 = d1["start"] == n
+        fwd2 = d2["start"] == n
+        p1 = d1["path"] if fwd1 else d1["path"][::-1]
+        p2 = d2["path"] if fwd2 else d2["path"][::-1]
+        path = np.vstack([p1[::-1], p2[1:]])  # o1 ... n ... o2
+        attrs = dict(path=path, start=o1, length=d1["length"] + d2["length"])
         if "radius" in d1:
-            r1 = d1["radius"] if a == n else d1["radius"][::-1]
-            r2 = d2["radius"] if c == n else d2["radius"][::-1]
+            r1 = d1["radius"] if fwd1 else d1["radius"][::-1]
+            r2 = d2["radius"] if fwd2 else d2["radius"][::-1]
             rad = np.concatenate([r1[::-1], r2[1:]])
             attrs["radius"] = rad
             attrs["radius_min"] = float(rad.min())
-        u, v = other1, other2
-        if u > v:
-            u, v = v, u
-            attrs["path"] = attrs["path"][::-1]
-            if "radius" in attrs:
-                attrs["radius"] = attrs["radius"][::-1]
+        u, v = o1, o2
         H.remove_node(n)
         H.add_edge(u, v, **attrs)
 
