@@ -251,7 +251,8 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
                     dilation_size: float = 0.15, wall_band: float = 0.5,
                     min_occupied_branch: float = 0.3, min_door_width: float = 0.5,
                     max_door_width: float = 2.0, window: float = 0.5, rise: float = 0.15, reach: float = 1.5,
-                    protrusion_min: float = 0.6, flat_min: float = 0.45, rule: str = "either") -> Segmentation:
+                    protrusion_min: float = 0.6, flat_min: float = 0.45, rule: str = "oneflat",
+                    skeleton_cell: float = 0.1) -> Segmentation:
     """Segment ``grid`` with topomap's method: the paper's two skeletons and
     map-measured threshold, with bottleneck candidates and a protrusion test.
 
@@ -282,16 +283,19 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
     params = dict(erosion_radius=erosion_radius, median_size=median_size, dilation_size=dilation_size,
                   wall_band=wall_band, min_occupied_branch=min_occupied_branch,
                   min_door_width=min_door_width, max_door_width=max_door_width, window=window, rise=rise, reach=reach,
-                  protrusion_min=protrusion_min, rule=rule)
+                  protrusion_min=protrusion_min, rule=rule, skeleton_cell=skeleton_cell)
     free = grid.free
     with T("preprocess"):
         f, d_free, occ = _free_and_occupied(grid, erosion_radius=erosion_radius, median_size=median_size,
                                             dilation_size=dilation_size, wall_band=wall_band)
+    fac = max(int(np.floor(skeleton_cell / res + 1e-9)), 1)
     with T("skeletons"):
-        fs = S.skeletonize(f)
+        fs = S.skeletonize(S.downsample(f, fac, keep="all"))
         os_ = S.skeletonize(occ)
     with T("graphs"):
-        Gf = S.skeleton_graph(fs, radius=d_free, resolution=res, to_world=grid.pixel_to_world)
+        Gf = S.skeleton_graph(fs, radius=None, resolution=res * fac)
+        Gf = S.rescale_graph(Gf, fac, radius=d_free, resolution=res, to_world=grid.pixel_to_world) \
+            if fac > 1 else S.skeleton_graph(fs, radius=d_free, resolution=res, to_world=grid.pixel_to_world)
         d_occ = edt(occ)
         Go = S.skeleton_graph(os_, radius=d_occ, resolution=res, to_world=grid.pixel_to_world)
         Go = S.prune_spurs(Go, min_occupied_branch)

@@ -337,3 +337,59 @@ def graph_pixels(G: nx.MultiGraph) -> np.ndarray:
     if not paths:
         return np.zeros((0, 2), int)
     return np.unique(np.vstack(paths), axis=0)
+
+
+def downsample(mask: np.ndarray, factor: int, *, keep: str = "all") -> np.ndarray:
+    """Block-reduce a bool mask by an integer ``factor``.
+
+    ``keep="all"``: a coarse cell is True only if every fine cell is (free
+    space: a one-cell wall survives as a wall); ``keep="any"``: True if any
+    fine cell is (occupied space). The image is padded with False.
+    """
+    if factor <= 1:
+        return np.asarray(mask, bool)
+    H, W = mask.shape
+    Hp, Wp = -(-H // factor) * factor, -(-W // factor) * factor
+    m = np.zeros((Hp, Wp), bool)
+    m[:H, :W] = mask
+    b = m.reshape(Hp // factor, factor, Wp // factor, factor)
+    return b.all(axis=(1, 3)) if keep == "all" else b.any(axis=(1, 3))
+
+
+def rescale_graph(G: nx.MultiGraph, factor: int, *, radius: np.ndarray, resolution: float,
+                  to_world=None) -> nx.MultiGraph:
+    """Map a graph built on a ``factor``-times coarser grid back to the fine grid.
+
+    Paths and node pixels are scaled to the fine grid (the centre cell of
+    each coarse block); ``radius`` (fine-grid pixels) is sampled anew along
+    the paths and ``length`` recomputed, so clearances are exact at fine
+    resolution while the topology comes from the coarse skeleton.
+    """
+    if factor <= 1:
+        return G
+    H, W = radius.shape
+    off = (factor - 1) // 2
+    res = float(resolution)
+    out = nx.MultiGraph(resolution=res)
+
+    def fine(p):
+        q = np.asarray(p) * factor + off
+        q[..., 0] = np.clip(q[..., 0], 0, H - 1)
+        q[..., 1] = np.clip(q[..., 1], 0, W - 1)
+        return q
+
+    for n, d in G.nodes(data=True):
+        r, c = fine(np.array(d["pixel"]))
+        attrs = dict(d, pixel=(int(r), int(c)), row=float(d["row"] * factor + off),
+                     col=float(d["col"] * factor + off), radius=float(radius[r, c]) * res)
+        if to_world is not None:
+            x, y = to_world(attrs["row"], attrs["col"])
+            attrs["x"], attrs["y"] = float(x), float(y)
+        out.add_node(n, **attrs)
+    for u, v, k, d in G.edges(keys=True, data=True):
+        path = fine(d["path"])
+        rad = radius[path[:, 0], path[:, 1]].astype(float) * res
+        steps = np.hypot(*np.diff(path, axis=0).T)
+        out.add_edge(u, v, key=k, **dict(d, path=path, radius=rad, radius_min=float(rad.min()),
+                                          length=float(steps.sum()) * res))
+    return out
