@@ -1,0 +1,280 @@
+"""Regenerate the pictures in ``docs/img`` from the embedded example map.
+
+Run from the repository root::
+
+    python docs/make_figures.py            # writes docs/img/*.png
+    python docs/make_figures.py --out DIR  # somewhere else
+
+Every picture is drawn from ``topomap/data/example_office.yaml`` (the
+synthetic example office shipped with topomap) and nothing else: no
+benchmark map may be pictured in the repository.
+
+The small private helpers below draw what :mod:`topomap.plot` has no
+function for yet (the preprocessed free / occupied masks, the candidates with
+their status, the threshold histogram).
+
+The module is also the site's mkdocs hook (``hooks:`` in ``mkdocs.yml``):
+:func:`on_page_markdown` only rewrites links that leave ``docs/``, and
+importing the module draws nothing.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+DPI = 110
+
+
+def _imports():
+    """Heavy imports, only for drawing (the mkdocs hook needs none of them)."""
+    global matplotlib, plt, np, topomap, planning, _extent, plot_map, plot_route, plot_segmentation
+    global plot_skeletons, METHODS, segment
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    import topomap
+    from topomap import planning
+    from topomap.plot import _extent, plot_map, plot_route, plot_segmentation, plot_skeletons
+    from topomap.segment import METHODS, segment
+
+
+#: Colour per candidate ``status`` (anything else: gray).
+STATUS_COLORS = {
+    "door": "red",
+    "duplicate": "orange",
+    "no protruding wall": "royalblue",
+    "no protruding wall near": "royalblue",
+    "centres apart": "purple",
+    "crosses a wall skeleton": "saddlebrown",
+    "width out of range": "deepskyblue",
+    "no wall on both sides": "gray",
+    "no endpoints": "gray",
+}
+
+
+# --------------------------------------------------------------------------
+# mkdocs hook (mkdocs.yml: ``hooks: [docs/make_figures.py]``)
+# --------------------------------------------------------------------------
+
+_OUTSIDE_LINK = re.compile(r"\[([^\]]+)\]\((\.\./[^)\s]+)\)")
+
+
+def on_page_markdown(markdown, page, **kwargs):
+    """Turn links that leave ``docs/`` (``[text](../benchmarks/README.md)``,
+    as in the benchmarks page) into plain text naming the repository file.
+
+    mkdocs cannot link outside ``docs_dir`` and ``--strict`` fails on such
+    links; the file is still named so a reader can find it in the repository.
+    """
+    def repl(m):
+        target = m.group(2)[3:]
+        return m.group(1) if m.group(1).strip("`") == target else f"{m.group(1)} (`{target}` in the repository)"
+
+    return _OUTSIDE_LINK.sub(repl, markdown)
+
+
+# --------------------------------------------------------------------------
+# private helpers
+# --------------------------------------------------------------------------
+
+def _masks(grid, method):
+    """(free after preprocessing, occupied after preprocessing) as used by ``method``.
+
+    Mirrors the preprocessing stage of :func:`topomap.segment.segment_paper`
+    and :func:`topomap.segment.segment_topomap` with their default
+    parameters.
+    """
+    import inspect
+
+    from topomap import segment as S
+
+    fn = S.METHODS[method]
+    p = {k: v.default for k, v in inspect.signature(fn).parameters.items()
+         if k in ("erosion_radius", "median_size", "dilation_size", "wall_band")}
+    f, _, occ = S._free_and_occupied(grid, **p)
+    if method == "paper":
+        # the paper method keeps only *occupied* cells (not unknown ones) in the band
+        import cv2
+
+        from topomap._fast import edt
+
+        band = S._px(p["wall_band"], grid.resolution, "wall_band", 1)
+        dil = S._px(p["dilation_size"], grid.resolution, "dilation_size")
+        occ = grid.occupied & (edt(~grid.free) <= band)
+        if dil > 1:
+            occ = cv2.dilate(occ.astype(np.uint8), np.ones((dil, dil), np.uint8)) > 0
+    return f, occ
+
+
+def _show_mask(grid, mask, ax, color):
+    rgba = np.zeros(mask.shape + (4,))
+    rgba[mask] = matplotlib.colors.to_rgba(color, 0.55)
+    ax.imshow(rgba, extent=_extent(grid), interpolation="nearest")
+
+
+def _px_xy(grid, p):
+    x, y = grid.pixel_to_world(p[0], p[1])
+    return float(x), float(y)
+
+
+def plot_candidates(seg, ax, *, legend=True):
+    """Every candidate of ``seg``: bottleneck dot, IP1–IP2 segment (and EP1–EP2
+    for the paper method), coloured by ``status``."""
+    grid = seg.grid
+    seen = set()
+    for c in seg.candidates:
+        col = STATUS_COLORS.get(c.status, "gray")
+        label = c.status if c.status not in seen else None
+        seen.add(c.status)
+        cx, cy = _px_xy(grid, c.centroid)
+        ax.plot(cx, cy, "o", color=col, ms=4, mec="k", mew=0.4, label=label, zorder=5)
+        if c.ip1 is not None and c.ip2 is not None:
+            (x1, y1), (x2, y2) = _px_xy(grid, c.ip1), _px_xy(grid, c.ip2)
+            ax.plot([x1, x2], [y1, y2], "-", color=col, lw=1.8, zorder=4)
+        if getattr(c, "ep1", None) is not None and getattr(c, "ep2", None) is not None:
+            (x1, y1), (x2, y2) = _px_xy(grid, c.ep1), _px_xy(grid, c.ep2)
+            ax.plot([x1, x2], [y1, y2], ":", color="magenta", lw=1.2, zorder=4)
+    if legend and seen:
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7, title="status",
+                  title_fontsize=8, frameon=False)
+
+
+def _endpoints(seg, ax):
+    G = seg.occupied_graph
+    e = np.array([G.nodes[n]["pixel"] for n in G.nodes if G.degree(n) == 1], float).reshape(-1, 2)
+    x, y = seg.grid.pixel_to_world(e[:, 0], e[:, 1])
+    ax.plot(x, y, "o", color="magenta", ms=3.5, mec="k", mew=0.3, label="occupied-skeleton endpoint")
+    return e
+
+
+def _title(seg):
+    # not plot_segmentation's default title, which shows the absolute path of the map file
+    return f"example office: {seg.n_rooms} rooms, {len(seg.doors)} doors ({seg.method})"
+
+
+def _save(fig, out, name):
+    path = out / name
+    fig.savefig(path, dpi=DPI, bbox_inches="tight")
+    plt.close(fig)
+    print(path)
+    return path
+
+
+def _wall_half_thickness(seg):
+    """Distance to free space (m) on every occupied-skeleton pixel: the
+    values the threshold is the (doubled) mean of."""
+    from topomap import skeleton as S
+    from topomap._fast import edt
+
+    _, occ = _masks(seg.grid, seg.method)
+    d = edt(occ) * seg.grid.resolution
+    px = S.graph_pixels(seg.occupied_graph)
+    return d[px[:, 0], px[:, 1]]
+
+
+# --------------------------------------------------------------------------
+# figures
+# --------------------------------------------------------------------------
+
+def main(out: Path):
+    _imports()
+    out.mkdir(parents=True, exist_ok=True)
+    grid = topomap.load_map(topomap.example_map_path())
+    segs = {m: segment(grid, method=m) for m in ("topomap", "paper")}
+    seg = segs["topomap"]
+
+    # README / index picture
+    fig, ax = plt.subplots(figsize=(8, 5.8))
+    plot_segmentation(seg, ax, skeletons=True, graph=True, title=_title(seg))
+    _save(fig, out, "example_overlay.png")
+
+    # the input map
+    fig, ax = plt.subplots(figsize=(7, 5))
+    plot_map(grid, ax)
+    ax.set_title("example office map: free white, occupied black, unknown gray", fontsize=9)
+    _save(fig, out, "step0_map.png")
+
+    # step 1: preprocessing, both methods
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.6))
+    for ax, m in zip(axes, ("paper", "topomap")):
+        f, occ = _masks(grid, m)
+        plot_map(grid, ax)
+        _show_mask(grid, f, ax, "limegreen")
+        _show_mask(grid, occ, ax, "magenta")
+        ax.set_title(f"{m}: free after erosion + median (green), occupied after band + dilation (magenta)",
+                     fontsize=8)
+    _save(fig, out, "step1_preprocess.png")
+
+    # step 2: skeleton graphs
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.6))
+    for ax, m in zip(axes, ("paper", "topomap")):
+        s = segs[m]
+        plot_map(grid, ax)
+        plot_skeletons(s, ax)
+        ax.set_title(f"{m}: free-space skeleton graph (green, {s.free_graph.number_of_edges()} branches), "
+                     f"occupied-space (magenta, {s.occupied_graph.number_of_edges()})", fontsize=8)
+    _save(fig, out, "step2_skeletons.png")
+
+    # step 3: wall thickness threshold
+    fig, axes = plt.subplots(1, 2, figsize=(12, 3.8))
+    for ax, m in zip(axes, ("paper", "topomap")):
+        s = segs[m]
+        v = _wall_half_thickness(s)
+        ax.hist(2 * v, bins=np.arange(0, 2 * v.max() + 0.05, 0.05), color="magenta", alpha=0.6)
+        ax.axvline(s.threshold, color="k", lw=2, label=f"threshold {s.threshold:.3f} m")
+        ax.set_xlabel("2 × distance to free space on the occupied skeleton [m]")
+        ax.set_ylabel("skeleton pixels")
+        ax.set_title(f"{m}: wall thickness along the occupied-space skeleton", fontsize=9)
+        ax.legend(fontsize=8)
+    _save(fig, out, "step3_threshold.png")
+
+    # step 4: candidates, endpoints, status (one picture per method)
+    for m in ("paper", "topomap"):
+        s = segs[m]
+        fig, ax = plt.subplots(figsize=(10, 6))
+        plot_map(grid, ax)
+        plot_skeletons(s, ax, endpoints=False, lw=0.6)
+        _endpoints(s, ax)
+        plot_candidates(s, ax)
+        ax.set_title(f"{m}: {len(s.candidates)} candidate passages, {len(s.doors)} doors "
+                     f"(threshold {s.threshold:.3f} m)", fontsize=9)
+        _save(fig, out, f"step4_candidates_{m}.png")
+
+    # step 5: rooms and doors, both methods
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.6))
+    for ax, m in zip(axes, ("paper", "topomap")):
+        plot_segmentation(segs[m], ax, title=_title(segs[m]))
+    _save(fig, out, "step5_rooms.png")
+
+    # room graph and a route
+    G = planning.travel_graph(seg)
+    route = planning.plan_path(G, (-6.0, 4.0), (6.0, -4.0))
+    fig, ax = plt.subplots(figsize=(8, 5.8))
+    plot_segmentation(seg, ax, graph=True, title=f"route: rooms {route['rooms']}, doors {route['doors']}, "
+                                                 f"{route['length']:.1f} m")
+    plot_route(route, ax)
+    _save(fig, out, "room_graph_route.png")
+
+    # every method side by side
+    names = list(METHODS)
+    ncol = 3
+    nrow = -(-len(names) // ncol)
+    fig, axes = plt.subplots(nrow, ncol, figsize=(5 * ncol, 3.7 * nrow))
+    for ax, m in zip(axes.ravel(), names):
+        s = segs[m] if m in segs else segment(grid, method=m)
+        plot_segmentation(s, ax, title=_title(s))
+    for ax in axes.ravel()[len(names):]:
+        ax.axis("off")
+    _save(fig, out, "compare_methods.png")
+
+
+if __name__ == "__main__":
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", type=Path, default=HERE / "img", help="output directory (default docs/img)")
+    main(ap.parse_args().out)
