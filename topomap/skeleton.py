@@ -84,102 +84,95 @@ def skeleton_graph(skel: np.ndarray, *, radius: np.ndarray | None = None,
     skel = np.asarray(skel, bool)
     H, W = skel.shape
     G = nx.MultiGraph(resolution=float(resolution))
-    if not skel.any():
+    pr, pc = np.nonzero(skel)  # row-major order
+    npx = pr.size
+    if npx == 0:
         return G
-    deg = _neighbour_count(skel)
-    node_px = skel & (deg != 2)
-    # junction pixels are clustered into one node; endpoints/isolated stay single
-    junc = skel & (deg >= 3)
-    jlab, nj = cc_label(junc, 8)
-    nodelab = jlab.copy()
-    single = skel & (deg <= 1)
-    sr, sc = np.nonzero(single)
-    nodelab[sr, sc] = nj + 1 + np.arange(sr.size)
-    n_nodes = nj + sr.size
+    # sparse pixel adjacency: one full-size index image, everything else O(pixels)
+    pid = np.full((H + 2, W + 2), -1, np.int32)
+    pid[pr + 1, pc + 1] = np.arange(npx, dtype=np.int32)
+    nb = np.stack([pid[pr + 1 + dr, pc + 1 + dc] for dr, dc in _OFFSETS], 1)  # (npx, 8)
+    has = nb >= 0
+    deg = has.sum(1)
+    src = np.repeat(np.arange(npx), 8)[has.ravel()]
+    dst = nb.ravel()[has.ravel()]
 
-    # branches: skeleton minus node pixels
-    br = skel & ~node_px
-    blab, nb = cc_label(br, 8)
+    def components(mask_px):
+        """Connected components of the pixels in ``mask_px`` (labels 1.., 0 = outside),
+        numbered in row-major order of their first pixel."""
+        m = mask_px[src] & mask_px[dst]
+        A = sparse.csr_matrix((np.ones(int(m.sum()), np.int8), (src[m], dst[m])), shape=(npx, npx))
+        _, comp = csgraph.connected_components(A, directed=False)
+        lab = np.zeros(npx, np.int64)
+        idx = np.flatnonzero(mask_px)
+        if idx.size:
+            _, first, inv = np.unique(comp[idx], return_index=True, return_inverse=True)
+            rank = np.empty(first.size, np.int64)
+            rank[np.argsort(first, kind="stable")] = np.arange(1, first.size + 1)
+            lab[idx] = rank[inv]
+        return lab
 
-    # loops without any node: give each such component one artificial node
-    if nb:
-        has_node = np.zeros(nb + 1, bool)
-        # a branch component touching a node pixel
-        touch = ndi.maximum_filter(nodelab > 0, size=3) & br
-        has_node[np.unique(blab[touch])] = True
+    # nodes: clusters of junction pixels (3+ neighbours), single end/isolated pixels
+    is_junc = deg >= 3
+    node_of = components(is_junc)
+    nj = int(node_of.max())
+    single = np.flatnonzero(deg <= 1)
+    node_of[single] = nj + 1 + np.arange(single.size)
+    n_nodes = nj + single.size
+    is_br = node_of == 0
+    blab = components(is_br)
+    # loops without any node: the first pixel of each becomes a node
+    if blab.max():
+        touches = ((node_of[np.where(has, nb, 0)] > 0) & has).any(1)
+        has_node = np.zeros(int(blab.max()) + 1, bool)
+        has_node[blab[is_br & touches]] = True
         loops = np.flatnonzero(~has_node[1:]) + 1
         if loops.size:
-            flat = blab.ravel()
-            idx = np.flatnonzero(np.isin(flat, loops))
-            first = {}
-            # first pixel (row-major) of each loop component
-            vals, pos = np.unique(flat[idx], return_index=True)
-            for v, p in zip(vals, idx[pos]):
-                first[int(v)] = p
-            for v, p in first.items():
-                r, c = divmod(int(p), W)
-                n_nodes += 1
-                nodelab[r, c] = n_nodes
-                br[r, c] = False
-                blab[r, c] = 0
-            # the loop component is now open; relabel branches
-            blab, nb = cc_label(br, 8)
+            firsts = np.array([np.flatnonzero(blab == lv)[0] for lv in loops])
+            node_of[firsts] = n_nodes + 1 + np.arange(firsts.size)
+            n_nodes += firsts.size
+            is_br = node_of == 0
+            blab = components(is_br)
 
     # node attributes
-    nr, nc = np.nonzero(nodelab)
-    nl = nodelab[nr, nc]
+    nidx = np.flatnonzero(node_of)
+    nl = node_of[nidx]
+    nr, nc = pr[nidx], pc[nidx]
     cnt = np.bincount(nl, minlength=n_nodes + 1).astype(float)
     cnt[cnt == 0] = 1
     mr = np.bincount(nl, weights=nr, minlength=n_nodes + 1) / cnt
     mc = np.bincount(nl, weights=nc, minlength=n_nodes + 1) / cnt
-    # representative pixel per node: the node pixel closest to the centroid
     d2 = (nr - mr[nl]) ** 2 + (nc - mc[nl]) ** 2
     order = np.lexsort((d2, nl))
     first_idx = order[np.r_[True, nl[order][1:] != nl[order][:-1]]]
     rep = np.zeros((n_nodes + 1, 2), int)
     rep[nl[first_idx]] = np.stack([nr[first_idx], nc[first_idx]], 1)
 
-    # edges between nodes: via branch components, and direct node-node adjacency
     edges = []  # (u, v, path array)
-    if nb:
-        br_r, br_c = np.nonzero(br)
-        br_l = blab[br_r, br_c]
-        npx = br_r.size
-        pid = np.full(skel.shape, -1, np.int64)
-        pid[br_r, br_c] = np.arange(npx)
-        # adjacency among branch pixels and to nodes
-        src, dst = [], []
-        end_node = []  # (pixel index, node label)
-        for dr, dc in _OFFSETS:
-            rr, cc = br_r + dr, br_c + dc
-            ok = (rr >= 0) & (rr < H) & (cc >= 0) & (cc < W)
-            i = np.flatnonzero(ok)
-            q = pid[rr[i], cc[i]]
-            m = q >= 0
-            src.append(i[m]); dst.append(q[m])
-            nlab = nodelab[rr[i], cc[i]]
-            mn = nlab > 0
-            end_node.append(np.stack([i[mn], nlab[mn]], 1))
-        src = np.concatenate(src); dst = np.concatenate(dst)
-        w = np.hypot(br_r[src] - br_r[dst], br_c[src] - br_c[dst])
-        A = sparse.csr_matrix((w, (src, dst)), shape=(npx, npx))
-        en = np.unique(np.concatenate(end_node), axis=0)  # unique (pixel, node)
-        # start pixel of each branch: the lowest-index pixel touching the lowest node
-        # (branch ends are pixels with < 2 branch neighbours)
-        bdeg = np.bincount(src, minlength=npx)
+    if blab.max():
+        bidx = np.flatnonzero(is_br)
+        nbr = bidx.size
+        local = np.full(npx, -1, np.int64)
+        local[bidx] = np.arange(nbr)
+        br_r, br_c, br_l = pr[bidx], pc[bidx], blab[bidx]
+        m = is_br[src] & is_br[dst]
+        s_l, d_l = local[src[m]], local[dst[m]]
+        w = np.hypot(br_r[s_l] - br_r[d_l], br_c[s_l] - br_c[d_l])
+        A = sparse.csr_matrix((w, (s_l, d_l)), shape=(nbr, nbr))
+        # (branch pixel, node) pairs of touching pixels
+        m2 = is_br[src] & (node_of[dst] > 0)
+        en = np.unique(np.stack([local[src[m2]], node_of[dst[m2]]], 1), axis=0)
+        bdeg = np.bincount(s_l, minlength=nbr)
         ends = np.flatnonzero(bdeg <= 1)
-        # order ends per branch deterministically
         ends = ends[np.argsort(br_l[ends], kind="stable")]
         e_l = br_l[ends]
         starts = ends[np.r_[True, e_l[1:] != e_l[:-1]]] if ends.size else ends
         dist = csgraph.dijkstra(A, directed=False, indices=starts, min_only=True)
-        # order pixels of every branch by distance from the start
         porder = np.lexsort((dist, br_l))
         bounds = np.flatnonzero(np.r_[True, br_l[porder][1:] != br_l[porder][:-1], True])
-        # nodes touching each pixel
         touch_px = {}
-        for p, nlab in en:
-            touch_px.setdefault(int(p), []).append(int(nlab))
+        for p, nlab in en.tolist():
+            touch_px.setdefault(p, []).append(nlab)
         extra = []
 
         def new_node(r, c):
@@ -228,13 +221,9 @@ def skeleton_graph(skel: np.ndarray, *, radius: np.ndarray | None = None,
             mc = np.concatenate([mc, ex[:, 1].astype(float)])
             n_nodes += len(extra)
     # direct node-node adjacency (no branch pixel between them)
-    for dr, dc in _OFFSETS[4:]:
-        b = nodelab[max(0, dr):H + min(0, dr), max(0, dc):W + min(0, dc)]
-        a = nodelab[max(0, -dr):H - max(0, dr), max(0, -dc):W - max(0, dc)]
-        m = (a > 0) & (b > 0) & (a != b)
-        for u, v in set(zip(a[m].tolist(), b[m].tolist())):
-            u, v = min(u, v), max(u, v)
-            edges.append((u, v, np.vstack([rep[u], rep[v]])))
+    m3 = (node_of[src] > 0) & (node_of[dst] > 0) & (node_of[src] < node_of[dst])
+    for u, v in sorted(set(zip(node_of[src[m3]].tolist(), node_of[dst[m3]].tolist()))):
+        edges.append((u, v, np.vstack([rep[u], rep[v]])))
 
     # dedupe the direct edges listed twice
     seen_direct = set()
