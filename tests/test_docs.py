@@ -97,3 +97,13 @@ def test_mkdocs_build_strict(tmp_path):
                           env={**__import__("os").environ, "NO_MKDOCS_2_WARNING": "1"})
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     assert (tmp_path / "site" / "graph-attributes" / "index.html").is_file()
+
+
+def test_every_candidate_status_is_explained():
+    """Each ``status`` string the code gives a candidate is on how-it-works.md."""
+    page = (ROOT / "docs" / "how-it-works.md").read_text(encoding="utf-8")
+    src = "".join((ROOT / "topomap" / f).read_text(encoding="utf-8") for f in ("segment.py", "doors.py"))
+    statuses = set(re.findall(r"\.status = \"([^\"]+)\"", src))
+    assert statuses
+    missing = [s for s in sorted(statuses) if f"`{s}`" not in page]
+    assert not missing, f"how-it-works.md does not explain candidate status {missing}"
