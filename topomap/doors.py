@@ -348,32 +348,49 @@ def protrusion(obstacle_like_free: np.ndarray, radius_px: float) -> np.ndarray:
     return cv2.filter2D(obstacle_like_free.astype(np.float32), -1, k, borderType=cv2.BORDER_CONSTANT)
 
 
-def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float):
-    """Set ``ip1``, ``ip2``: the nearest obstacle cell to each bottleneck, and
-    the nearest one on the opposite side (angle of at least 90° between them,
-    seen from the bottleneck).
+def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, depth_px: float = 0.0):
+    """Set ``ip1``, ``ip2``: the two door posts of each bottleneck.
 
-    At a door these are the two door posts, wherever along the passage the
-    skeleton's minimum lies. Cells farther than ``max_px`` are not searched.
+    The nearest obstacle cell to the bottleneck and the nearest one on the
+    opposite side (at least 90° apart, seen from the bottleneck) give the
+    width of the passage; then, among the obstacle cells within
+    ``depth_px`` of those distances, every pair (one cell per side) as close
+    as the closest pair (within 0.75 px) is averaged. Where the passage has
+    parallel faces, such as a gap between two wall ends, the door line thus
+    runs through the middle of the wall's thickness, wherever along the
+    passage the skeleton's minimum lies. Cells farther than ``max_px`` are
+    not searched.
     """
     H, W = obstacle.shape
     for c in candidates:
-        R = int(np.ceil(min(c.radius * 1.5 + 3, max_px)))
+        R = int(np.ceil(min(c.radius * 1.5 + 3 + depth_px, max_px + depth_px)))
         r0, c0 = int(round(c.centroid[0])), int(round(c.centroid[1]))
         ra, rb = max(r0 - R, 0), min(r0 + R + 1, H)
         ca, cb = max(c0 - R, 0), min(c0 + R + 1, W)
         rr, cc = np.nonzero(obstacle[ra:rb, ca:cb])
+        c.ip1 = c.ip2 = None
         if rr.size == 0:
-            c.ip1 = c.ip2 = None
             continue
         q = np.stack([rr + ra, cc + ca], 1).astype(float)
         v = q - c.centroid
         d = np.hypot(v[:, 0], v[:, 1])
         i = int(np.argmin(d))
+        if d[i] > max_px:
+            continue
         opp = (v @ v[i]) <= 0
         if not opp.any():
-            c.ip1, c.ip2 = q[i], None
+            c.ip1 = q[i]
             continue
         j = np.flatnonzero(opp)[np.argmin(d[opp])]
-        c.ip1, c.ip2 = q[i], q[j]
+        if d[j] > max_px:
+            c.ip1 = q[i]
+            continue
+        a = q[(~opp) & (d <= d[i] + depth_px)]
+        b = q[opp & (d <= d[j] + depth_px)]
+        if depth_px > 0 and a.size and b.size:
+            D = np.hypot(a[:, None, 0] - b[None, :, 0], a[:, None, 1] - b[None, :, 1])
+            ia, ib = np.nonzero(D <= D.min() + 0.75)
+            c.ip1, c.ip2 = a[ia].mean(axis=0), b[ib].mean(axis=0)
+        else:
+            c.ip1, c.ip2 = q[i], q[j]
     return candidates

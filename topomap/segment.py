@@ -302,7 +302,7 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
     with T("doors"):
         thr_px = D.wall_threshold(d_occ, S.graph_pixels(Go))
         cands = D.passage_minima(Gf, window_px=window / res, rise_px=rise / res, reach_px=reach / res)
-        D.nearest_wall_points(cands, ~free, max_px=max_door_width / res)
+        D.nearest_wall_points(cands, ~free, max_px=max_door_width / res, depth_px=max(thr_px, 2.0))
         frac = D.protrusion(free, max(thr_px, 0.25 / res))
         # the protrusion of a wall end: the most protruding obstacle cell near the IP
         import cv2
@@ -323,8 +323,8 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
             if not (min_door_width <= width <= max_door_width):
                 c.status = "width out of range"
                 continue
-            f1 = frac[int(c.ip1[0]), int(c.ip1[1])]
-            f2 = frac[int(c.ip2[0]), int(c.ip2[1])]
+            f1 = frac[int(round(c.ip1[0])), int(round(c.ip1[1]))]
+            f2 = frac[int(round(c.ip2[0])), int(round(c.ip2[1]))]
             p1, p2 = f1 >= protrusion_min, f2 >= protrusion_min
             e_ok = False
             if tree is not None:
@@ -405,7 +405,15 @@ def cut_rooms(grid: OccupancyGrid, segments):
     cut = np.zeros_like(free)
     for p, q in segments:
         cut[_line_px(p, q, free.shape)] = True
-    pieces, _ = cc_label(free & ~cut, 4)
+    pieces, n = cc_label(free & ~cut, 4)
+    if n > 1:
+        # number pieces by area (largest = highest id): cut cells then go to
+        # the larger neighbour, whatever the map's orientation
+        area = np.bincount(pieces.ravel(), minlength=n + 1)
+        area[0] = -1
+        rank = np.empty(n + 1, np.int32)
+        rank[np.argsort(area, kind="stable")] = np.arange(n + 1, dtype=np.int32)
+        pieces = rank[pieces]
     labels = fill_unlabeled(pieces, free)
     return labels, doors_between_rooms(grid, labels, segments)
 
