@@ -223,3 +223,24 @@ def test_subprocess_batch_and_debug(tmp_path):
     assert (tmp_path / "out" / "a" / "labels.png").exists()
     p = _run("--debug", "segment", "bad.png", "-o", "out2", cwd=tmp_path)
     assert p.returncode == 1 and "Traceback (most recent call last)" in p.stderr
+
+
+def test_cli_method_choices_match_library():
+    """The CLI lists the methods without importing the library; it must not drift."""
+    from topomap.cli import _method_names
+    from topomap.segment import METHODS
+
+    assert sorted(_method_names()) == sorted(METHODS)
+    assert _method_names()[0] == "topomap"
+
+
+def test_segment_with_each_method_name(tmp_path):
+    from click.testing import CliRunner
+
+    from topomap._example import example_map_path
+    from topomap.cli import main
+
+    r = CliRunner().invoke(main, ["segment", str(example_map_path()), "-o", str(tmp_path / "o"),
+                                  "--method", "topomap"])
+    assert r.exit_code == 0, r.output
+    assert (tmp_path / "o" / "labels.png").exists()

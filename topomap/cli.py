@@ -21,8 +21,8 @@ log = logging.getLogger("topomap")
 
 
 def _method_names():
-    # kept in sync with topomap.segment.METHODS without importing numpy at start-up
-    return ["paper", "watershed", "morphological", "distance", "voronoi"]
+    # kept in sync with topomap.segment.METHODS (a test checks) without importing numpy at start-up
+    return ["topomap", "paper", "watershed", "morphological", "distance", "voronoi"]
 
 
 class _State:
