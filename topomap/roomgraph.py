@@ -62,6 +62,12 @@ def room_polygons(labels: np.ndarray, to_world=None) -> dict:
                 if len(shell) >= 3:
                     polys.append(Polygon(shell, [h for h in holes if len(h) >= 3]))
         geom = unary_union([p.buffer(0) for p in polys]) if polys else Polygon()
+        if not geom.is_empty:
+            # the outline ran through sub-cell centres a quarter cell inside
+            # the cells' edges: offset it out by that quarter cell
+            q = 0.25 * (abs(to_world(0, 1)[0] - to_world(0, 0)[0]) + abs(to_world(0, 1)[1] - to_world(0, 0)[1])
+                        if to_world is not None else 1.0)
+            geom = geom.buffer(q, join_style="mitre", mitre_limit=2.0)
         if geom.geom_type == "GeometryCollection":
             geom = MultiPolygon([g for g in geom.geoms if g.geom_type == "Polygon"])
         out[i] = geom
@@ -69,9 +75,12 @@ def room_polygons(labels: np.ndarray, to_world=None) -> dict:
 
 
 def _to_coords(cnt, r0, c0, to_world):
-    pts = cnt[:, 0, :].astype(float)  # (x=col2, y=row2) in the x2, padded grid
-    cols = (pts[:, 0] - 1) / 2.0 - 0.5 + c0
-    rows = (pts[:, 1] - 1) / 2.0 - 0.5 + r0
+    # contour points are centres of sub-cells of the x2, padded grid: sub-cell
+    # k (after the pad) has its centre at k / 2 - 0.25 in cell units, a
+    # quarter cell inside the cells' outer edges (pushed back out by the caller)
+    pts = cnt[:, 0, :].astype(float) - 1.0
+    cols = pts[:, 0] / 2.0 - 0.25 + c0
+    rows = pts[:, 1] / 2.0 - 0.25 + r0
     if to_world is not None:
         x, y = to_world(rows, cols)
         return list(zip(np.asarray(x).tolist(), np.asarray(y).tolist()))
