@@ -249,7 +249,8 @@ def select_doors(candidates, endpoints: np.ndarray, threshold: float, occ_lines)
     return kept
 
 
-def passage_minima(G, *, window_px: float, rise_px: float, reach_px: float, min_branch_px: float = 3):
+def passage_minima(G, *, window_px: float, rise_px: float, reach_px: float, min_branch_px: float = 3,
+                   mouths: bool = False):
     """Bottlenecks of free space: local clearance minima along skeleton branches.
 
     A pixel of a branch is a bottleneck when its clearance is the smallest
@@ -320,6 +321,8 @@ def passage_minima(G, *, window_px: float, rise_px: float, reach_px: float, min_
             if arc[-1] - arc[i] < reach_px:
                 right = max(right, beyond(v, (u, v, k), reach_px - (arc[-1] - arc[i])))
             if left < r + rise_px or right < r + rise_px:
+                if mouths:
+                    out.extend(_mouths(G, run, rad, arc, path, (u, v, k), reach_px, rise_px, beyond))
                 continue
             a = path[max(i - 3, 0)].astype(float)
             b = path[min(i + 3, n - 1)].astype(float)
@@ -328,6 +331,40 @@ def passage_minima(G, *, window_px: float, rise_px: float, reach_px: float, min_
             dvec = dvec / nrm if nrm else np.array([1.0, 0.0])
             out.append(Candidate(edge=(u, v, k), centroid=path[i].astype(float), direction=dvec,
                                  radius=float(r)))
+    return out
+
+
+def _mouths(G, run, rad, arc, path, edge, reach_px, rise_px, beyond, tol_px: float = 1.0):
+    """One-sided bottlenecks at the ends of a run of minima: where a passage of
+    even width (a corridor) opens into a wider space. The clearance rises by
+    ``rise_px`` on one side within ``reach_px`` and does not fall below the
+    run's value minus ``tol_px`` on the other."""
+    u, v, _ = edge
+    n = rad.size
+    out = []
+    for i, towards in ((int(run[-1]), +1), (int(run[0]), -1)):
+        r = rad[i]
+        if towards > 0:
+            ahead = (arc > arc[i]) & (arc - arc[i] <= reach_px)
+            back = (arc < arc[i]) & (arc[i] - arc <= reach_px)
+            far_node, far_rem = v, reach_px - (arc[-1] - arc[i])
+        else:
+            ahead = (arc < arc[i]) & (arc[i] - arc <= reach_px)
+            back = (arc > arc[i]) & (arc - arc[i] <= reach_px)
+            far_node, far_rem = u, reach_px - arc[i]
+        up = rad[ahead].max() if ahead.any() else 0.0
+        if far_rem > 0:
+            up = max(up, beyond(far_node, edge, far_rem))
+        if up < r + rise_px or not back.any() or rad[back].min() < r - tol_px \
+                or rad[back].max() >= r + rise_px:
+            continue
+        a = path[max(i - 3, 0)].astype(float)
+        b = path[min(i + 3, n - 1)].astype(float)
+        dvec = b - a
+        nrm = np.linalg.norm(dvec)
+        dvec = dvec / nrm if nrm else np.array([1.0, 0.0])
+        out.append(Candidate(edge=edge, centroid=path[i].astype(float), direction=dvec, radius=float(r),
+                             status="mouth"))
     return out
 
 
@@ -387,7 +424,7 @@ def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, dept
             continue
         a = q[(~opp) & (d <= d[i] + depth_px)]
         b = q[opp & (d <= d[j] + depth_px)]
-        if depth_px > 0 and a.size and b.size:
+        if depth_px > 0 and a.size and b.size and c.status != "mouth":
             D = np.hypot(a[:, None, 0] - b[None, :, 0], a[:, None, 1] - b[None, :, 1])
             ia, ib = np.nonzero(D <= D.min() + 0.75)
             c.ip1, c.ip2 = a[ia].mean(axis=0), b[ib].mean(axis=0)

@@ -252,7 +252,7 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
                     min_occupied_branch: float = 0.3, min_door_width: float = 0.5,
                     max_door_width: float = 2.0, window: float = 0.5, rise: float = 0.15, reach: float = 1.5,
                     protrusion_min: float = 0.6, flat_min: float = 0.45, rule: str = "oneflat",
-                    skeleton_cell: float = 0.1) -> Segmentation:
+                    skeleton_cell: float = 0.1, mouths: bool = True) -> Segmentation:
     """Segment ``grid`` with topomap's method: the paper's two skeletons and
     map-measured threshold, with bottleneck candidates and a protrusion test.
 
@@ -283,7 +283,7 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
     params = dict(erosion_radius=erosion_radius, median_size=median_size, dilation_size=dilation_size,
                   wall_band=wall_band, min_occupied_branch=min_occupied_branch,
                   min_door_width=min_door_width, max_door_width=max_door_width, window=window, rise=rise, reach=reach,
-                  protrusion_min=protrusion_min, rule=rule, skeleton_cell=skeleton_cell)
+                  protrusion_min=protrusion_min, rule=rule, skeleton_cell=skeleton_cell, mouths=mouths)
     free = grid.free
     with T("preprocess"):
         f, d_free, occ = _free_and_occupied(grid, erosion_radius=erosion_radius, median_size=median_size,
@@ -301,7 +301,8 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
         Go = S.prune_spurs(Go, min_occupied_branch)
     with T("doors"):
         thr_px = D.wall_threshold(d_occ, S.graph_pixels(Go))
-        cands = D.passage_minima(Gf, window_px=window / res, rise_px=rise / res, reach_px=reach / res)
+        cands = D.passage_minima(Gf, window_px=window / res, rise_px=rise / res, reach_px=reach / res,
+                                 mouths=mouths)
         D.nearest_wall_points(cands, ~free, max_px=max_door_width / res, depth_px=max(thr_px, 2.0))
         frac = D.protrusion(free, max(thr_px, 0.25 / res))
         # the protrusion of a wall end: the most protruding obstacle cell near the IP
@@ -332,6 +333,14 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
                 d2, _ = tree.query(c.ip2)
                 e_ok = d1 <= thr_px and d2 <= thr_px
             f_ok = p1 and p2
+            if c.status == "mouth":
+                # a corridor opening into a room: walls must end on both sides
+                if not f_ok:
+                    c.status = "mouth without protruding walls"
+                    continue
+                c.status = "door"
+                accepted.append((width, c))
+                continue
             ok = {"either": e_ok or f_ok, "ep": e_ok, "frac": f_ok, "one": (p1 or p2),
                   "oneflat": e_ok or f_ok or (max(f1, f2) >= protrusion_min and min(f1, f2) >= flat_min)}[rule]
             if not ok:
