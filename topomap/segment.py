@@ -4,6 +4,9 @@
 :class:`Segmentation`: the label image, the doors, the skeleton graphs and the
 per-stage timings. Methods:
 
+``"topomap"`` (the default)
+    The paper's two skeletons and map-measured threshold with a stronger door
+    test: :func:`segment_topomap`.
 ``"paper"``
     The method of Mora, Prados & Barber (ICAART 2023), step by step:
     :func:`segment_paper`.
@@ -253,24 +256,83 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
                     max_door_width: float = 2.0, window: float = 0.5, rise: float = 0.15, reach: float = 1.5,
                     protrusion_min: float = 0.6, flat_min: float = 0.45, rule: str = "oneflat",
                     skeleton_cell: float = 0.1, mouths: bool = True) -> Segmentation:
-    """Segment ``grid`` with topomap's method: the paper's two skeletons and
-    map-measured threshold, with bottleneck candidates and a protrusion test.
+    """Segment ``grid`` with topomap's default method.
+
+    The paper's ideas — skeletons of free *and* occupied space, a threshold
+    measured on the map (twice the mean wall half-thickness), doors where a
+    narrow passage meets protruding walls, rooms by cutting at the doors with
+    no merging step — with a different door test: bottlenecks of clearance
+    along the free-space skeleton (and corridor mouths), door posts at the
+    closest wall cells, and a protrusion test that accepts the paper's
+    endpoint evidence or a measured convexity of the wall at the posts. See
+    the "How it works" page for pictures of every step.
 
     Parameters
     ----------
     grid : OccupancyGrid
+        Free cells are ``grid.free``; every other cell is an obstacle.
+    erosion_radius : float
+        Radius (m) of the disk free space is eroded with before its skeleton
+        is taken: 0.05 m (one cell at 0.05 m/px) removes free-space speckle
+        without narrowing any door by more than a cell on each side.
+    median_size : float
+        Side (m) of the median filter that smooths the eroded free space:
+        0.25 m rounds corners so they add no skeleton spurs.
+    dilation_size : float
+        Side (m) of the square occupied space is dilated with before its
+        skeleton: 0.15 m closes one-cell gaps in scanned walls.
+    wall_band : float
+        Obstacle cells farther than this (m) from free space are left out of
+        the occupied-space analysis (the outside of the building): 0.5 m
+        keeps walls up to 1 m thick whole.
+    min_occupied_branch : float
+        End branches of the occupied skeleton shorter than this (m) are
+        pruned: 0.3 m, about a wall's thickness — a spur shorter than the
+        wall is thick is a corner artefact, not a protrusion (the paper's
+        1 m also removes real wall stubs beside doors).
     min_door_width, max_door_width : float
         Range of door widths (m): 0.5 m is narrower than any door a person
-        uses; 2.0 m is a double door.
+        or robot uses; 2.0 m is a double door.
     window : float
         A bottleneck is the narrowest point within this distance (m) along
-        the skeleton.
+        the skeleton: 0.5 m, half a door's width either way.
     rise : float
-        Clearance must grow by this much (m) on both sides of a bottleneck:
-        doors lead from one space into another.
+        The clearance must grow by this much (m) on both sides of a
+        bottleneck within ``reach``: doors lead from one space into a wider
+        one. 0.15 m is three cells at 0.05 m/px, well above the
+        distance transform's discretisation noise.
+    reach : float
+        How far (m) along the skeleton the rise is looked for: 1.5 m, a
+        door's frame and the first step into the room behind it.
     protrusion_min : float
-        Fraction of free cells within the map's wall-thickness threshold of
-        an intersection point above which the wall there protrudes.
+        Fraction of free cells in a disk of the map's wall-thickness
+        threshold (at least 0.25 m) around a door post above which the wall
+        protrudes there: 0.6 lies between a straight wall (0.5) and a
+        right-angled convex corner (0.75).
+    flat_min : float
+        With ``rule="oneflat"``, the other post must be at least this
+        (0.45): a straight wall, not a concave corner (0.25).
+    rule : {"oneflat", "either", "ep", "frac", "one"}
+        Which protrusion evidence accepts a door: ``"ep"`` the paper's
+        endpoint test at both posts; ``"frac"`` the convexity test at both
+        posts; ``"either"`` one of these; ``"one"`` convexity at one post;
+        ``"oneflat"`` (default) ``"either"``, or convexity at one post and a
+        straight wall at the other (a door beside a wall).
+    skeleton_cell : float
+        Cell size (m) of the grid the free-space skeleton is taken on; the
+        clearances are always sampled at the map's own resolution. 0.1 m:
+        the narrowest door (0.5 m) is still five cells wide. Maps coarser
+        than this use their own grid.
+    mouths : bool
+        Also look for corridor mouths: one-sided bottlenecks where a run of
+        even clearance opens into a wider space; they are doors only where
+        the walls protrude on both sides.
+
+    Returns
+    -------
+    Segmentation
+        ``method="topomap"``; ``candidates`` holds every bottleneck with its
+        ``status``.
     """
     from shapely.geometry import MultiLineString
 
