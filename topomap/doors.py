@@ -271,12 +271,15 @@ def passage_minima(G, *, window_px: float, rise_px: float, reach_px: float, min_
     res = G.graph.get("resolution", 1.0)
     out = []
     w = max(int(round(window_px)), 1)
-    # per edge: radius (px) and arc length from its first pixel (px)
+    # per edge: radius (px), arc length from its first pixel (px), and the
+    # running maximum of the radius from either end (for look-ahead queries)
     info = {}
     for u, v, k, d in G.edges(keys=True, data=True):
         p = d["path"].astype(float)
+        rad = d["radius"] / res
         arc = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(p, axis=0).T))])
-        info[(u, v, k)] = (d["radius"] / res, arc)
+        info[(u, v, k)] = (rad, arc, d["start"], np.maximum.accumulate(rad),
+                           arc[-1] - arc[::-1], np.maximum.accumulate(rad[::-1]))
 
     def beyond(node, edge, rem):
         """Largest clearance within ``rem`` px past ``node`` on its other branches."""
@@ -287,17 +290,19 @@ def passage_minima(G, *, window_px: float, rise_px: float, reach_px: float, min_
             key = (a, b, kk) if (a, b, kk) in info else (b, a, kk)
             if key == edge and a != b:
                 continue
-            rad, arc = info[key]
-            if G.edges[key]["start"] == node:
-                sel = arc <= rem
+            rad, arc, start, pm, arc_back, pm_back = info[key]
+            if start == node:
+                j = np.searchsorted(arc, rem, side="right") - 1
+                if j >= 0:
+                    best = max(best, float(pm[j]))
             else:
-                sel = arc[-1] - arc <= rem
-            if sel.any():
-                best = max(best, float(rad[sel].max()))
+                j = np.searchsorted(arc_back, rem, side="right") - 1
+                if j >= 0:
+                    best = max(best, float(pm_back[j]))
         return best
 
     for u, v, k in sorted(info):
-        rad, arc = info[(u, v, k)]
+        rad, arc = info[(u, v, k)][:2]
         n = rad.size
         if n < min_branch_px:
             continue
