@@ -250,7 +250,7 @@ def select_doors(candidates, endpoints: np.ndarray, threshold: float, occ_lines)
 
 
 def passage_minima(G, *, window_px: float, rise_px: float, reach_px: float, min_branch_px: float = 3,
-                   mouths: bool = False):
+                   mouths: bool = False, min_run_px: float = 0.0):
     """Bottlenecks of free space: local clearance minima along skeleton branches.
 
     A pixel of a branch is a bottleneck when its clearance is the smallest
@@ -327,7 +327,8 @@ def passage_minima(G, *, window_px: float, rise_px: float, reach_px: float, min_
                 right = max(right, beyond(v, (u, v, k), reach_px - (arc[-1] - arc[i])))
             if left < r + rise_px or right < r + rise_px:
                 if mouths:
-                    out.extend(_mouths(G, run, rad, arc, path, (u, v, k), reach_px, rise_px, beyond))
+                    out.extend(_mouths(G, run, rad, arc, path, (u, v, k), reach_px, rise_px, beyond,
+                                       min_run_px=min_run_px))
                 continue
             a = path[max(i - 3, 0)].astype(float)
             b = path[min(i + 3, n - 1)].astype(float)
@@ -339,15 +340,26 @@ def passage_minima(G, *, window_px: float, rise_px: float, reach_px: float, min_
     return out
 
 
-def _mouths(G, run, rad, arc, path, edge, reach_px, rise_px, beyond, tol_px: float = 1.0):
+def _mouths(G, run, rad, arc, path, edge, reach_px, rise_px, beyond, tol_px: float = 1.0,
+            min_run_px: float = 0.0):
     """One-sided bottlenecks at the ends of a run of minima: where a passage of
-    even width (a corridor) opens into a wider space. The clearance rises by
-    ``rise_px`` on one side within ``reach_px`` and does not fall below the
-    run's value minus ``tol_px`` on the other."""
+    even width (a corridor, at least ``min_run_px`` long within ``tol_px``)
+    opens into a wider space. The clearance rises by ``2 * rise_px`` on one
+    side within ``reach_px`` and does not fall below the run's value minus
+    ``tol_px`` on the other."""
     u, v, _ = edge
     n = rad.size
     out = []
-    for i, towards in ((int(run[-1]), +1), (int(run[0]), -1)):
+    # the plateau around the run: neighbours within ``tol_px`` of its minimum
+    base = rad[run].min()
+    lo, hi = int(run[0]), int(run[-1])
+    while lo > 0 and rad[lo - 1] <= base + tol_px:
+        lo -= 1
+    while hi < n - 1 and rad[hi + 1] <= base + tol_px:
+        hi += 1
+    if arc[hi] - arc[lo] < min_run_px:
+        return out  # too short a stretch of even width to be a corridor
+    for i, towards in ((hi, +1), (lo, -1)):
         r = rad[i]
         if towards > 0:
             ahead = (arc > arc[i]) & (arc - arc[i] <= reach_px)
@@ -360,7 +372,7 @@ def _mouths(G, run, rad, arc, path, edge, reach_px, rise_px, beyond, tol_px: flo
         up = rad[ahead].max() if ahead.any() else 0.0
         if far_rem > 0:
             up = max(up, beyond(far_node, edge, far_rem))
-        if up < r + rise_px or not back.any() or rad[back].min() < r - tol_px \
+        if up < r + 2 * rise_px or not back.any() or rad[back].min() < r - tol_px \
                 or rad[back].max() >= r + rise_px:
             continue
         a = path[max(i - 3, 0)].astype(float)

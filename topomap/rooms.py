@@ -64,26 +64,24 @@ def relabel_sequential(labels: np.ndarray) -> np.ndarray:
 
     This makes room IDs deterministic for the same input: room 1 is the room
     that contains the top-most (then left-most) free cell, and so on.
+    Negative labels count as 0. O(cells): no sort of the image.
     """
     labels = np.asarray(labels)
     flat = labels.ravel()
-    vals, first = np.unique(flat, return_index=True)
-    keep = vals != 0
-    vals, first = vals[keep], first[keep]
-    order = np.argsort(first, kind="stable")
-    lut_keys = vals[order]
-    out = np.zeros_like(labels, dtype=np.int32)
-    if lut_keys.size == 0:
-        return out
-    # map via searchsorted on the sorted unique values
-    new_ids = np.empty(vals.size, np.int32)
-    new_ids[order] = np.arange(1, vals.size + 1, dtype=np.int32)
-    idx = np.searchsorted(vals, flat)
-    idx = np.clip(idx, 0, vals.size - 1)
-    hit = (flat != 0) & (vals[idx] == flat)
-    out_flat = out.ravel()
-    out_flat[hit] = new_ids[idx[hit]]
-    return out
+    idx = np.flatnonzero(flat > 0)
+    if idx.size == 0:
+        return np.zeros(labels.shape, np.int32)
+    vals = flat[idx].astype(np.int64)
+    top = int(vals.max())
+    first = np.full(top + 1, flat.size, np.int64)
+    np.minimum.at(first, vals, idx)
+    ids = np.flatnonzero(first < flat.size)
+    order = ids[np.argsort(first[ids], kind="stable")]
+    lut = np.zeros(top + 1, np.int32)
+    lut[order] = np.arange(1, order.size + 1, dtype=np.int32)
+    out = np.zeros(flat.size, np.int32)
+    out[idx] = lut[vals]
+    return out.reshape(labels.shape)
 
 
 def _grow(seeds: np.ndarray, todo: np.ndarray, max_steps: int = 8) -> np.ndarray:

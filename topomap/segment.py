@@ -255,7 +255,8 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
                     min_occupied_branch: float = 0.3, min_door_width: float = 0.5,
                     max_door_width: float = 2.0, window: float = 0.5, rise: float = 0.15, reach: float = 1.5,
                     protrusion_min: float = 0.6, flat_min: float = 0.45, rule: str = "oneflat",
-                    skeleton_cell: float = 0.1, mouths: bool = True) -> Segmentation:
+                    skeleton_cell: float = 0.1, mouths: bool = True,
+                    corridor_length: float = 1.0) -> Segmentation:
     """Segment ``grid`` with topomap's default method.
 
     The paper's ideas — skeletons of free *and* occupied space, a threshold
@@ -325,8 +326,12 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
         than this use their own grid.
     mouths : bool
         Also look for corridor mouths: one-sided bottlenecks where a run of
-        even clearance opens into a wider space; they are doors only where
-        the walls protrude on both sides.
+        even clearance opens into a space at least ``2 * rise`` wider; they
+        are doors only where the walls protrude on both sides.
+    corridor_length : float
+        A run of even clearance (within one cell) must be at least this long
+        (m) to count as a corridor whose mouth can be a door: 1.0 m, longer
+        than any door frame or gap between pieces of furniture.
 
     Returns
     -------
@@ -345,7 +350,8 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
     params = dict(erosion_radius=erosion_radius, median_size=median_size, dilation_size=dilation_size,
                   wall_band=wall_band, min_occupied_branch=min_occupied_branch,
                   min_door_width=min_door_width, max_door_width=max_door_width, window=window, rise=rise, reach=reach,
-                  protrusion_min=protrusion_min, rule=rule, skeleton_cell=skeleton_cell, mouths=mouths)
+                  protrusion_min=protrusion_min, rule=rule, skeleton_cell=skeleton_cell, mouths=mouths,
+                  corridor_length=corridor_length)
     free = grid.free
     with T("preprocess"):
         f, d_free, occ = _free_and_occupied(grid, erosion_radius=erosion_radius, median_size=median_size,
@@ -364,7 +370,7 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
     with T("doors"):
         thr_px = D.wall_threshold(d_occ, S.graph_pixels(Go))
         cands = D.passage_minima(Gf, window_px=window / res, rise_px=rise / res, reach_px=reach / res,
-                                 mouths=mouths)
+                                 mouths=mouths, min_run_px=corridor_length / res)
         D.nearest_wall_points(cands, ~free, max_px=max_door_width / res, depth_px=max(thr_px, 2.0))
         frac = D.protrusion(free, max(thr_px, 0.25 / res))
         # the protrusion of a wall end: the most protruding obstacle cell near the IP
