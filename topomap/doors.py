@@ -340,6 +340,38 @@ def passage_minima(G, *, window_px: float, rise_px: float, reach_px: float, min_
     return out
 
 
+def protrusion_at(free: np.ndarray, points, radius_px: float, look_px: int) -> np.ndarray:
+    """:func:`protrusion` evaluated only near ``points``: for each point, the
+    largest protrusion of an obstacle cell within ``look_px`` (Chebyshev) of
+    it, 0 where there is none. Same values as filtering the whole map, at the
+    cost of a small window per point."""
+    import cv2
+
+    H, W = free.shape
+    r = max(int(round(radius_px)), 1)
+    y, x = np.ogrid[-r:r + 1, -r:r + 1]
+    k = (x * x + y * y <= r * r).astype(np.float32)
+    k /= k.sum()
+    out = np.zeros(len(points))
+    pad = r + look_px
+    for n, p in enumerate(points):
+        pr, pc = int(round(float(p[0]))), int(round(float(p[1])))
+        ra, rb = max(pr - pad, 0), min(pr + pad + 1, H)
+        ca, cb = max(pc - pad, 0), min(pc + pad + 1, W)
+        win = free[ra:rb, ca:cb].astype(np.float32)
+        # zero padding outside the map, as the whole-map filter does
+        full = np.zeros((rb - ra + 2 * r, cb - ca + 2 * r), np.float32)
+        full[r:r + rb - ra, r:r + cb - ca] = win
+        fr = cv2.filter2D(full, -1, k, borderType=cv2.BORDER_CONSTANT)[r:r + rb - ra, r:r + cb - ca]
+        # only cells near the post that are obstacles *and* whose disk lies
+        # inside the window are exact; the look area is well inside
+        la, lb = max(pr - look_px, 0) - ra, min(pr + look_px + 1, H) - ra
+        lc, ld = max(pc - look_px, 0) - ca, min(pc + look_px + 1, W) - ca
+        sub = np.where(win[la:lb, lc:ld] > 0, 0.0, fr[la:lb, lc:ld])
+        out[n] = float(sub.max()) if sub.size else 0.0
+    return out
+
+
 def _mouths(G, run, rad, arc, path, edge, reach_px, rise_px, beyond, tol_px: float = 1.0,
             min_run_px: float = 0.0):
     """One-sided bottlenecks at the ends of a run of minima: where a passage of

@@ -372,13 +372,12 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
         cands = D.passage_minima(Gf, window_px=window / res, rise_px=rise / res, reach_px=reach / res,
                                  mouths=mouths, min_run_px=corridor_length / res)
         D.nearest_wall_points(cands, ~free, max_px=max_door_width / res, depth_px=max(thr_px, 2.0))
-        frac = D.protrusion(free, max(thr_px, 0.25 / res))
-        # the protrusion of a wall end: the most protruding obstacle cell near the IP
-        import cv2
-
+        # the protrusion of a wall end: the most protruding obstacle cell
+        # within half the wall thickness of each door post
+        posts = [p for c in cands for p in (c.ip1, c.ip2) if p is not None]
         look = max(int(round(thr_px / 2)), 1)
-        frac = cv2.dilate(np.where(free, 0, frac).astype(np.float32),
-                          np.ones((2 * look + 1, 2 * look + 1), np.uint8))
+        pvals = D.protrusion_at(free, posts, max(thr_px, 0.25 / res), look)
+        frac = {(round(float(p[0]), 3), round(float(p[1]), 3)): v for p, v in zip(posts, pvals)}
         ends = S.graph_endpoints(Go)
         from scipy.spatial import cKDTree
 
@@ -392,8 +391,8 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
             if not (min_door_width <= width <= max_door_width):
                 c.status = "width out of range"
                 continue
-            f1 = frac[int(round(c.ip1[0])), int(round(c.ip1[1]))]
-            f2 = frac[int(round(c.ip2[0])), int(round(c.ip2[1]))]
+            f1 = frac[(round(float(c.ip1[0]), 3), round(float(c.ip1[1]), 3))]
+            f2 = frac[(round(float(c.ip2[0]), 3), round(float(c.ip2[1]), 3))]
             p1, p2 = f1 >= protrusion_min, f2 >= protrusion_min
             e_ok = False
             if tree is not None:

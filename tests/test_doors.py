@@ -1,0 +1,68 @@
+"""Door-finding building blocks of the default method (topomap.doors)."""
+
+import cv2
+import numpy as np
+import pytest
+
+from topomap import doors as D
+from topomap import skeleton as S
+from topomap._fast import edt
+
+
+def _map():
+    rng = np.random.default_rng(1)
+    free = np.ones((120, 150), bool)
+    free[40:60, :70] = False
+    free[:, 100:104] = False
+    free[rng.random(free.shape) > 0.97] = False
+    return free
+
+
+@pytest.mark.parametrize("radius,look", [(5, 1), (12, 3), (20, 6)])
+def test_protrusion_at_equals_whole_map_filter(radius, look):
+    free = _map()
+    pts = [np.array(p, float) for p in [(50, 69), (0, 101), (119, 149), (45.3, 30.7), (10.6, 99.5)]]
+    whole = D.protrusion(free, radius)
+    whole = cv2.dilate(np.where(free, 0, whole).astype(np.float32), np.ones((2 * look + 1,) * 2, np.uint8))
+    expect = [whole[int(round(p[0])), int(round(p[1]))] for p in pts]
+    np.testing.assert_allclose(D.protrusion_at(free, pts, radius, look), expect, atol=1e-6)
+
+
+def test_protrusion_values_on_simple_shapes():
+    free = np.ones((81, 81), bool)
+    free[40:, :] = False  # straight wall: half the disk is free
+    assert D.protrusion(free, 10)[40, 40] == pytest.approx(0.5, abs=0.05)
+    free = np.ones((81, 81), bool)
+    free[40:, 40:] = False  # convex right-angled corner: three quarters free
+    assert D.protrusion(free, 10)[40, 40] == pytest.approx(0.75, abs=0.05)
+
+
+def _two_rooms_with_door(door_px=18):
+    """Two 3 m rooms, a 0.2 m wall, a door of ``door_px`` cells (0.05 m/px)."""
+    free = np.zeros((70, 134), bool)
+    free[5:65, 5:65] = True
+    free[5:65, 69:129] = True
+    top = 35 - door_px // 2
+    free[top:top + door_px, 65:69] = True
+    return free
+
+
+def test_passage_minima_finds_the_door_and_its_posts():
+    free = _two_rooms_with_door()
+    G = S.skeleton_graph(S.skeletonize(free), radius=edt(free), resolution=0.05)
+    cands = D.passage_minima(G, window_px=10, rise_px=3, reach_px=30)
+    assert len(cands) == 1
+    D.nearest_wall_points(cands, ~free, max_px=40, depth_px=4)
+    c = cands[0]
+    rows = sorted([c.ip1[0], c.ip2[0]])
+    # the posts are the wall ends above and below the 18-cell gap
+    assert rows[0] == pytest.approx(25, abs=1) and rows[1] == pytest.approx(44, abs=1)
+    # and the door line runs through the middle of the 4-cell wall
+    assert (c.ip1[1] + c.ip2[1]) / 2 == pytest.approx(66.5, abs=1.0)
+
+
+def test_uniform_corridor_has_no_bottleneck():
+    free = np.zeros((30, 200), bool)
+    free[5:25, 5:195] = True
+    G = S.skeleton_graph(S.skeletonize(free), radius=edt(free), resolution=0.05)
+    assert D.passage_minima(G, window_px=10, rise_px=3, reach_px=30) == []
