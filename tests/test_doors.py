@@ -66,3 +66,28 @@ def test_uniform_corridor_has_no_bottleneck():
     free[5:25, 5:195] = True
     G = S.skeleton_graph(S.skeletonize(free), radius=edt(free), resolution=0.05)
     assert D.passage_minima(G, window_px=10, rise_px=3, reach_px=30) == []
+
+
+def test_unknown_margin_does_not_change_the_result():
+    """The default method works on the free space's bounding box; a wide
+    unknown margin around the map must not change rooms, doors or world
+    coordinates."""
+    from topomap._example import example_map_path
+    from topomap.io import UNKNOWN, OccupancyGrid, load_map
+    from topomap.segment import segment
+
+    g = load_map(example_map_path())
+    pad = 64
+    cells = np.pad(g.cells, pad, constant_values=UNKNOWN)
+    ox, oy, yaw = g.origin
+    big = OccupancyGrid(cells, g.resolution, (ox - pad * g.resolution, oy - pad * g.resolution, yaw))
+    a, b = segment(g), segment(big)
+    np.testing.assert_array_equal(b.labels[pad:-pad, pad:-pad], a.labels)
+    assert len(a.doors) == len(b.doors)
+    for da, db in zip(a.doors, b.doors):
+        assert db.xy1 == pytest.approx(da.xy1) and db.xy2 == pytest.approx(da.xy2)
+        assert db.p1 == pytest.approx((da.p1[0] + pad, da.p1[1] + pad))
+    na = a.free_graph.nodes[0]
+    nb = b.free_graph.nodes[0]
+    assert nb["pixel"] == (na["pixel"][0] + pad, na["pixel"][1] + pad)
+    assert (nb["x"], nb["y"]) == pytest.approx((na["x"], na["y"]))

@@ -347,6 +347,11 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
 
     res = grid.resolution
     T = _Timer()
+    # work on the bounding box of free space plus the wall band: the rest of
+    # the map (unknown margins, solid outside) cannot hold a room or a door
+    full, box = grid, _free_box(grid, _px(wall_band + dilation_size + max_door_width, grid.resolution, "wall_band"))
+    if box is not None:
+        grid = _crop(grid, box)
     params = dict(erosion_radius=erosion_radius, median_size=median_size, dilation_size=dilation_size,
                   wall_band=wall_band, min_occupied_branch=min_occupied_branch,
                   min_door_width=min_door_width, max_door_width=max_door_width, window=window, rise=rise, reach=reach,
@@ -432,8 +437,71 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
     seg = Segmentation(grid=grid, labels=labels, doors=door_objs, method="topomap", params=params,
                        threshold=thr_px * res, free_graph=Gf, occupied_graph=Go,
                        candidates=cands, timings=T.t)
-    log.info("%s: %d rooms, %d doors, threshold %.3f m (%d candidates)", grid.name, seg.n_rooms,
+    if box is not None:
+        seg = _uncrop(seg, full, box)
+    log.info("%s: %d rooms, %d doors, threshold %.3f m (%d candidates)", full.name, seg.n_rooms,
              len(door_objs), thr_px * res, len(cands))
+    return seg
+
+
+def _free_box(grid: OccupancyGrid, margin: int):
+    """``(r0, r1, c0, c1)``: bounding box of the free cells grown by ``margin``
+    cells, or None when it is the whole map (or there is no free cell)."""
+    free = grid.free
+    rows = np.flatnonzero(free.any(axis=1))
+    if rows.size == 0:
+        return None
+    cols = np.flatnonzero(free.any(axis=0))
+    H, W = free.shape
+    r0, r1 = max(rows[0] - margin, 0), min(rows[-1] + margin + 1, H)
+    c0, c1 = max(cols[0] - margin, 0), min(cols[-1] + margin + 1, W)
+    # start on a multiple of 4 cells, so the coarse skeleton grid (factors
+    # 1, 2, 4) falls on the same cells as without cropping
+    r0, c0 = r0 - r0 % 4, c0 - c0 % 4
+    if (r0, r1, c0, c1) == (0, H, 0, W):
+        return None
+    return int(r0), int(r1), int(c0), int(c1)
+
+
+def _crop(grid: OccupancyGrid, box) -> OccupancyGrid:
+    """The part ``box`` of ``grid``, with the origin moved so that every cell
+    keeps its world coordinates."""
+    r0, r1, c0, c1 = box
+    H = grid.shape[0]
+    ox, oy, yaw = grid.origin
+    u, v = c0 * grid.resolution, (H - r1) * grid.resolution
+    cy, sy = np.cos(yaw), np.sin(yaw)
+    origin = (ox + cy * u - sy * v, oy + sy * u + cy * v, yaw)
+    gray = grid.gray[r0:r1, c0:c1] if grid.gray is not None else None
+    return OccupancyGrid(grid.cells[r0:r1, c0:c1], grid.resolution, origin, grid.source, gray)
+
+
+def _uncrop(seg: Segmentation, full: OccupancyGrid, box) -> Segmentation:
+    """Move a segmentation of ``_crop(full, box)`` back onto ``full``: labels
+    pasted in, every pixel coordinate shifted (world coordinates are unchanged)."""
+    r0, r1, c0, c1 = box
+    off = np.array([r0, c0], float)
+    labels = np.zeros(full.shape, np.int32)
+    labels[r0:r1, c0:c1] = seg.labels
+    for d in seg.doors:
+        d.p1 = (d.p1[0] + r0, d.p1[1] + c0)
+        d.p2 = (d.p2[0] + r0, d.p2[1] + c0)
+    for G in (seg.free_graph, seg.occupied_graph):
+        if G is None:
+            continue
+        for _, nd in G.nodes(data=True):
+            nd["pixel"] = (nd["pixel"][0] + r0, nd["pixel"][1] + c0)
+            nd["row"] += r0
+            nd["col"] += c0
+        for _, _, ed in G.edges(data=True):
+            ed["path"] = ed["path"] + np.array([r0, c0])
+    for c in seg.candidates:
+        for name in ("centroid", "ip1", "ip2", "ep1", "ep2"):
+            val = getattr(c, name)
+            if val is not None:
+                setattr(c, name, np.asarray(val, float) + off)
+    seg.grid = full
+    seg.labels = labels
     return seg
 
 
