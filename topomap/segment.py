@@ -366,11 +366,9 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
         fs = S.skeletonize(S.downsample(f, fac, keep="all"))
         os_ = S.skeletonize(occ)
     with T("graphs"):
-        Gf = S.skeleton_graph(fs, radius=None, resolution=res * fac)
-        Gf = S.rescale_graph(Gf, fac, radius=d_free, resolution=res, to_world=grid.pixel_to_world) \
-            if fac > 1 else S.skeleton_graph(fs, radius=d_free, resolution=res, to_world=grid.pixel_to_world)
         d_occ = edt(occ)
-        Go = S.skeleton_graph(os_, radius=d_occ, resolution=res, to_world=grid.pixel_to_world)
+        Gf = _coarse_graph(fs, fac, d_free, grid)
+        Go = _coarse_graph(os_, 1, d_occ, grid)
         Go = S.prune_spurs(Go, min_occupied_branch)
     with T("doors"):
         thr_px = D.wall_threshold(d_occ, S.graph_pixels(Go))
@@ -444,6 +442,17 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
     return seg
 
 
+def _coarse_graph(skel, fac, radius, grid):
+    """Skeleton graph of a skeleton taken on a ``fac``-times coarser grid,
+    mapped back to the grid's cells with ``radius`` (pixels) sampled there."""
+    from . import skeleton as S
+
+    if fac <= 1:
+        return S.skeleton_graph(skel, radius=radius, resolution=grid.resolution, to_world=grid.pixel_to_world)
+    G = S.skeleton_graph(skel, radius=None, resolution=grid.resolution * fac)
+    return S.rescale_graph(G, fac, radius=radius, resolution=grid.resolution, to_world=grid.pixel_to_world)
+
+
 def _free_box(grid: OccupancyGrid, margin: int):
     """``(r0, r1, c0, c1)``: bounding box of the free cells grown by ``margin``
     cells, or None when it is the whole map (or there is no free cell)."""
@@ -458,6 +467,9 @@ def _free_box(grid: OccupancyGrid, margin: int):
     # start on a multiple of 4 cells, so the coarse skeleton grid (factors
     # 1, 2, 4) falls on the same cells as without cropping
     r0, c0 = r0 - r0 % 4, c0 - c0 % 4
+    # and end where a multiple of 4 cells is left to the far edge, so that a
+    # rotated or flipped map is cut into the same blocks
+    r1, c1 = H - (H - r1) + ((H - r1) % 4), W - (W - c1) + ((W - c1) % 4)
     if (r0, r1, c0, c1) == (0, H, 0, W):
         return None
     return int(r0), int(r1), int(c0), int(c1)
