@@ -18,7 +18,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 __all__ = ["Candidate", "Door", "passage_candidates", "intersection_points",
-           "wall_threshold", "select_doors", "segment_crosses"]
+           "wall_threshold", "select_doors", "segment_crosses", "passage_minima",
+           "nearest_wall_points", "protrusion", "protrusion_at"]
 
 
 @dataclass
@@ -330,12 +331,7 @@ def passage_minima(G, *, window_px: float, rise_px: float, reach_px: float, min_
                     out.extend(_mouths(G, run, rad, arc, path, (u, v, k), reach_px, rise_px, beyond,
                                        min_run_px=min_run_px))
                 continue
-            a = path[max(i - 3, 0)].astype(float)
-            b = path[min(i + 3, n - 1)].astype(float)
-            dvec = b - a
-            nrm = np.linalg.norm(dvec)
-            dvec = dvec / nrm if nrm else np.array([1.0, 0.0])
-            out.append(Candidate(edge=(u, v, k), centroid=path[i].astype(float), direction=dvec,
+            out.append(Candidate(edge=(u, v, k), centroid=path[i].astype(float), direction=_direction(path, i),
                                  radius=float(r)))
     return out
 
@@ -370,6 +366,15 @@ def protrusion_at(free: np.ndarray, points, radius_px: float, look_px: int) -> n
         sub = np.where(win[la:lb, lc:ld] > 0, 0.0, fr[la:lb, lc:ld])
         out[n] = float(sub.max()) if sub.size else 0.0
     return out
+
+
+def _direction(path, i, half: int = 3) -> np.ndarray:
+    """Unit vector (rows, cols) along a skeleton path at index ``i``."""
+    a = path[max(i - half, 0)].astype(float)
+    b = path[min(i + half, path.shape[0] - 1)].astype(float)
+    d = b - a
+    n = np.linalg.norm(d)
+    return d / n if n else np.array([1.0, 0.0])
 
 
 def _mouths(G, run, rad, arc, path, edge, reach_px, rise_px, beyond, tol_px: float = 1.0,
@@ -407,12 +412,8 @@ def _mouths(G, run, rad, arc, path, edge, reach_px, rise_px, beyond, tol_px: flo
         if up < r + 2 * rise_px or not back.any() or rad[back].min() < r - tol_px \
                 or rad[back].max() >= r + rise_px:
             continue
-        a = path[max(i - 3, 0)].astype(float)
-        b = path[min(i + 3, n - 1)].astype(float)
-        dvec = b - a
-        nrm = np.linalg.norm(dvec)
-        dvec = dvec / nrm if nrm else np.array([1.0, 0.0])
-        out.append(Candidate(edge=edge, centroid=path[i].astype(float), direction=dvec, radius=float(r),
+        out.append(Candidate(edge=edge, centroid=path[i].astype(float), direction=_direction(path, i),
+                             radius=float(r),
                              status="mouth"))
     return out
 

@@ -33,49 +33,18 @@ and never clobbers an earlier output.
 from __future__ import annotations
 
 import json
-import os
-import tempfile
-from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 import networkx as nx
 
 from .errors import GraphFormatError
+from .io import atomic_write  # noqa: F401  (re-exported: topomap.export.atomic_write)
 
 __all__ = ["atomic_write", "save_labels", "save_graphml", "save_json", "to_graphml_graph",
            "node_link", "write_outputs", "geometry_wkt", "restore_types", "load_graphml", "load_json",
            "to_geojson", "from_geojson", "save_geojson", "load_geojson", "save_label_map", "load_label_map",
            "save_graph", "load_graph", "GRAPH_TYPES", "NODE_TYPES", "EDGE_TYPES", "FORMATS"]
-
-
-@contextmanager
-def atomic_write(path, mode: str = "wb"):
-    """Open a temporary file beside ``path``; rename it to ``path`` on success.
-
-    On an exception the temporary file is removed and ``path`` is untouched.
-    Yields the temporary file's path (``mode=None``) or an open file object.
-    """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(tmp, 0o666 & ~umask)
-    try:
-        if mode is None:
-            yield tmp
-        else:
-            with open(tmp, mode) as fh:
-                yield fh
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
 
 
 def save_labels(labels: np.ndarray, path) -> Path:

@@ -15,6 +15,7 @@ import re
 import tempfile
 import threading
 import warnings
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Optional
@@ -670,18 +671,35 @@ def yaml_text(meta: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _atomic_write(path: Path, data: bytes):
+@contextmanager
+def atomic_write(path, mode: Optional[str] = "wb"):
+    """Open a temporary file beside ``path``; rename it to ``path`` on success.
+
+    On an exception the temporary file is removed and ``path`` is untouched
+    (never a half-written output, never a clobbered earlier one). Yields the
+    temporary file's path (``mode=None``, for writers that take a file name)
+    or a file object open in ``mode``. The file gets the permissions of the
+    file it replaces, or the umask's default for a new one.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
     try:
         try:
-            mode = os.stat(path).st_mode & 0o777
+            perm = os.stat(path).st_mode & 0o777
         except OSError:
-            mode = 0o644
-        os.fchmod(fd, mode)
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-            fh.flush()
-            os.fsync(fh.fileno())
+            umask = os.umask(0)
+            os.umask(umask)
+            perm = 0o666 & ~umask
+        os.chmod(tmp, perm)
+        if mode is None:
+            yield tmp
+        else:
+            with open(tmp, mode) as fh:
+                yield fh
+                fh.flush()
+                os.fsync(fh.fileno())
         os.replace(tmp, path)
     except BaseException:
         try:
@@ -689,6 +707,11 @@ def _atomic_write(path: Path, data: bytes):
         except OSError:
             pass
         raise
+
+
+def _atomic_write(path: Path, data: bytes):
+    with atomic_write(path) as fh:
+        fh.write(data)
 
 
 def save_map(grid_or_cells, path_stem, *, resolution=None, origin=None, mode: str = "trinary"):

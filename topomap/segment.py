@@ -162,7 +162,6 @@ def segment_paper(grid: OccupancyGrid, *, erosion_radius: float = 0.10, median_s
     -------
     Segmentation
     """
-    import cv2
     from shapely.geometry import MultiLineString
 
     from . import doors as D
@@ -174,27 +173,13 @@ def segment_paper(grid: OccupancyGrid, *, erosion_radius: float = 0.10, median_s
     params = dict(erosion_radius=erosion_radius, median_size=median_size, dilation_size=dilation_size,
                   wall_band=wall_band, min_free_branch=min_free_branch,
                   min_occupied_branch=min_occupied_branch, max_door_search=max_door_search)
-    er = _px(erosion_radius, res, "erosion_radius")
-    med = _px(median_size, res, "median_size")
-    dil = _px(dilation_size, res, "dilation_size")
-    band = _px(wall_band, res, "wall_band", 1)
     free = grid.free
+    nonfree = ~free
     with T("preprocess"):
-        f = free.astype(np.uint8)
-        if er > 0:
-            f = cv2.erode(f, _disk(er), borderType=cv2.BORDER_CONSTANT, borderValue=0)
-        if med >= 3:
-            k = med if med % 2 else med + 1
-            f = cv2.medianBlur(f * 255, k) > 127
-        else:
-            f = f.astype(bool)
-        nonfree = ~free
-        d_free = edt(free)  # clearance of free cells, px
-        occ = grid.occupied & (d_free <= 0)  # occupied cells
-        dist_out = edt(nonfree)  # distance of non-free cells to free space
-        occ = occ & (dist_out <= band)
-        if dil > 1:
-            occ = cv2.dilate(occ.astype(np.uint8), np.ones((dil, dil), np.uint8)) > 0
+        # the paper: occupied space is the occupied cells (unknown ones are not)
+        f, d_free, occ = _free_and_occupied(grid, erosion_radius=erosion_radius, median_size=median_size,
+                                            dilation_size=dilation_size, wall_band=wall_band,
+                                            occupied=grid.occupied)
     with T("skeletons"):
         fs = S.skeletonize(f)
         os_ = S.skeletonize(occ)
@@ -222,8 +207,13 @@ def segment_paper(grid: OccupancyGrid, *, erosion_radius: float = 0.10, median_s
     return seg
 
 
-def _free_and_occupied(grid, *, erosion_radius, median_size, dilation_size, wall_band):
-    """Preprocessed free mask, clearance, occupied mask for the skeletons."""
+def _free_and_occupied(grid, *, erosion_radius, median_size, dilation_size, wall_band, occupied=None):
+    """Preprocessed free mask, clearance (px) and occupied mask for the skeletons.
+
+    Free space is eroded with a disk and median-filtered; occupied space
+    (``occupied``, default every non-free cell) is restricted to the band
+    within ``wall_band`` of free space and dilated with a square.
+    """
     import cv2
 
     from ._fast import edt
@@ -244,7 +234,7 @@ def _free_and_occupied(grid, *, erosion_radius, median_size, dilation_size, wall
         f = f.astype(bool)
     d_free = edt(free)
     dist_out = edt(~free)
-    occ = ~free & (dist_out <= band)
+    occ = (~free if occupied is None else occupied & ~free) & (dist_out <= band)
     if dil > 1:
         occ = cv2.dilate(occ.astype(np.uint8), np.ones((dil, dil), np.uint8)) > 0
     return f, d_free, occ
@@ -339,8 +329,6 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
         ``method="topomap"``; ``candidates`` holds every bottleneck with its
         ``status``.
     """
-    from shapely.geometry import MultiLineString
-
     from . import doors as D
     from . import skeleton as S
     from ._fast import edt

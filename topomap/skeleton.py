@@ -25,9 +25,9 @@ from scipy import ndimage as ndi
 from scipy import sparse
 from scipy.sparse import csgraph
 
-from ._fast import label as cc_label
 
-__all__ = ["skeletonize", "skeleton_graph", "prune_spurs", "graph_endpoints", "graph_pixels"]
+__all__ = ["skeletonize", "skeleton_graph", "prune_spurs", "graph_endpoints", "graph_pixels",
+           "downsample", "rescale_graph"]
 
 _OFFSETS = np.array([(-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1)])
 
