@@ -251,7 +251,7 @@ def select_doors(candidates, endpoints: np.ndarray, threshold: float, occ_lines)
 
 
 def passage_minima(G, *, window_px: float, rise_px: float, reach_px: float, min_branch_px: float = 3,
-                   mouths: bool = False, min_run_px: float = 0.0):
+                   mouths: bool = False, min_run_px: float = 0.0, max_radius_px: float = np.inf):
     """Bottlenecks of free space: local clearance minima along skeleton branches.
 
     A pixel of a branch is a bottleneck when its clearance is the smallest
@@ -259,7 +259,10 @@ def passage_minima(G, *, window_px: float, rise_px: float, reach_px: float, min_
     ``rise_px`` on *both* sides within ``reach_px`` along the skeleton
     (continuing one branch past the end node): a door is a narrowing between
     two wider spaces, not a stretch of uniform corridor. A plateau of equal
-    minima gives one candidate at its middle.
+    minima gives one candidate at its middle. Branches and minima with a
+    clearance above ``max_radius_px`` are skipped: door posts at least 90°
+    apart around such a point are more than ``max_radius_px * sqrt(2)``
+    apart.
 
     Returns
     -------
@@ -305,8 +308,8 @@ def passage_minima(G, *, window_px: float, rise_px: float, reach_px: float, min_
     for u, v, k in sorted(info):
         rad, arc = info[(u, v, k)][:2]
         n = rad.size
-        if n < min_branch_px:
-            continue
+        if n < min_branch_px or rad.min() > max_radius_px:
+            continue  # too short, or too wide everywhere for a door
         mn = minimum_filter1d(rad, 2 * w + 1, mode="nearest")
         is_min = rad <= mn + 1e-6
         if not is_min.any():
@@ -317,6 +320,8 @@ def passage_minima(G, *, window_px: float, rise_px: float, reach_px: float, min_
         for run in runs:
             i = int(run[len(run) // 2])
             r = rad[i]
+            if r > max_radius_px:
+                continue
             # side towards u
             sel = (arc[i] - arc <= reach_px) & (np.arange(n) < i)
             left = rad[sel].max() if sel.any() else 0.0
@@ -345,11 +350,19 @@ def protrusion_at(free: np.ndarray, points, radius_px: float, look_px: int) -> n
 
     H, W = free.shape
     r = max(int(round(radius_px)), 1)
+    out = np.zeros(len(points))
+    pad = r + look_px
+    if len(points) * (2 * pad + 1) ** 2 > free.size:
+        # many posts: one filter over the whole map is cheaper than windows
+        fr = protrusion(free, r)
+        fr = cv2.dilate(np.where(free, 0, fr).astype(np.float32),
+                        np.ones((2 * look_px + 1, 2 * look_px + 1), np.uint8))
+        for n, p in enumerate(points):
+            out[n] = fr[min(max(int(round(float(p[0]))), 0), H - 1), min(max(int(round(float(p[1]))), 0), W - 1)]
+        return out
     y, x = np.ogrid[-r:r + 1, -r:r + 1]
     k = (x * x + y * y <= r * r).astype(np.float32)
     k /= k.sum()
-    out = np.zeros(len(points))
-    pad = r + look_px
     for n, p in enumerate(points):
         pr, pc = int(round(float(p[0]))), int(round(float(p[1])))
         ra, rb = max(pr - pad, 0), min(pr + pad + 1, H)

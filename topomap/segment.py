@@ -361,19 +361,16 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
     with T("doors"):
         thr_px = D.wall_threshold(d_occ, S.graph_pixels(Go))
         cands = D.passage_minima(Gf, window_px=window / res, rise_px=rise / res, reach_px=reach / res,
-                                 mouths=mouths, min_run_px=corridor_length / res)
+                                 mouths=mouths, min_run_px=corridor_length / res,
+                                 max_radius_px=max_door_width / np.sqrt(2) / res)
         D.nearest_wall_points(cands, ~free, max_px=max_door_width / res, depth_px=max(thr_px, 2.0))
         # the protrusion of a wall end: the most protruding obstacle cell
         # within half the wall thickness of each door post
-        posts = [p for c in cands for p in (c.ip1, c.ip2) if p is not None]
-        look = max(int(round(thr_px / 2)), 1)
-        pvals = D.protrusion_at(free, posts, max(thr_px, 0.25 / res), look)
-        frac = {(round(float(p[0]), 3), round(float(p[1]), 3)): v for p, v in zip(posts, pvals)}
         ends = S.graph_endpoints(Go)
         from scipy.spatial import cKDTree
 
         tree = cKDTree(ends) if ends.shape[0] else None
-        accepted = []
+        judged = []
         for c in cands:
             if c.ip1 is None or c.ip2 is None:
                 c.status = "no wall on both sides"
@@ -382,8 +379,15 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
             if not (min_door_width <= width <= max_door_width):
                 c.status = "width out of range"
                 continue
-            f1 = frac[(round(float(c.ip1[0]), 3), round(float(c.ip1[1]), 3))]
-            f2 = frac[(round(float(c.ip2[0]), 3), round(float(c.ip2[1]), 3))]
+            judged.append((width, c))
+        # the protrusion of a wall end: the most protruding obstacle cell
+        # within half the wall thickness of each door post
+        posts = [p for _, c in judged for p in (c.ip1, c.ip2)]
+        look = max(int(round(thr_px / 2)), 1)
+        pvals = D.protrusion_at(free, posts, max(thr_px, 0.25 / res), look)
+        accepted = []
+        for n, (width, c) in enumerate(judged):
+            f1, f2 = pvals[2 * n], pvals[2 * n + 1]
             p1, p2 = f1 >= protrusion_min, f2 >= protrusion_min
             e_ok = False
             if tree is not None:
@@ -435,10 +439,8 @@ def _coarse_graph(skel, fac, radius, grid):
     mapped back to the grid's cells with ``radius`` (pixels) sampled there."""
     from . import skeleton as S
 
-    if fac <= 1:
-        return S.skeleton_graph(skel, radius=radius, resolution=grid.resolution, to_world=grid.pixel_to_world)
-    G = S.skeleton_graph(skel, radius=None, resolution=grid.resolution * fac)
-    return S.rescale_graph(G, fac, radius=radius, resolution=grid.resolution, to_world=grid.pixel_to_world)
+    return S.skeleton_graph(skel, radius=radius, resolution=grid.resolution, to_world=grid.pixel_to_world,
+                            scale=max(int(fac), 1))
 
 
 def _free_box(grid: OccupancyGrid, margin: int):

@@ -27,7 +27,7 @@ from scipy.sparse import csgraph
 
 
 __all__ = ["skeletonize", "skeleton_graph", "prune_spurs", "graph_endpoints", "graph_pixels",
-           "downsample", "rescale_graph"]
+           "downsample"]
 
 _OFFSETS = np.array([(-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1)])
 
@@ -60,7 +60,7 @@ def _neighbour_count(skel: np.ndarray) -> np.ndarray:
 
 
 def skeleton_graph(skel: np.ndarray, *, radius: np.ndarray | None = None,
-                   resolution: float = 1.0, to_world=None) -> nx.MultiGraph:
+                   resolution: float = 1.0, to_world=None, scale: int = 1) -> nx.MultiGraph:
     """Convert a skeleton image to a graph of junctions, endpoints and branches.
 
     Parameters
@@ -74,6 +74,12 @@ def skeleton_graph(skel: np.ndarray, *, radius: np.ndarray | None = None,
         Metres per pixel, for ``length`` and ``radius``.
     to_world : callable, optional
         ``(rows, cols) -> (x, y)`` in metres; adds ``x``, ``y`` to nodes.
+    scale : int
+        ``skel`` was taken on a grid ``scale`` times coarser than ``radius``
+        (see :func:`downsample`): paths and node pixels are given on the fine
+        grid (the centre cell of each coarse block), ``radius`` is sampled
+        there and ``resolution`` is the fine grid's. The topology comes from
+        the coarse skeleton, clearances and lengths from the fine grid.
 
     Returns
     -------
@@ -228,14 +234,25 @@ def skeleton_graph(skel: np.ndarray, *, radius: np.ndarray | None = None,
     # dedupe the direct edges listed twice
     seen_direct = set()
     res = float(resolution)
+    if scale > 1:
+        # coordinates on the fine grid: the centre cell of each coarse block
+        fh, fw = radius.shape
+        off = (scale - 1) // 2
+        lim = np.array([fh - 1, fw - 1])
+        rep = np.minimum(rep * scale + off, lim)
+        mr, mc = mr * scale + off, mc * scale + off
+        edges = [(u, v, np.minimum(p * scale + off, lim)) for u, v, p in edges]
+    # world coordinates of all nodes at once
+    if to_world is not None:
+        wx, wy = to_world(mr, mc)
+        wx, wy = np.broadcast_to(wx, mr.shape), np.broadcast_to(wy, mr.shape)
     for u in range(1, n_nodes + 1):
         r, c = rep[u]
         attrs = dict(row=float(mr[u]), col=float(mc[u]), pixel=(int(r), int(c)))
         if radius is not None:
             attrs["radius"] = float(radius[r, c]) * res
         if to_world is not None:
-            x, y = to_world(mr[u], mc[u])
-            attrs["x"], attrs["y"] = float(x), float(y)
+            attrs["x"], attrs["y"] = float(wx[u]), float(wy[u])
         G.add_node(u - 1, **attrs)
     for u, v, path in edges:
         if path.shape[0] == 2:
@@ -246,8 +263,8 @@ def skeleton_graph(skel: np.ndarray, *, radius: np.ndarray | None = None,
         if u > v:
             u, v = v, u
             path = path[::-1]
-        steps = np.hypot(*np.diff(path, axis=0).T)
-        attrs = dict(path=path, start=u - 1, length=float(steps.sum()) * res)
+        d = np.diff(path, axis=0)
+        attrs = dict(path=path, start=u - 1, length=float(np.sqrt((d * d).sum(1)).sum()) * res)
         if radius is not None:
             rad = radius[path[:, 0], path[:, 1]].astype(float) * res
             attrs["radius"] = rad
@@ -343,42 +360,3 @@ def downsample(mask: np.ndarray, factor: int, *, keep: str = "all") -> np.ndarra
     m[:H, :W] = mask
     b = m.reshape(Hp // factor, factor, Wp // factor, factor)
     return b.all(axis=(1, 3)) if keep == "all" else b.any(axis=(1, 3))
-
-
-def rescale_graph(G: nx.MultiGraph, factor: int, *, radius: np.ndarray, resolution: float,
-                  to_world=None) -> nx.MultiGraph:
-    """Map a graph built on a ``factor``-times coarser grid back to the fine grid.
-
-    Paths and node pixels are scaled to the fine grid (the centre cell of
-    each coarse block); ``radius`` (fine-grid pixels) is sampled anew along
-    the paths and ``length`` recomputed, so clearances are exact at fine
-    resolution while the topology comes from the coarse skeleton.
-    """
-    if factor <= 1:
-        return G
-    H, W = radius.shape
-    off = (factor - 1) // 2
-    res = float(resolution)
-    out = nx.MultiGraph(resolution=res)
-
-    def fine(p):
-        q = np.asarray(p) * factor + off
-        q[..., 0] = np.clip(q[..., 0], 0, H - 1)
-        q[..., 1] = np.clip(q[..., 1], 0, W - 1)
-        return q
-
-    for n, d in G.nodes(data=True):
-        r, c = fine(np.array(d["pixel"]))
-        attrs = dict(d, pixel=(int(r), int(c)), row=float(d["row"] * factor + off),
-                     col=float(d["col"] * factor + off), radius=float(radius[r, c]) * res)
-        if to_world is not None:
-            x, y = to_world(attrs["row"], attrs["col"])
-            attrs["x"], attrs["y"] = float(x), float(y)
-        out.add_node(n, **attrs)
-    for u, v, k, d in G.edges(keys=True, data=True):
-        path = fine(d["path"])
-        rad = radius[path[:, 0], path[:, 1]].astype(float) * res
-        steps = np.hypot(*np.diff(path, axis=0).T)
-        out.add_edge(u, v, key=k, **dict(d, path=path, radius=rad, radius_min=float(rad.min()),
-                                          length=float(steps.sum()) * res))
-    return out
