@@ -243,7 +243,7 @@ def _free_and_occupied(grid, *, erosion_radius, median_size, dilation_size, wall
 def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median_size: float = 0.25,
                     dilation_size: float = 0.15, wall_band: float = 0.5,
                     min_occupied_branch: float = 0.3, min_door_width: float = 0.5,
-                    max_door_width: float = 2.0, window: float = 0.5, rise: float = 0.15, reach: float = 1.5,
+                    max_door_width: float = 3.0, window: float = 0.5, rise: float = 0.15, reach: float = 1.5,
                     protrusion_min: float = 0.6, flat_min: float = 0.45, rule: str = "oneflat",
                     skeleton_cell: float = 0.1, mouths: bool = True,
                     corridor_length: float = 1.0) -> Segmentation:
@@ -283,7 +283,9 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
         1 m also removes real wall stubs beside doors).
     min_door_width, max_door_width : float
         Range of door widths (m): 0.5 m is narrower than any door a person
-        or robot uses; 2.0 m is a double door.
+        or robot uses; 3.0 m admits double doors and the wide openings
+        between a room and a hall or an open office bay, which floor plans
+        separate as rooms of their own.
     window : float
         A bottleneck is the narrowest point within this distance (m) along
         the skeleton: 0.5 m, half a door's width either way.
