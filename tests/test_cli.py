@@ -244,3 +244,16 @@ def test_segment_with_each_method_name(tmp_path):
                                   "--method", "topomap"])
     assert r.exit_code == 0, r.output
     assert (tmp_path / "o" / "labels.png").exists()
+
+
+def test_segment_profile_prints_every_stage(tmp_path):
+    from click.testing import CliRunner
+
+    from topomap._example import example_map_path
+    from topomap.cli import main
+
+    r = CliRunner().invoke(main, ["segment", str(example_map_path()), "-o", str(tmp_path / "o"), "--profile"])
+    assert r.exit_code == 0, r.output
+    err = r.stderr if hasattr(r, "stderr") else r.output
+    for stage in ["load", "preprocess", "skeletons", "graphs", "doors", "rooms", "total", "room_graph", "write"]:
+        assert f"{stage} " in err, (stage, err)

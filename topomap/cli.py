@@ -57,14 +57,31 @@ def main(debug, verbose):
 
 
 def _segment_one(path, outdir, resolution, method, skeletons):
+    import time
+
     from . import io
     from .export import write_outputs
     from .segment import segment
 
+    t0 = time.perf_counter()
     grid = io.load_map(path, resolution=resolution)
+    t1 = time.perf_counter()
     seg = segment(grid, method=method)
+    t2 = time.perf_counter()
+    seg.room_graph  # built here so its time is its own stage (timings["room_graph"])
     write_outputs(seg, outdir, skeletons=skeletons)
+    seg.timings["load"] = t1 - t0
+    seg.timings["write"] = time.perf_counter() - t2 - seg.timings.get("room_graph", 0.0)
     return seg
+
+
+def _print_profile(path, seg):
+    """One line per stage on stderr: where the time of a map went."""
+    order = ["load", "preprocess", "skeletons", "graphs", "doors", "rooms", "segment", "total",
+             "room_graph", "write"]
+    t = seg.timings
+    stages = [k for k in order if k in t] + sorted(k for k in t if k not in order)
+    click.echo(f"{path}: " + ", ".join(f"{k} {t[k] * 1000:.0f} ms" for k in stages), err=True)
 
 
 @main.command("segment")
@@ -76,11 +93,13 @@ def _segment_one(path, outdir, resolution, method, skeletons):
 @click.option("--method", type=click.Choice(_method_names()), default=None,
               help="Segmentation method (default: the library's default).")
 @click.option("--skeletons", is_flag=True, help="Draw both skeleton graphs in overlay.png.")
-def segment_cmd(maps, outdir, resolution, method, skeletons):
+@click.option("--profile", is_flag=True,
+              help="Print the time of every stage (load, segmentation stages, room graph, write) on stderr.")
+def segment_cmd(maps, outdir, resolution, method, skeletons, profile):
     """Segment MAP files (ROS YAML, PGM or PNG) into rooms and doors.
 
     Writes labels.png (16-bit, 0 = not a room), rooms.graphml, rooms.json
-    (node-link) and overlay.png per map.
+    (node-link), rooms.geojson and overlay.png per map.
     """
     from .errors import ParameterError
 
@@ -97,6 +116,8 @@ def segment_cmd(maps, outdir, resolution, method, skeletons):
             try:
                 seg = _segment_one(path, target, resolution, method, skeletons)
                 log.info("%s: %d rooms, %d doors -> %s", path, seg.n_rooms, len(seg.doors), target)
+                if profile:
+                    _print_profile(path, seg)
                 if not many:
                     click.echo(f"{path}: {seg.n_rooms} rooms, {len(seg.doors)} doors -> {target}")
             except Exception as exc:  # noqa: BLE001 - reported, batch goes on

@@ -402,11 +402,10 @@ def _mouths(G, run, rad, arc, path, edge, reach_px, rise_px, beyond, tol_px: flo
     out = []
     # the plateau around the run: neighbours within ``tol_px`` of its minimum
     base = rad[run].min()
-    lo, hi = int(run[0]), int(run[-1])
-    while lo > 0 and rad[lo - 1] <= base + tol_px:
-        lo -= 1
-    while hi < n - 1 and rad[hi + 1] <= base + tol_px:
-        hi += 1
+    above = np.flatnonzero(rad > base + tol_px)
+    before, after = above[above < run[0]], above[above > run[-1]]
+    lo = int(before[-1]) + 1 if before.size else 0
+    hi = int(after[0]) - 1 if after.size else n - 1
     if arc[hi] - arc[lo] < min_run_px:
         return out  # too short a stretch of even width to be a corridor
     for i, towards in ((hi, +1), (lo, -1)):
