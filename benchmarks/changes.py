@@ -70,7 +70,10 @@ import numpy as np
 from PIL import Image
 import topomap
 from topomap.io import from_array
-from topomap import segment as S
+try:  # the pipeline module was renamed from topomap/segment.py to topomap/segmentation.py
+    import topomap.segmentation as S
+except ImportError:
+    import topomap.segment as S
 
 out, data = Path(sys.argv[1]), Path(sys.argv[2])
 names = sys.argv[3:]

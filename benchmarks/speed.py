@@ -56,7 +56,7 @@ def _grid_from_gray(gray, resolution, name):
 
 def _warm(method):
     from topomap.io import from_array
-    from topomap.segment import segment
+    from topomap.segmentation import segment
 
     free = np.zeros((80, 120), bool)
     free[5:75, 5:58] = True
@@ -68,7 +68,7 @@ def _warm(method):
 def _timed(grid, method):
     import gc
 
-    from topomap.segment import segment
+    from topomap.segmentation import segment
 
     gc.collect()
     t0 = time.perf_counter()
@@ -108,7 +108,7 @@ def _commit():
 def compare(directory, variant):
     from topomap.benchmark import benchmark_grid
     from topomap.datasets import load_benchmark
-    from topomap.segment import DEFAULT_METHOD
+    from topomap.segmentation import DEFAULT_METHOD
 
     maps = load_benchmark(directory, variant=variant)
     grids = [(bm.name, benchmark_grid(bm)) for bm in maps]
@@ -269,7 +269,7 @@ def main(argv=None):
         run_case(json.loads(a._case))
         return 0
     from topomap.datasets import benchmark_dir
-    from topomap.segment import DEFAULT_METHOD
+    from topomap.segmentation import DEFAULT_METHOD
 
     directory = a.directory or benchmark_dir()
     if directory is None:

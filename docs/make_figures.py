@@ -41,7 +41,7 @@ def _imports():
     import topomap
     from topomap import planning
     from topomap.plot import _extent, plot_map, plot_route, plot_segmentation, plot_skeletons
-    from topomap.segment import METHODS, segment
+    from topomap.segmentation import METHODS, segment
 
 
 #: Colour per candidate ``status`` (anything else: gray).
@@ -86,8 +86,8 @@ def on_page_markdown(markdown, page, **kwargs):
 def _masks(grid, method):
     """(free after preprocessing, occupied after preprocessing) as used by ``method``.
 
-    Mirrors the preprocessing stage of :func:`topomap.segment.segment_paper`
-    and :func:`topomap.segment.segment_topomap` with their default
+    Mirrors the preprocessing stage of :func:`topomap.segmentation.segment_paper`
+    and :func:`topomap.segmentation.segment_topomap` with their default
     parameters.
     """
     import inspect

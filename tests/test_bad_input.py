@@ -28,7 +28,7 @@ from topomap.errors import (
     TopomapError,
 )
 from topomap.io import from_array, load_map
-from topomap.segment import METHODS, Segmentation, segment
+from topomap.segmentation import METHODS, Segmentation, segment
 
 
 # --------------------------------------------------------------------------

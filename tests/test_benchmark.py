@@ -23,7 +23,7 @@ from topomap.benchmark import (ROW_COLUMNS, benchmark_grid, format_table, run_be
 from topomap.cli import main
 from topomap.datasets import benchmark_dir, load_benchmark
 from topomap.errors import ParameterError
-from topomap.segment import DEFAULT_METHOD, METHODS, Segmentation
+from topomap.segmentation import DEFAULT_METHOD, METHODS, Segmentation
 
 # --------------------------------------------------------------------------
 # the synthetic data set

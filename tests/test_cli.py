@@ -96,7 +96,7 @@ def test_internal_error_exit_3(tmp_path, monkeypatch):
     def bug(*a, **k):
         raise KeyError("oops")
 
-    monkeypatch.setattr("topomap.segment.segment", bug)
+    monkeypatch.setattr("topomap.segmentation.segment", bug)
     r = invoke("segment", path, "-o", tmp_path / "out")
     assert r.exit_code == 3
     lines = stderr_lines(r)
@@ -228,7 +228,7 @@ def test_subprocess_batch_and_debug(tmp_path):
 def test_cli_method_choices_match_library():
     """The CLI lists the methods without importing the library; it must not drift."""
     from topomap.cli import _method_names
-    from topomap.segment import METHODS
+    from topomap.segmentation import METHODS
 
     assert sorted(_method_names()) == sorted(METHODS)
     assert _method_names()[0] == "topomap"
@@ -257,3 +257,18 @@ def test_segment_profile_prints_every_stage(tmp_path):
     err = r.stderr if hasattr(r, "stderr") else r.output
     for stage in ["load", "preprocess", "skeletons", "graphs", "doors", "rooms", "total", "room_graph", "write"]:
         assert f"{stage} " in err, (stage, err)
+
+
+def test_package_functions_are_not_shadowed_by_submodules():
+    """``topomap.segment`` is the function, whatever submodules were imported."""
+    import importlib
+
+    import topomap
+
+    for mod in ["io", "segmentation", "skeleton", "doors", "rooms", "roomgraph", "planning", "export",
+                "plot", "evaluation", "datasets", "benchmark", "baselines", "cli"]:
+        importlib.import_module(f"topomap.{mod}")
+    for name in topomap.__all__:
+        obj = getattr(topomap, name)
+        assert not isinstance(obj, type(topomap)), name
+    assert callable(topomap.segment) and topomap.segment.__name__ == "segment"

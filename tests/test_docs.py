@@ -50,7 +50,7 @@ def actual():
     """Attributes the code puts on every kind of graph, over the example map."""
     import topomap
     from topomap import planning
-    from topomap.segment import METHODS, segment
+    from topomap.segmentation import METHODS, segment
 
     grid = topomap.load_map(topomap.example_map_path())
     room = [set(), set(), set()]
@@ -102,7 +102,7 @@ def test_mkdocs_build_strict(tmp_path):
 def test_every_candidate_status_is_explained():
     """Each ``status`` string the code gives a candidate is on how-it-works.md."""
     page = (ROOT / "docs" / "how-it-works.md").read_text(encoding="utf-8")
-    src = "".join((ROOT / "topomap" / f).read_text(encoding="utf-8") for f in ("segment.py", "doors.py"))
+    src = "".join((ROOT / "topomap" / f).read_text(encoding="utf-8") for f in ("segmentation.py", "doors.py"))
     statuses = set(re.findall(r"\.status = \"([^\"]+)\"", src))
     assert statuses
     missing = [s for s in sorted(statuses) if f"`{s}`" not in page]

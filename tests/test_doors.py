@@ -74,7 +74,7 @@ def test_unknown_margin_does_not_change_the_result():
     coordinates."""
     from topomap._example import example_map_path
     from topomap.io import UNKNOWN, OccupancyGrid, load_map
-    from topomap.segment import segment
+    from topomap.segmentation import segment
 
     g = load_map(example_map_path())
     pad = 64

@@ -11,7 +11,7 @@ from topomap import export as E
 from topomap import planning as P
 from topomap.errors import GraphFormatError, TopomapError
 from topomap.io import FREE, OCCUPIED, OccupancyGrid, load_map
-from topomap.segment import Segmentation, cut_rooms, segment
+from topomap.segmentation import Segmentation, cut_rooms, segment
 
 RES = 0.05
 

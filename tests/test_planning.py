@@ -7,7 +7,7 @@ import pytest
 from topomap import planning as P
 from topomap.errors import TopomapError
 from topomap.io import FREE, OCCUPIED, OccupancyGrid, load_map
-from topomap.segment import METHODS, Segmentation, cut_rooms, segment
+from topomap.segmentation import METHODS, Segmentation, cut_rooms, segment
 
 RES = 0.05
 

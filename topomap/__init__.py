@@ -23,7 +23,8 @@ __version__ = "0.1.0"
 
 _LAZY = {
     "load_map": "io", "save_map": "io", "from_array": "io", "OccupancyGrid": "io",
-    "segment": "segment", "Segmentation": "segment", "METHODS": "segment", "DEFAULT_METHOD": "segment",
+    "segment": "segmentation", "Segmentation": "segmentation", "METHODS": "segmentation",
+    "DEFAULT_METHOD": "segmentation",
     "room_graph": "roomgraph",
     "TopomapError": "errors", "MapError": "errors", "MapFileError": "errors", "ParameterError": "errors",
     "example_map_path": "_example",

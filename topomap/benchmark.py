@@ -2,7 +2,7 @@
 
 :func:`run_benchmark` segments every map of a benchmark directory (the
 layout of Bormann et al. 2016, see :mod:`topomap.datasets`) with every
-method of :data:`topomap.segment.METHODS` and scores the result with
+method of :data:`topomap.segmentation.METHODS` and scores the result with
 :func:`topomap.evaluation.evaluate`; :func:`format_table` turns the per-map
 rows into a table like Tables 1 and 2 of the paper, and :func:`write_rows`
 saves them as CSV or JSON.
@@ -88,7 +88,7 @@ def benchmark_grid(bm):
 
 
 def _check_methods(methods) -> list:
-    from .segment import METHODS
+    from .segmentation import METHODS
 
     if methods is None:
         return list(METHODS)
@@ -131,7 +131,7 @@ def _warm_up(method: str) -> None:
         return
     _WARM.add(method)
     from .io import from_array
-    from .segment import segment
+    from .segmentation import segment
 
     free = np.zeros((80, 120), bool)
     free[5:75, 5:58] = True
@@ -150,7 +150,7 @@ def run_map(bm, method: str, *, jobs: int = 1, warm_up: bool = True) -> dict:
     ----------
     bm : topomap.datasets.BenchmarkMap
     method : str
-        A key of :data:`topomap.segment.METHODS`.
+        A key of :data:`topomap.segmentation.METHODS`.
     jobs : int, optional
         Recorded in the row (the number of parallel workers of the run).
     warm_up : bool, optional
@@ -164,7 +164,7 @@ def run_map(bm, method: str, *, jobs: int = 1, warm_up: bool = True) -> dict:
         has ``error`` set to a one-line message and NaN scores.
     """
     from .evaluation import evaluate
-    from .segment import segment
+    from .segmentation import segment
 
     row = {"method": method, "variant": bm.variant, "map": bm.name}
     if warm_up:
@@ -229,7 +229,7 @@ def run_benchmark(directory, *, methods: Optional[Sequence[str]] = None,
         ``NAME_furnitures.png``, ``NAME_gt_segmentation.png``).
     methods : sequence of str or str, optional
         Method names (or one comma-separated string); default every method
-        of :data:`topomap.segment.METHODS`.
+        of :data:`topomap.segmentation.METHODS`.
     variants : iterable of str or str, optional
         ``"unfurnished"``, ``"furnished"`` or both (default; the string
         ``"both"`` is accepted too).

@@ -21,7 +21,7 @@ log = logging.getLogger("topomap")
 
 
 def _method_names():
-    # kept in sync with topomap.segment.METHODS (a test checks) without importing numpy at start-up
+    # kept in sync with topomap.segmentation.METHODS (a test checks) without importing numpy at start-up
     return ["topomap", "paper", "watershed", "morphological", "distance", "voronoi"]
 
 
@@ -61,7 +61,7 @@ def _segment_one(path, outdir, resolution, method, skeletons):
 
     from . import io
     from .export import write_outputs
-    from .segment import segment
+    from .segmentation import segment
 
     t0 = time.perf_counter()
     grid = io.load_map(path, resolution=resolution)
@@ -161,7 +161,7 @@ def demo_cmd(outdir, method):
 @main.command("benchmark")
 @click.argument("dataset_dir", type=click.Path(path_type=Path))
 @click.option("--methods", default=None,
-              help="Comma-separated methods (default: every method of topomap.segment.METHODS).")
+              help="Comma-separated methods (default: every method of topomap.segmentation.METHODS).")
 @click.option("--variant", type=click.Choice(["unfurnished", "furnished", "both"]), default="both",
               show_default=True, help="Which maps: without furniture, with furniture, or both.")
 @click.option("--jobs", type=click.IntRange(min=1), default=1, show_default=True,

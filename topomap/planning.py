@@ -2,7 +2,7 @@
 
 Stateless functions in the style of networkx: the graph (or segmentation)
 comes first. Every function that takes ``seg_or_G`` accepts either a
-:class:`~topomap.segment.Segmentation` or a room–door graph as built by
+:class:`~topomap.segmentation.Segmentation` or a room–door graph as built by
 :func:`topomap.roomgraph.room_graph` (also one loaded back with
 :func:`topomap.export.load_graphml` / :func:`~topomap.export.load_json` /
 :func:`~topomap.export.load_geojson`). A graph carries everything planning

@@ -1,6 +1,6 @@
 """The room–door graph: rooms as nodes, doors as edges.
 
-:func:`room_graph` turns a :class:`~topomap.segment.Segmentation` into a
+:func:`room_graph` turns a :class:`~topomap.segmentation.Segmentation` into a
 :class:`networkx.MultiGraph` (two rooms can share several doors, each its own
 edge, keyed by the door id). Every attribute, with its unit, is listed on the
 "Graph attributes" page of the documentation.

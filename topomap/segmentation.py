@@ -246,7 +246,7 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
                     max_door_width: float = 3.0, window: float = 0.5, rise: float = 0.15, reach: float = 1.5,
                     protrusion_min: float = 0.6, flat_min: float = 0.45, rule: str = "oneflat",
                     skeleton_cell: float = 0.1, mouths: bool = True,
-                    corridor_length: float = 1.0) -> Segmentation:
+                    corridor_length: float = 1.0, min_wall_length: float = 0.0) -> Segmentation:
     """Segment ``grid`` with topomap's default method.
 
     The paper's ideas — skeletons of free *and* occupied space, a threshold
@@ -346,7 +346,7 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
                   wall_band=wall_band, min_occupied_branch=min_occupied_branch,
                   min_door_width=min_door_width, max_door_width=max_door_width, window=window, rise=rise, reach=reach,
                   protrusion_min=protrusion_min, rule=rule, skeleton_cell=skeleton_cell, mouths=mouths,
-                  corridor_length=corridor_length)
+                  corridor_length=corridor_length, min_wall_length=min_wall_length)
     free = grid.free
     with T("preprocess"):
         f, d_free, occ = _free_and_occupied(grid, erosion_radius=erosion_radius, median_size=median_size,
@@ -387,6 +387,20 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
         posts = [p for _, c in judged for p in (c.ip1, c.ip2)]
         look = max(int(round(thr_px / 2)), 1)
         pvals = D.protrusion_at(free, posts, max(thr_px, 0.25 / res), look)
+        if min_wall_length > 0 and posts:
+            # a post on a free-standing obstacle smaller than a wall piece
+            # (furniture, a plant, a pillar) does not protrude from a wall
+            import cv2
+
+            _, comp, stats, _ = cv2.connectedComponentsWithStats((~free).astype(np.uint8), connectivity=8)
+            extent = np.maximum(stats[:, cv2.CC_STAT_WIDTH], stats[:, cv2.CC_STAT_HEIGHT]) * res
+            Hc, Wc = free.shape
+            for n, p in enumerate(posts):
+                pr, pc = int(round(float(p[0]))), int(round(float(p[1])))
+                win = comp[max(pr - 1, 0):min(pr + 2, Hc), max(pc - 1, 0):min(pc + 2, Wc)]
+                labs = win[win > 0]
+                if labs.size and extent[labs].max() < min_wall_length:
+                    pvals[n] = 0.0
         accepted = []
         for n, (width, c) in enumerate(judged):
             f1, f2 = pvals[2 * n], pvals[2 * n + 1]
