@@ -243,10 +243,11 @@ def _free_and_occupied(grid, *, erosion_radius, median_size, dilation_size, wall
 def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median_size: float = 0.25,
                     dilation_size: float = 0.15, wall_band: float = 0.5,
                     min_occupied_branch: float = 0.3, min_door_width: float = 0.5,
-                    max_door_width: float = 3.0, window: float = 0.5, rise: float = 0.15, reach: float = 1.5,
+                    max_door_width: float = 3.0, window: float = 0.5, rise: float | None = None, reach: float = 1.5,
                     protrusion_min: float = 0.6, flat_min: float = 0.45, rule: str = "oneflat",
                     skeleton_cell: float = 0.1, mouths: bool = True,
-                    corridor_length: float = 1.0, min_wall_length: float = 0.0) -> Segmentation:
+                    corridor_length: float = 1.0, min_wall_length: float = 1.0,
+                    facing: float = 0.9) -> Segmentation:
     """Segment ``grid`` with topomap's default method.
 
     The paper's ideas — skeletons of free *and* occupied space, a threshold
@@ -289,11 +290,15 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
     window : float
         A bottleneck is the narrowest point within this distance (m) along
         the skeleton: 0.5 m, half a door's width either way.
-    rise : float
+    rise : float, optional
         The clearance must grow by this much (m) on both sides of a
         bottleneck within ``reach``: doors lead from one space into a wider
-        one. 0.15 m is three cells at 0.05 m/px, well above the
-        distance transform's discretisation noise.
+        one. Default: the discretisation noise of a clearance read along the
+        skeleton — the skeleton may run half a cell's diagonal off the true
+        medial axis, and clearances are compared to half a cell — so
+        ``(sqrt(2)/2 + 1/2) * skeleton_cell`` (0.12 m): any smaller rise may
+        be the grid's, not the building's. Independent of the map's
+        resolution.
     reach : float
         How far (m) along the skeleton the rise is looked for: 1.5 m, a
         door's frame and the first step into the room behind it.
@@ -320,6 +325,16 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
         Also look for corridor mouths: one-sided bottlenecks where a run of
         even clearance opens into a space at least ``2 * rise`` wider; they
         are doors only where the walls protrude on both sides.
+    min_wall_length : float
+        A door post on a free-standing obstacle less than this (m) across
+        (a chair, a plant, a small table, a pillar) does not count as a
+        protruding wall: 1.0 m, shorter than any wall piece between two
+        doors.
+    facing : float
+        The posts must face each other across the bottleneck: their distance
+        must be at least ``facing`` times the bottleneck's diameter (0.9:
+        about 130° apart seen from the narrowest point). Posts at a right
+        angle to each other are a room's corner, not a doorway.
     corridor_length : float
         A run of even clearance (within one cell) must be at least this long
         (m) to count as a corridor whose mouth can be a door: 1.0 m, longer
@@ -337,6 +352,8 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
 
     res = grid.resolution
     T = _Timer()
+    if rise is None:
+        rise = max(skeleton_cell, res) * (np.sqrt(2) / 2 + 0.5)
     # work on the bounding box of free space plus the wall band: the rest of
     # the map (unknown margins, solid outside) cannot hold a room or a door
     full, box = grid, _free_box(grid, _px(wall_band + dilation_size + max_door_width, grid.resolution, "wall_band"))
@@ -346,7 +363,7 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
                   wall_band=wall_band, min_occupied_branch=min_occupied_branch,
                   min_door_width=min_door_width, max_door_width=max_door_width, window=window, rise=rise, reach=reach,
                   protrusion_min=protrusion_min, rule=rule, skeleton_cell=skeleton_cell, mouths=mouths,
-                  corridor_length=corridor_length, min_wall_length=min_wall_length)
+                  corridor_length=corridor_length, min_wall_length=min_wall_length, facing=facing)
     free = grid.free
     with T("preprocess"):
         f, d_free, occ = _free_and_occupied(grid, erosion_radius=erosion_radius, median_size=median_size,
@@ -380,6 +397,11 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
             width = np.linalg.norm(c.ip1 - c.ip2) * res
             if not (min_door_width <= width <= max_door_width):
                 c.status = "width out of range"
+                continue
+            if width < facing * 2 * c.radius * res:
+                # the posts do not face each other across the bottleneck: it
+                # lies beside a corner, not in a doorway
+                c.status = "posts not facing"
                 continue
             judged.append((width, c))
         # the protrusion of a wall end: the most protruding obstacle cell
