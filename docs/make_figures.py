@@ -92,7 +92,7 @@ def _masks(grid, method):
     """
     import inspect
 
-    from topomap import segment as S
+    from topomap import segmentation as S
 
     fn = S.METHODS[method]
     p = {k: v.default for k, v in inspect.signature(fn).parameters.items()

@@ -17,7 +17,6 @@ import pytest
 from click.testing import CliRunner
 from PIL import Image
 
-from topomap import segment as segmod
 from topomap.benchmark import (ROW_COLUMNS, benchmark_grid, format_table, run_benchmark,
                                run_map, write_rows)
 from topomap.cli import main
