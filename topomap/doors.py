@@ -322,13 +322,13 @@ def passage_minima(G, *, window_px: float, rise_px: float, reach_px: float, min_
             r = rad[i]
             if r > max_radius_px:
                 continue
-            # side towards u
-            sel = (arc[i] - arc <= reach_px) & (np.arange(n) < i)
-            left = rad[sel].max() if sel.any() else 0.0
+            # side towards u: pixels before i within reach along the path
+            j0 = int(np.searchsorted(arc, arc[i] - reach_px, side="left"))
+            left = float(rad[j0:i].max()) if i > j0 else 0.0
             if arc[i] < reach_px:
                 left = max(left, beyond(u, (u, v, k), reach_px - arc[i]))
-            sel = (arc - arc[i] <= reach_px) & (np.arange(n) > i)
-            right = rad[sel].max() if sel.any() else 0.0
+            j1 = int(np.searchsorted(arc, arc[i] + reach_px, side="right"))
+            right = float(rad[i + 1:j1].max()) if j1 > i + 1 else 0.0
             if arc[-1] - arc[i] < reach_px:
                 right = max(right, beyond(v, (u, v, k), reach_px - (arc[-1] - arc[i])))
             if left < r + rise_px or right < r + rise_px:
