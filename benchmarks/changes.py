@@ -70,9 +70,11 @@ import numpy as np
 from PIL import Image
 import topomap
 from topomap.io import from_array
-try:  # the pipeline module was renamed from topomap/segment.py to topomap/segmentation.py
+# the pipeline module was renamed from topomap/segment.py to topomap/segmentation.py;
+# choose by the worktree's own files (an editable install of main must not answer)
+if os.path.exists(os.path.join(os.environ["PYTHONPATH"], "topomap", "segmentation.py")):
     import topomap.segmentation as S
-except ImportError:
+else:
     import topomap.segment as S
 
 out, data = Path(sys.argv[1]), Path(sys.argv[2])
