@@ -25,7 +25,7 @@ from typing import Optional
 import numpy as np
 
 from .errors import ParameterError
-from .io import OccupancyGrid
+from .io import FREE, OccupancyGrid
 
 log = logging.getLogger("topomap")
 
@@ -326,10 +326,12 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
         even clearance opens into a space at least ``2 * rise`` wider; they
         are doors only where the walls protrude on both sides.
     min_wall_length : float
-        A door post on a free-standing obstacle less than this (m) across
-        (a chair, a plant, a small table, a pillar) does not count as a
-        protruding wall: 1.0 m, shorter than any wall piece between two
-        doors.
+        Free-standing obstacles less than this (m) across (bounding box) are
+        clutter — chairs, plants, small tables, pillars — and are looked
+        through while doors are searched: doors are in walls, and 1.0 m is
+        shorter than any wall piece between two doors. Rooms are still cut
+        from the map as it is (clutter cells stay out of every room). 0
+        turns this off.
     facing : float
         The posts must face each other across the bottleneck: their distance
         must be at least ``facing`` times the bottleneck's diameter (0.9:
@@ -364,8 +366,16 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
                   min_door_width=min_door_width, max_door_width=max_door_width, window=window, rise=rise, reach=reach,
                   protrusion_min=protrusion_min, rule=rule, skeleton_cell=skeleton_cell, mouths=mouths,
                   corridor_length=corridor_length, min_wall_length=min_wall_length, facing=facing)
-    free = grid.free
+    rooms_grid = grid
     with T("preprocess"):
+        if min_wall_length > 0:
+            # doors are in walls: free-standing clutter smaller than a wall piece
+            # is looked through while doors are searched (rooms still use the map)
+            clutter = _clutter(grid.free, min_wall_length / res)
+            if clutter.any():
+                grid = OccupancyGrid(np.where(clutter, FREE, grid.cells).astype(np.int8), grid.resolution,
+                                     grid.origin, grid.source)
+        free = grid.free
         f, d_free, occ = _free_and_occupied(grid, erosion_radius=erosion_radius, median_size=median_size,
                                             dilation_size=dilation_size, wall_band=wall_band)
     fac = max(int(np.floor(skeleton_cell / res + 1e-9)), 1)
@@ -409,20 +419,6 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
         posts = [p for _, c in judged for p in (c.ip1, c.ip2)]
         look = max(int(round(thr_px / 2)), 1)
         pvals = D.protrusion_at(free, posts, max(thr_px, 0.25 / res), look)
-        if min_wall_length > 0 and posts:
-            # a post on a free-standing obstacle smaller than a wall piece
-            # (furniture, a plant, a pillar) does not protrude from a wall
-            import cv2
-
-            _, comp, stats, _ = cv2.connectedComponentsWithStats((~free).astype(np.uint8), connectivity=8)
-            extent = np.maximum(stats[:, cv2.CC_STAT_WIDTH], stats[:, cv2.CC_STAT_HEIGHT]) * res
-            Hc, Wc = free.shape
-            for n, p in enumerate(posts):
-                pr, pc = int(round(float(p[0]))), int(round(float(p[1])))
-                win = comp[max(pr - 1, 0):min(pr + 2, Hc), max(pc - 1, 0):min(pc + 2, Wc)]
-                labs = win[win > 0]
-                if labs.size and extent[labs].max() < min_wall_length:
-                    pvals[n] = 0.0
         accepted = []
         for n, (width, c) in enumerate(judged):
             f1, f2 = pvals[2 * n], pvals[2 * n + 1]
@@ -461,8 +457,8 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
             A[k], B[k] = c.ip1, c.ip2
             segs.append((c.ip1, c.ip2))
     with T("rooms"):
-        labels, door_objs = cut_rooms(grid, segs)
-    seg = Segmentation(grid=grid, labels=labels, doors=door_objs, method="topomap", params=params,
+        labels, door_objs = cut_rooms(rooms_grid, segs)
+    seg = Segmentation(grid=rooms_grid, labels=labels, doors=door_objs, method="topomap", params=params,
                        threshold=thr_px * res, free_graph=Gf, occupied_graph=Go,
                        candidates=cands, timings=T.t)
     if box is not None:
@@ -479,6 +475,18 @@ def _coarse_graph(skel, fac, radius, grid):
 
     return S.skeleton_graph(skel, radius=radius, resolution=grid.resolution, to_world=grid.pixel_to_world,
                             scale=max(int(fac), 1))
+
+
+def _clutter(free: np.ndarray, max_extent_px: float) -> np.ndarray:
+    """Obstacle cells of free-standing components less than ``max_extent_px``
+    across (bounding box, 8-connected): chairs, plants, small tables."""
+    import cv2
+
+    n, comp, stats, _ = cv2.connectedComponentsWithStats((~free).astype(np.uint8), connectivity=8)
+    extent = np.maximum(stats[:, cv2.CC_STAT_WIDTH], stats[:, cv2.CC_STAT_HEIGHT])
+    small = extent < max_extent_px
+    small[0] = False  # label 0: the free cells themselves
+    return small[comp]
 
 
 def _free_box(grid: OccupancyGrid, margin: int):
