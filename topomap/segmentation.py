@@ -381,11 +381,11 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
     fac = max(int(np.floor(skeleton_cell / res + 1e-9)), 1)
     with T("skeletons"):
         fs = S.skeletonize(S.downsample(f, fac, keep="all"))
-        os_ = S.skeletonize(occ)
+        os_ = S.skeletonize(S.downsample(occ, fac, keep="any"))
     with T("graphs"):
         d_occ = edt(occ)
         Gf = _coarse_graph(fs, fac, d_free, grid)
-        Go = _coarse_graph(os_, 1, d_occ, grid)
+        Go = _coarse_graph(os_, fac, d_occ, grid)
         Go = S.prune_spurs(Go, min_occupied_branch)
     with T("doors"):
         thr_px = D.wall_threshold(d_occ, S.graph_pixels(Go))
