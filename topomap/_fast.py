@@ -14,8 +14,12 @@ import numpy as np
 __all__ = ["edt", "label"]
 
 
-def edt(mask: np.ndarray) -> np.ndarray:
-    """Exact Euclidean distance (pixels) of each True cell to the nearest False cell.
+def edt(mask: np.ndarray, *, exact: bool = True) -> np.ndarray:
+    """Euclidean distance (pixels) of each True cell to the nearest False cell.
+
+    ``exact=False`` uses OpenCV's 5x5 chamfer approximation (relative error
+    under 2 %, about twice as fast), for distances that are only compared
+    with a threshold or averaged.
 
     Parameters
     ----------
@@ -33,7 +37,7 @@ def edt(mask: np.ndarray) -> np.ndarray:
     if m.all():
         # no background at all: infinite distance; report a large finite value
         return np.full(m.shape, float(max(m.shape)), np.float32)
-    return cv2.distanceTransform(m, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+    return cv2.distanceTransform(m, cv2.DIST_L2, cv2.DIST_MASK_PRECISE if exact else 5)
 
 
 def label(mask: np.ndarray, connectivity: int = 8):

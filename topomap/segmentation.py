@@ -233,7 +233,7 @@ def _free_and_occupied(grid, *, erosion_radius, median_size, dilation_size, wall
     else:
         f = f.astype(bool)
     d_free = edt(free)
-    dist_out = edt(~free)
+    dist_out = edt(~free, exact=False)  # only compared with the band width
     occ = (~free if occupied is None else occupied & ~free) & (dist_out <= band)
     if dil > 1:
         occ = cv2.dilate(occ.astype(np.uint8), np.ones((dil, dil), np.uint8)) > 0
@@ -383,7 +383,7 @@ def segment_topomap(grid: OccupancyGrid, *, erosion_radius: float = 0.05, median
         fs = S.skeletonize(S.downsample(f, fac, keep="all"))
         os_ = S.skeletonize(S.downsample(occ, fac, keep="any"))
     with T("graphs"):
-        d_occ = edt(occ)
+        d_occ = edt(occ, exact=False)  # only averaged into the wall threshold
         Gf = _coarse_graph(fs, fac, d_free, grid)
         Go = _coarse_graph(os_, fac, d_occ, grid)
         Go = S.prune_spurs(Go, min_occupied_branch)
