@@ -95,13 +95,16 @@ def _grow(seeds: np.ndarray, todo: np.ndarray, max_steps: int = 8) -> np.ndarray
     """
     import cv2
 
-    if seeds.max() >= 2 ** 24:  # float32 holds integers exactly up to 2**24
+    top = int(seeds.max())
+    if top >= 2 ** 24:  # float32 holds integers exactly up to 2**24
         return seeds
-    out = seeds.copy()
+    # OpenCV dilates uint16 and float32 images; uint16 needs no conversion back
+    dtype = np.uint16 if top < 2 ** 16 else np.float32
+    out = seeds.astype(dtype)
     todo = todo.copy()
     k = np.ones((3, 3), np.uint8)
     for _ in range(max_steps):
-        grown = cv2.dilate(out.astype(np.float32), k).astype(np.int32)
+        grown = cv2.dilate(out, k)
         hit = todo & (grown > 0)
         if not hit.any():
             break
@@ -109,4 +112,4 @@ def _grow(seeds: np.ndarray, todo: np.ndarray, max_steps: int = 8) -> np.ndarray
         todo &= ~hit
         if not todo.any():
             break
-    return out
+    return out.astype(np.int32)
