@@ -82,6 +82,19 @@ def _check_same_shape(name_a, a, name_b, b):
             f"<array>: {name_a} shape {a.shape} differs from {name_b} shape {b.shape}")
 
 
+def _as_inputs(labels, gt_rooms, scored):
+    """Arrays of the same shape: labels, true rooms, scored mask (all True by default)."""
+    labels = np.asarray(labels)
+    gt_rooms = np.asarray(gt_rooms)
+    _check_same_shape("labels", labels, "gt_rooms", gt_rooms)
+    if scored is None:
+        scored = np.ones(labels.shape, bool)
+    else:
+        scored = np.asarray(scored, bool)
+        _check_same_shape("scored", scored, "labels", labels)
+    return labels, gt_rooms, scored
+
+
 def _contingency(labels, gt_rooms, scored):
     """Sparse contingency table of (segment, room) cell counts on scored cells.
 
@@ -143,14 +156,7 @@ def score_segmentation(labels, gt_rooms, *, scored=None, min_size: int = MIN_SIZ
     The computation is a sparse contingency table of the scored cells, so it
     is linear in the number of cells.
     """
-    labels = np.asarray(labels)
-    gt_rooms = np.asarray(gt_rooms)
-    _check_same_shape("labels", labels, "gt_rooms", gt_rooms)
-    if scored is None:
-        scored = np.ones(labels.shape, bool)
-    else:
-        scored = np.asarray(scored, bool)
-        _check_same_shape("scored", scored, "labels", labels)
+    labels, gt_rooms, scored = _as_inputs(labels, gt_rooms, scored)
     if int(min_size) < 0:
         raise ParameterError(f"<array>: min_size must be >= 0, got {min_size!r}")
 
@@ -556,14 +562,7 @@ def score_adjacency(labels, gt_rooms, pred_edges, true_edges, *, scored=None,
         ``n_pred`` (mapped edges), ``n_true`` and ``mapping``
         (predicted label → true room).
     """
-    labels = np.asarray(labels)
-    gt_rooms = np.asarray(gt_rooms)
-    _check_same_shape("labels", labels, "gt_rooms", gt_rooms)
-    if scored is None:
-        scored = np.ones(labels.shape, bool)
-    else:
-        scored = np.asarray(scored, bool)
-        _check_same_shape("scored", scored, "labels", labels)
+    labels, gt_rooms, scored = _as_inputs(labels, gt_rooms, scored)
     mapping = {}
     seg_ids, room_ids, table = _contingency(labels, gt_rooms, scored)
     if seg_ids.size and room_ids.size:
