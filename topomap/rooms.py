@@ -64,24 +64,35 @@ def relabel_sequential(labels: np.ndarray) -> np.ndarray:
 
     This makes room IDs deterministic for the same input: room 1 is the room
     that contains the top-most (then left-most) free cell, and so on.
-    Negative labels count as 0. O(cells): no sort of the image.
+    Negative labels count as 0. One C pass over the image
+    (:func:`scipy.ndimage.find_objects`) plus a look at each label's top row.
     """
     labels = np.asarray(labels)
-    flat = labels.ravel()
-    idx = np.flatnonzero(flat > 0)
-    if idx.size == 0:
+    if labels.dtype == np.int32 and (labels.size == 0 or labels.min() >= 0):
+        lab = labels
+    else:
+        lab = np.where(labels > 0, labels, 0).astype(np.int64, copy=False)
+    top = int(lab.max()) if lab.size else 0
+    if top == 0:
         return np.zeros(labels.shape, np.int32)
-    vals = flat[idx].astype(np.int64)
-    top = int(vals.max())
-    first = np.full(top + 1, flat.size, np.int64)
-    np.minimum.at(first, vals, idx)
-    ids = np.flatnonzero(first < flat.size)
+    if top > 4 * lab.size:  # sparse huge ids: compact them first
+        vals, inv = np.unique(lab, return_inverse=True)
+        lab = inv.reshape(lab.shape)
+        top = vals.size - 1
+    slices = ndi.find_objects(lab if lab.dtype == np.int32 else lab.astype(np.int32), max_label=top)
+    first = np.full(top + 1, -1, np.int64)
+    W = lab.shape[1]
+    for i, sl in enumerate(slices, start=1):
+        if sl is None:
+            continue
+        r, cs = sl[0].start, sl[1]
+        c = cs.start + int(np.flatnonzero(lab[r, cs] == i)[0])
+        first[i] = r * W + c
+    ids = np.flatnonzero(first >= 0)
     order = ids[np.argsort(first[ids], kind="stable")]
     lut = np.zeros(top + 1, np.int32)
     lut[order] = np.arange(1, order.size + 1, dtype=np.int32)
-    out = np.zeros(flat.size, np.int32)
-    out[idx] = lut[vals]
-    return out.reshape(labels.shape)
+    return lut[lab]
 
 
 def _grow(seeds: np.ndarray, todo: np.ndarray, max_steps: int = 8) -> np.ndarray:

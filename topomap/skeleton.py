@@ -358,5 +358,13 @@ def downsample(mask: np.ndarray, factor: int, *, keep: str = "all") -> np.ndarra
     Hp, Wp = -(-H // factor) * factor, -(-W // factor) * factor
     m = np.zeros((Hp, Wp), bool)
     m[:H, :W] = mask
-    b = m.reshape(Hp // factor, factor, Wp // factor, factor)
-    return b.all(axis=(1, 3)) if keep == "all" else b.any(axis=(1, 3))
+    # combine the factor**2 strided sub-grids (faster than a reduction over axes)
+    out = m[0::factor, 0::factor].copy()
+    for i in range(factor):
+        for j in range(factor):
+            if i or j:
+                if keep == "all":
+                    out &= m[i::factor, j::factor]
+                else:
+                    out |= m[i::factor, j::factor]
+    return out
