@@ -16,7 +16,7 @@ from click.testing import CliRunner
 from PIL import Image
 
 import _testdata as T
-from test_bad_input import CASES, ERROR_CASES, OK_CASES, build, png
+from test_bad_input import ERROR_CASES, OK_CASES, build, png
 from topomap import cli
 from topomap.cli import main
 

@@ -1,6 +1,5 @@
 """Every notebook in notebooks/ runs from top to bottom without an error."""
 
-import os
 from pathlib import Path
 
 import pytest

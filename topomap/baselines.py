@@ -25,7 +25,6 @@ returns ``(labels, doors)``:
 from __future__ import annotations
 
 import numpy as np
-from scipy import ndimage as ndi
 
 from topomap._fast import edt, label
 from topomap.errors import MapError, ParameterError
@@ -275,12 +274,7 @@ def distance(free, *, resolution=0.05, room_area_min=0.35, room_area_max=163.0):
 
 
 # --------------------------------------------------------------------------- voronoi
-def _neighbour_count(mask):
-    import cv2
-
-    k = np.ones((3, 3), np.float32)
-    k[1, 1] = 0
-    return cv2.filter2D(mask.astype(np.uint8), cv2.CV_16S, k, borderType=cv2.BORDER_CONSTANT)
+from .skeleton import neighbour_count as _neighbour_count  # noqa: E402
 
 
 def _prune(skel, max_len):
@@ -507,7 +501,6 @@ def voronoi(free, *, resolution=0.05, neighborhood=1.0, max_door_width=2.5, prun
         return _empty(free)
     box = _crop(free, pad=3)
     f = free[box]
-    shape = f.shape
     dist = edt(f)
 
     # 1. Voronoi graph = pruned skeleton of the opened free space

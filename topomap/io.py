@@ -379,8 +379,6 @@ def _check_size(name, rows, cols):
 
 def _to_gray(name, img):
     """Decode a Pillow image into ``(gray uint8, transparent bool or None)``."""
-    from PIL import Image
-
     mode = img.mode
     transparent = None
     if mode == "P" or (mode in ("L", "RGB", "1") and "transparency" in img.info):

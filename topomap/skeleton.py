@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import numpy as np
 import networkx as nx
-from scipy import ndimage as ndi
 from scipy import sparse
 from scipy.sparse import csgraph
 
@@ -53,10 +52,14 @@ def skeletonize(mask: np.ndarray) -> np.ndarray:
     return out
 
 
-def _neighbour_count(skel: np.ndarray) -> np.ndarray:
-    k = np.ones((3, 3), np.uint8)
+def neighbour_count(mask: np.ndarray) -> np.ndarray:
+    """Number of 8-neighbours of every cell that are True (int16; outside the
+    image counts as False). On a skeleton: 1 at endpoints, 3+ at junctions."""
+    import cv2
+
+    k = np.ones((3, 3), np.float32)
     k[1, 1] = 0
-    return ndi.convolve(skel.astype(np.uint8), k, mode="constant") * skel
+    return cv2.filter2D(np.asarray(mask, np.uint8), cv2.CV_16S, k, borderType=cv2.BORDER_CONSTANT)
 
 
 def skeleton_graph(skel: np.ndarray, *, radius: np.ndarray | None = None,
