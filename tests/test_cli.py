@@ -272,3 +272,20 @@ def test_package_functions_are_not_shadowed_by_submodules():
         obj = getattr(topomap, name)
         assert not isinstance(obj, type(topomap)), name
     assert callable(topomap.segment) and topomap.segment.__name__ == "segment"
+
+
+def test_segment_summary_counts_rooms_of_at_least_one_square_metre(tmp_path):
+    """Specks of free space are rooms of their own; the summary line says how
+    many rooms are at least 1 m²."""
+    from click.testing import CliRunner
+
+    from topomap.cli import main
+
+    free = np.zeros((60, 80), bool)
+    free[5:55, 5:45] = True  # 2.0 m x 2.5 m = 5 m² at 0.05 m/px
+    free[10, 60] = True  # a one-cell speck
+    p = tmp_path / "speck.png"
+    Image.fromarray(np.where(free, 254, 0).astype(np.uint8)).save(p)
+    r = CliRunner().invoke(main, ["segment", str(p), "-o", str(tmp_path / "o")])
+    assert r.exit_code == 0, r.output
+    assert "2 rooms (1 of at least 1 m²), 0 doors" in r.output
