@@ -484,8 +484,15 @@ def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, dept
         if d[j] > max_px:
             c.ip1 = q[i]
             continue
-        a = q[(~opp) & (d <= d[i] + depth_px)]
-        b = q[opp & (d <= d[j] + depth_px)]
+        # closest pairs of cells across a passage lie on the obstacles'
+        # surface: only cells with a free 4-neighbour are paired (keeps the
+        # pairing linear in the window's side, not in its area)
+        win = obstacle[ra:rb, ca:cb]
+        pad = np.pad(win, 1, constant_values=True)
+        surface = win & ~(pad[:-2, 1:-1] & pad[2:, 1:-1] & pad[1:-1, :-2] & pad[1:-1, 2:])
+        on_surface = surface[rr, cc]
+        a = q[(~opp) & (d <= d[i] + depth_px) & on_surface]
+        b = q[opp & (d <= d[j] + depth_px) & on_surface]
         if depth_px > 0 and a.size and b.size and c.status != "mouth":
             D = np.hypot(a[:, None, 0] - b[None, :, 0], a[:, None, 1] - b[None, :, 1])
             ia, ib = np.nonzero(D <= D.min() + 0.75)
