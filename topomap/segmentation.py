@@ -648,13 +648,12 @@ def doors_between_rooms(grid: OccupancyGrid, labels: np.ndarray, segments) -> li
 def _baseline(name):
     def run(grid: OccupancyGrid, **params) -> Segmentation:
         from . import baselines
-        from .rooms import fill_unlabeled
 
         T = _Timer()
         with T("segment"):
+            # every baseline ends with fill_unlabeled: all free cells labelled
             labels, segs = getattr(baselines, name)(grid.free, resolution=grid.resolution, **params)
         with T("rooms"):
-            labels = fill_unlabeled(labels, grid.free)
             doors = doors_between_rooms(grid, labels, segs)
         return Segmentation(grid=grid, labels=labels, doors=doors, method=name, params=params, timings=T.t)
 
