@@ -18,6 +18,7 @@ __all__ = [
     "MapTooLargeError",
     "ParameterError",
     "GraphFormatError",
+    "BenchmarkNotFoundError",
 ]
 
 
@@ -47,3 +48,7 @@ class GraphFormatError(TopomapError, ValueError):
 
 class MapFileNotFoundError(MapFileError, FileNotFoundError):
     """A map file (or the image a YAML names) does not exist."""
+
+
+class BenchmarkNotFoundError(MapFileError, FileNotFoundError):
+    """No benchmark maps in a directory (or the directory does not exist)."""
