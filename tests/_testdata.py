@@ -218,3 +218,157 @@ ALL = [two_rooms, corridor_with_rooms, door_near_corner, room_with_furniture, l_
 def gray(a: np.ndarray) -> np.ndarray:
     """map_server gray image of a bool free mask (254 free, 0 occupied)."""
     return np.where(a, GRAY_FREE, GRAY_OCCUPIED).astype(np.uint8)
+
+
+# --------------------------------------------------------------------------
+# Real-building features (issue 13): pillars, niches, desks, specks, noise.
+# Not in ALL (whose maps other tests and docs/errors.md describe); listed in
+# REAL_WORLD. Walls 0.2 m (4 px) unless said otherwise.
+# --------------------------------------------------------------------------
+
+def corridor_with_pillars() -> TestMap:
+    """A 2 m x 20 m corridor with 0.35 m pillars on both sides, and one office off it.
+
+    Pillars (7 px square) stand in opposite pairs every 3 m, alternately
+    against the walls and 0.15 m (3 px) off them (free-standing), so the
+    corridor narrows to 1.3 m and 1.0 m at the pairs: a pillar is not a
+    wall, so none of these narrowings is a door. A 5 m x 4 m office north of
+    the corridor is entered by a 0.9 m door in the 0.2 m wall, 0.7 m from
+    the nearest pillar and 2 m of wall either side. 132 x 408 px.
+    """
+    crow0, crow1 = 88, 128                 # corridor rows (2 m)
+    rooms = [(crow0, crow1, 4, 404),       # corridor 20 m
+             (4, 84, 120, 220)]            # office 5 m x 4 m
+    doors = [(84, 88, 161, 179)]           # 18 px = 0.9 m
+    furniture = []
+    for k, c in enumerate(range(20, 400, 60)):   # 7 pairs, 3 m apart
+        off = 0 if k % 2 == 0 else 3             # against the wall / 0.15 m off it
+        furniture.append((crow0 + off, crow0 + off + 7, c, c + 7))   # north pillar
+        furniture.append((crow1 - off - 7, crow1 - off, c, c + 7))   # south pillar
+    return _build("corridor_with_pillars", (132, 408), rooms, doors, 2, furniture)
+
+
+def corridor_with_niches() -> TestMap:
+    """A 2 m x 16 m corridor with five niches in its walls and doors into two offices.
+
+    Niches (recesses 0.5-1.0 m deep, 1.2-2.0 m long) are cut into the solid
+    parts of both corridor walls; they are part of the corridor, not rooms.
+    Two 5 m x 4 m offices north of the corridor are entered by 0.9 m doors in
+    the 0.2 m wall (3 rooms, 2 doors). 152 x 328 px.
+    """
+    crow0, crow1 = 88, 128                 # corridor rows (2 m)
+    rooms = [(crow0, crow1, 4, 324),       # corridor 16 m
+             (4, 84, 4, 104),              # office A 5 m x 4 m
+             (4, 84, 170, 270)]            # office B 5 m x 4 m
+    niches = [(72, crow0, 120, 150),       # north, 0.8 m deep, 1.5 m long (between the offices)
+              (76, crow0, 290, 314),       # north, 0.6 m deep, 1.2 m long
+              (crow1, crow1 + 16, 20, 50),     # south, 0.8 m deep, 1.5 m long
+              (crow1, crow1 + 10, 140, 180),   # south, 0.5 m deep, 2.0 m long
+              (crow1, crow1 + 20, 240, 270)]   # south, 1.0 m deep, 1.5 m long
+    doors = [(84, crow0, 60, 78),          # office A, 0.9 m
+             (84, crow0, 210, 228)]        # office B, 0.9 m
+    return _build("corridor_with_niches", (152, 328), rooms + niches, doors, 3)
+
+
+def room_with_desks() -> TestMap:
+    """A 6 m x 5 m office with six 0.8 m x 1.6 m desks along three walls, and a second room.
+
+    The desks (16 x 32 px) stand along the north, west and south walls,
+    touching them or 0.1-0.3 m off them; neighbours along a wall are 0.2 m
+    apart or 0.9 m apart (room for a chair: a door-wide gap between two
+    desks). The east wall has a 0.9 m door into an empty 4 m x 5 m room.
+    The slits behind the desks and the gaps between them are not doors:
+    2 rooms, 1 door. 108 x 212 px.
+    """
+    rooms = [(4, 104, 4, 124),             # office 6 m x 5 m
+             (4, 104, 128, 208)]           # second room 4 m x 5 m
+    doors = [(50, 68, 124, 128)]           # 18 px = 0.9 m
+    desks = [
+        (4, 20, 10, 42),      # north wall, touching
+        (6, 22, 60, 92),      # north wall, 0.1 m off, 0.9 m from the first
+        (30, 62, 4, 20),      # west wall, touching
+        (66, 98, 10, 26),     # west wall, 0.3 m off, 0.2 m from the first
+        (88, 104, 36, 68),    # south wall, touching
+        (85, 101, 86, 118),   # south wall, 0.15 m off, 0.9 m from the first, 0.3 m from the east wall
+    ]
+    return _build("room_with_desks", (108, 212), rooms, doors, 2, desks)
+
+
+def specks_outside_building() -> TestMap:
+    """:func:`two_rooms` as a gray SLAM-like map with free specks in the unknown outside.
+
+    The building (two 3 m x 3 m rooms, a 0.9 m door) sits in a 1.5 m unknown
+    (205) margin holding free cells no robot can reach, as laser beams
+    through a window leave them: four single free cells, a 2-cell speck and
+    an 11 x 11 px (0.55 m x 0.55 m = 0.30 m²) free patch with a few occupied
+    cells on its far side. The specks are fragments, not rooms: 2 rooms, 1
+    door. 130 x 194 px.
+    """
+    base = two_rooms()
+    m = 30
+    H, W = base.array.shape
+    g = np.full((H + 2 * m, W + 2 * m), GRAY_UNKNOWN, np.uint8)
+    g[m:m + H, m:m + W] = np.where(base.array, GRAY_FREE, GRAY_OCCUPIED)
+    for r, c in [(8, 20), (15, 180), (120, 60), (112, 150)]:   # single free cells
+        g[r, c] = GRAY_FREE
+    g[60, 10:12] = GRAY_FREE                                    # 2-cell speck
+    g[106:117, 10:21] = GRAY_FREE                               # 0.30 m² patch
+    g[106:117, 8] = GRAY_OCCUPIED                               # its far side, partly seen
+    g[108:112, 8] = GRAY_UNKNOWN
+    doors = [(x + m * RES, y + m * RES) for x, y in base.doors]
+    return TestMap("specks_outside_building", g, 2, doors, base.door_widths)
+
+
+def noisy_corridor_with_pillars(seed: int = 13) -> TestMap:
+    """:func:`corridor_with_pillars` with laser-style noise (seeded): 2 rooms, 1 door.
+
+    * jagged wall edges: each free cell on an obstacle's face becomes
+      occupied with probability 0.2, each obstacle cell on a face becomes
+      free with probability 0.2 (±1 cell);
+    * 8 gaps of 1-2 cells through the outer walls (the exterior is occupied,
+      so they are dead-end slits, never a second way between rooms);
+    * up to 40 isolated occupied cells in the free space (none at the door).
+
+    The dividing wall, its door jambs and the door gap keep their drawn
+    cells apart from the ±1 edge noise; free cells the noise cut off from
+    the rest (if any) are filled, so the free space is one component.
+    """
+    import cv2
+
+    base = corridor_with_pillars()
+    a = base.array.copy()
+    rng = np.random.default_rng(seed)
+    H, W = a.shape
+    occ = ~a
+    pad = np.pad(a, 1)
+    free_nb = pad[:-2, 1:-1] | pad[2:, 1:-1] | pad[1:-1, :-2] | pad[1:-1, 2:]
+    padocc = np.pad(occ, 1, constant_values=True)
+    occ_nb = padocc[:-2, 1:-1] | padocc[2:, 1:-1] | padocc[1:-1, :-2] | padocc[1:-1, 2:]
+    grow = a & occ_nb & (rng.random(a.shape) < 0.2)       # free face cell -> occupied
+    shrink = occ & free_nb & (rng.random(a.shape) < 0.2)  # wall face cell -> free
+    keep = np.zeros_like(a)
+    keep[84:88, 155:185] = True                           # door and its jambs stay as drawn
+    a[grow & ~keep] = False
+    a[shrink & ~keep] = True
+    # gaps through the outer walls: south wall of the corridor, office's north wall
+    for c in rng.choice(np.arange(10, 395), 6, replace=False):
+        a[128:132, c:c + int(rng.integers(1, 3))] = True
+    for c in rng.choice(np.arange(125, 215), 2, replace=False):
+        a[0:4, c:c + int(rng.integers(1, 3))] = True
+    # speckles in the free space, away from the door gap
+    rr, cc = np.nonzero(base.array)
+    idx = rng.choice(len(rr), 40, replace=False)
+    for r, c in zip(rr[idx], cc[idx]):
+        if not (80 <= r < 92 and 155 <= c < 185):
+            a[r, c] = False
+    # one free component: fill any pocket the noise cut off
+    n, comp = cv2.connectedComponents(a.astype(np.uint8), connectivity=4)
+    if n > 2:
+        sizes = np.bincount(comp.ravel())
+        sizes[0] = 0
+        a &= comp == int(np.argmax(sizes))
+    return TestMap("noisy_corridor_with_pillars", a, 2, base.doors, base.door_widths)
+
+
+REAL_WORLD = [corridor_with_pillars, corridor_with_niches, room_with_desks,
+              specks_outside_building, noisy_corridor_with_pillars]

@@ -1,0 +1,82 @@
+"""Known answers of the default method on small hand-drawn maps (issues 11 and 13).
+
+Each map of tests/_testdata.py below is drawn at 0.05 m/px with physically
+realistic walls (0.2-0.25 m), doors (0.8-0.9 m) and rooms (3-6 m), and has
+an exact room and door count a person would give. Rooms and doors are
+counted on the room graph (``seg.room_graph``: nodes are rooms, edges are
+doors), which is to hold real rooms only (issue 13: specks are fragments,
+not rooms). Every free cell must carry a label, in every case.
+
+Maps the default method gets wrong today are ``xfail(strict=True)`` with
+what it gives now, so a method change that fixes one turns it into a
+failure: then remove the marker.
+"""
+
+import pytest
+
+import _testdata as T
+import topomap
+
+FURNITURE_REASON = (
+    "default method gives 2 rooms / 2 doors: it cuts the room between the table and the "
+    "north cabinet (0.92 m) and between the table and the south cabinet (1.42 m), "
+    "furniture taken for door posts")
+BESIDE_REASON = (
+    "default method gives 1 room / 0 doors: the 0.8 m door between the end of the dividing "
+    "wall and the north outer wall is not found (a protruding wall end on one side only)")
+PILLARS_REASON = (
+    "default method gives 4 rooms / 3 doors: besides the office door it cuts the corridor "
+    "twice, at the pairs of pillars against the walls at x = 7.2 m and x = 13.2 m "
+    "(1.3 m between the pillars), pillars taken for door posts")
+NICHES_REASON = (
+    "default method gives 4 rooms / 3 doors: besides the two office doors it cuts the corridor "
+    "across (2.1 m, midpoint x = 8.85 m) from the corridor's north wall below office B's west "
+    "wall (x = 8.6 m) to the east end of the 2 m south niche (x = 9.0 m), the niche's end "
+    "taken for a door post")
+SPECKS_REASON = (
+    "default method gives 8 rooms / 1 door: every free component is a room, so the six "
+    "unreachable free specks outside the building (four single cells, a 2-cell speck, "
+    "a 0.30 m2 patch) are rooms of their own")
+NOISY_REASON = (
+    "default method gives 4 rooms / 3 doors: as on the clean corridor_with_pillars, it cuts "
+    "the corridor at the pairs of pillars against the walls at x = 7.2 m and x = 13.1 m")
+
+CASES = [
+    pytest.param(T.room_with_furniture, 1, 0, id="room_with_furniture",
+                 marks=pytest.mark.xfail(strict=True, reason=FURNITURE_REASON)),
+    pytest.param(T.door_beside_wall, 2, 1, id="door_beside_wall",
+                 marks=pytest.mark.xfail(strict=True, reason=BESIDE_REASON)),
+    pytest.param(T.corridor_with_pillars, 2, 1, id="corridor_with_pillars",
+                 marks=pytest.mark.xfail(strict=True, reason=PILLARS_REASON)),
+    pytest.param(T.corridor_with_niches, 3, 2, id="corridor_with_niches",
+                 marks=pytest.mark.xfail(strict=True, reason=NICHES_REASON)),
+    pytest.param(T.room_with_desks, 2, 1, id="room_with_desks"),
+    pytest.param(T.specks_outside_building, 2, 1, id="specks_outside_building",
+                 marks=pytest.mark.xfail(strict=True, reason=SPECKS_REASON)),
+    pytest.param(T.noisy_corridor_with_pillars, 2, 1, id="noisy_corridor_with_pillars",
+                 marks=pytest.mark.xfail(strict=True, reason=NOISY_REASON)),
+]
+
+ALL_MAPS = [T.room_with_furniture, T.door_beside_wall] + T.REAL_WORLD
+
+
+def run(m):
+    grid = topomap.from_array(m.array, resolution=m.resolution)
+    return grid, topomap.segment(grid)
+
+
+@pytest.mark.parametrize("make, n_rooms, n_doors", CASES)
+def test_known_room_and_door_counts(make, n_rooms, n_doors):
+    m = make()
+    assert (m.n_rooms, m.n_doors) == (n_rooms, n_doors)  # the map's own record agrees
+    grid, seg = run(m)
+    G = seg.room_graph
+    got = (G.number_of_nodes(), G.number_of_edges())
+    assert got == (n_rooms, n_doors), f"{m.name}: {got[0]} rooms / {got[1]} doors"
+
+
+@pytest.mark.parametrize("make", ALL_MAPS, ids=lambda f: f.__name__)
+def test_every_free_cell_is_labelled(make):
+    m = make()
+    grid, seg = run(m)
+    assert (seg.labels > 0)[grid.free].all(), f"{m.name}: unlabelled free cells"
