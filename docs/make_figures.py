@@ -11,7 +11,8 @@ benchmark map may be pictured in the repository.
 
 The small private helpers below draw what :mod:`topomap.plot` has no
 function for yet (the preprocessed free / occupied masks, the candidates with
-their status, the threshold histogram).
+their status, the threshold histogram), from what the methods ran: the
+masks and clearances are ``seg.intermediates``, nothing is re-computed.
 
 The module is also the site's mkdocs hook (``hooks:`` in ``mkdocs.yml``):
 :func:`on_page_markdown` only rewrites links that leave ``docs/``, and
@@ -21,11 +22,13 @@ importing the module draws nothing.
 from __future__ import annotations
 
 import argparse
+import logging
 import re
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 DPI = 110
+log = logging.getLogger("make_figures")
 
 
 def _imports():
@@ -44,18 +47,21 @@ def _imports():
     from topomap.segmentation import METHODS, segment
 
 
-#: Colour per candidate ``status`` (anything else: gray).
-STATUS_COLORS = {
-    "door": "red",
-    "duplicate": "orange",
-    "no protruding wall": "royalblue",
-    "no protruding wall near": "royalblue",
-    "centres apart": "purple",
-    "crosses a wall skeleton": "saddlebrown",
-    "width out of range": "deepskyblue",
-    "no wall on both sides": "gray",
-    "no endpoints": "gray",
-}
+def _status_colors():
+    """Colour per candidate status (:data:`topomap.doors.STATUSES`; anything else: gray)."""
+    from topomap import doors as D
+
+    return {
+        D.DOOR: "red",
+        D.DUPLICATE: "orange",
+        D.NO_PROTRUDING_WALL: "royalblue",
+        D.NO_PROTRUDING_WALL_NEAR: "royalblue",
+        D.CENTRES_APART: "purple",
+        D.CROSSES_WALL_SKELETON: "saddlebrown",
+        D.WIDTH_OUT_OF_RANGE: "deepskyblue",
+        D.NO_WALL_BOTH_SIDES: "gray",
+        D.NO_ENDPOINTS: "gray",
+    }
 
 
 # --------------------------------------------------------------------------
@@ -83,35 +89,6 @@ def on_page_markdown(markdown, page, **kwargs):
 # private helpers
 # --------------------------------------------------------------------------
 
-def _masks(grid, method):
-    """(free after preprocessing, occupied after preprocessing) as used by ``method``.
-
-    Mirrors the preprocessing stage of :func:`topomap.segmentation.segment_paper`
-    and :func:`topomap.segmentation.segment_topomap` with their default
-    parameters.
-    """
-    import inspect
-
-    from topomap import segmentation as S
-
-    fn = S.METHODS[method]
-    p = {k: v.default for k, v in inspect.signature(fn).parameters.items()
-         if k in ("erosion_radius", "median_size", "dilation_size", "wall_band")}
-    f, _, occ = S._free_and_occupied(grid, **p)
-    if method == "paper":
-        # the paper method keeps only *occupied* cells (not unknown ones) in the band
-        import cv2
-
-        from topomap._fast import edt
-
-        band = S._px(p["wall_band"], grid.resolution, "wall_band", 1)
-        dil = S._px(p["dilation_size"], grid.resolution, "dilation_size")
-        occ = grid.occupied & (edt(~grid.free) <= band)
-        if dil > 1:
-            occ = cv2.dilate(occ.astype(np.uint8), np.ones((dil, dil), np.uint8)) > 0
-    return f, occ
-
-
 def _show_mask(grid, mask, ax, color):
     rgba = np.zeros(mask.shape + (4,))
     rgba[mask] = matplotlib.colors.to_rgba(color, 0.55)
@@ -128,8 +105,9 @@ def plot_candidates(seg, ax, *, legend=True):
     for the paper method), coloured by ``status``."""
     grid = seg.grid
     seen = set()
+    colors = _status_colors()
     for c in seg.candidates:
-        col = STATUS_COLORS.get(c.status, "gray")
+        col = colors.get(c.status, "gray")
         label = c.status if c.status not in seen else None
         seen.add(c.status)
         cx, cy = _px_xy(grid, c.centroid)
@@ -146,8 +124,9 @@ def plot_candidates(seg, ax, *, legend=True):
 
 
 def _endpoints(seg, ax):
-    G = seg.occupied_graph
-    e = np.array([G.nodes[n]["pixel"] for n in G.nodes if G.degree(n) == 1], float).reshape(-1, 2)
+    from topomap.skeleton import graph_endpoints
+
+    e = graph_endpoints(seg.occupied_graph)
     x, y = seg.grid.pixel_to_world(e[:, 0], e[:, 1])
     ax.plot(x, y, "o", color="magenta", ms=3.5, mec="k", mew=0.3, label="occupied-skeleton endpoint")
     return e
@@ -162,18 +141,17 @@ def _save(fig, out, name):
     path = out / name
     fig.savefig(path, dpi=DPI, bbox_inches="tight")
     plt.close(fig)
-    print(path)
+    log.info("%s", path)
     return path
 
 
 def _wall_half_thickness(seg):
     """Distance to free space (m) on every occupied-skeleton pixel: the
-    values the threshold is the (doubled) mean of."""
+    values the threshold is the (doubled) mean of, as the method measured
+    them (``seg.intermediates.occupied_clearance``)."""
     from topomap import skeleton as S
-    from topomap._fast import edt
 
-    _, occ = _masks(seg.grid, seg.method)
-    d = edt(occ) * seg.grid.resolution
+    d = seg.intermediates.occupied_clearance * seg.grid.resolution
     px = S.graph_pixels(seg.occupied_graph)
     return d[px[:, 0], px[:, 1]]
 
@@ -203,10 +181,10 @@ def main(out: Path):
     # step 1: preprocessing, both methods
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.6))
     for ax, m in zip(axes, ("paper", "topomap")):
-        f, occ = _masks(grid, m)
+        im = segs[m].intermediates
         plot_map(grid, ax)
-        _show_mask(grid, f, ax, "limegreen")
-        _show_mask(grid, occ, ax, "magenta")
+        _show_mask(grid, im.free_mask, ax, "limegreen")
+        _show_mask(grid, im.occupied_mask, ax, "magenta")
         ax.set_title(f"{m}: free after erosion + median (green), occupied after band + dilation (magenta)",
                      fontsize=8)
     _save(fig, out, "step1_preprocess.png")
@@ -277,4 +255,5 @@ def main(out: Path):
 if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=HERE / "img", help="output directory (default docs/img)")
+    logging.basicConfig(level=logging.INFO, format="%(message)s")
     main(ap.parse_args().out)

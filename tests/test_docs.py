@@ -99,11 +99,24 @@ def test_mkdocs_build_strict(tmp_path):
     assert (tmp_path / "site" / "graph-attributes" / "index.html").is_file()
 
 
+def test_statuses_are_named_constants_only():
+    """No module compares or sets a candidate status with a string literal:
+    the statuses are the constants of :mod:`topomap.doors`."""
+    from topomap import doors
+
+    for path in sorted((ROOT / "topomap").glob("*.py")):
+        src = path.read_text(encoding="utf-8")
+        bad = re.findall(r"status\s*(?:==|!=|=)\s*\"[^\"]+\"", src)
+        assert not bad, f"{path.name}: {bad}"
+    assert len(set(doors.STATUSES)) == len(doors.STATUSES)
+
+
 def test_every_candidate_status_is_explained():
     """Each ``status`` string the code gives a candidate is on how-it-works.md."""
+    from topomap import doors
+
     page = (ROOT / "docs" / "how-it-works.md").read_text(encoding="utf-8")
-    src = "".join((ROOT / "topomap" / f).read_text(encoding="utf-8") for f in ("segmentation.py", "doors.py"))
-    statuses = set(re.findall(r"\.status = \"([^\"]+)\"", src))
-    assert statuses
+    statuses = set(doors.STATUSES) - {doors.CANDIDATE}
+    assert len(statuses) == 12
     missing = [s for s in sorted(statuses) if f"`{s}`" not in page]
     assert not missing, f"how-it-works.md does not explain candidate status {missing}"

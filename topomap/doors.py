@@ -17,9 +17,49 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .geometry import disk, point_segment_distances
+
 __all__ = ["Candidate", "Door", "passage_candidates", "intersection_points",
            "wall_threshold", "select_doors", "segment_crosses", "passage_minima",
-           "nearest_wall_points", "protrusion", "protrusion_at"]
+           "nearest_wall_points", "protrusion", "protrusion_at", "occupied_skeleton_lines",
+           "find_bottlenecks", "judge_doors", "suppress_duplicates", "STATUSES"]
+
+# --------------------------------------------------------------------------
+# Candidate statuses: why a candidate was kept or refused (see the "How it
+# works" page, which explains every one of them).
+# --------------------------------------------------------------------------
+
+#: Not judged yet.
+CANDIDATE = "candidate"
+#: Accepted as a door.
+DOOR = "door"
+#: A wall was found on at most one side of the passage.
+NO_WALL_BOTH_SIDES = "no wall on both sides"
+#: Paper: the occupied-space skeleton has no endpoint at all.
+NO_ENDPOINTS = "no endpoints"
+#: Paper: no occupied-skeleton endpoint within the threshold of an IP.
+NO_PROTRUDING_WALL_NEAR = "no protruding wall near"
+#: Paper: the centres of IP1-IP2 and EP1-EP2 are more than half the threshold apart.
+CENTRES_APART = "centres apart"
+#: Paper: IP1-IP2 or EP1-EP2 crosses an occupied-space skeleton.
+CROSSES_WALL_SKELETON = "crosses a wall skeleton"
+#: topomap: the posts are closer than ``min_door_width`` or farther than ``max_door_width``.
+WIDTH_OUT_OF_RANGE = "width out of range"
+#: topomap: the posts do not face each other across the bottleneck.
+POSTS_NOT_FACING = "posts not facing"
+#: topomap: the protrusion evidence of ``rule`` is missing.
+NO_PROTRUDING_WALL = "no protruding wall"
+#: topomap: a one-sided candidate (corridor mouth), not judged yet.
+MOUTH = "mouth"
+#: topomap: a corridor mouth whose walls do not protrude on both sides.
+MOUTH_WITHOUT_PROTRUDING_WALLS = "mouth without protruding walls"
+#: topomap: a narrower accepted door lies across it.
+DUPLICATE = "duplicate"
+
+#: Every status a candidate can end with or pass through.
+STATUSES = (CANDIDATE, DOOR, NO_WALL_BOTH_SIDES, NO_ENDPOINTS, NO_PROTRUDING_WALL_NEAR, CENTRES_APART,
+            CROSSES_WALL_SKELETON, WIDTH_OUT_OF_RANGE, POSTS_NOT_FACING, NO_PROTRUDING_WALL, MOUTH,
+            MOUTH_WITHOUT_PROTRUDING_WALLS, DUPLICATE)
 
 
 @dataclass
@@ -38,6 +78,10 @@ class Candidate:
         Clearance at the passage, pixels.
     ip1, ip2 : (2,) ndarray or None
         Intersection points with the walls on either side (pixels).
+    status : str
+        Why the candidate was kept or refused: one of :data:`STATUSES`.
+    ep1, ep2 : (2,) ndarray or None
+        Paper method: the occupied-skeleton endpoints nearest ``ip1``, ``ip2``.
     """
 
     edge: tuple
@@ -46,7 +90,7 @@ class Candidate:
     radius: float
     ip1: np.ndarray | None = None
     ip2: np.ndarray | None = None
-    status: str = "candidate"
+    status: str = CANDIDATE
     ep1: np.ndarray | None = None
     ep2: np.ndarray | None = None
 
@@ -221,31 +265,31 @@ def select_doors(candidates, endpoints: np.ndarray, threshold: float, occ_lines)
     kept = []
     if endpoints.shape[0] == 0:
         for c in candidates:
-            c.status = "no endpoints"
+            c.status = NO_ENDPOINTS
         return kept
     from scipy.spatial import cKDTree
 
     tree = cKDTree(endpoints)
     for c in candidates:
         if c.ip1 is None or c.ip2 is None:
-            c.status = "no wall on both sides"
+            c.status = NO_WALL_BOTH_SIDES
             continue
         d1, i1 = tree.query(c.ip1)
         d2, i2 = tree.query(c.ip2)
         c.ep1, c.ep2 = endpoints[i1], endpoints[i2]
         if d1 > threshold or d2 > threshold:
-            c.status = "no protruding wall near"
+            c.status = NO_PROTRUDING_WALL_NEAR
             continue
         ipc = (c.ip1 + c.ip2) / 2
         epc = (c.ep1 + c.ep2) / 2
         if np.linalg.norm(ipc - epc) > threshold / 2:
-            c.status = "centres apart"
+            c.status = CENTRES_APART
             continue
         if occ_lines is not None and (segment_crosses(occ_lines, c.ip1, c.ip2)
                                       or segment_crosses(occ_lines, c.ep1, c.ep2)):
-            c.status = "crosses a wall skeleton"
+            c.status = CROSSES_WALL_SKELETON
             continue
-        c.status = "door"
+        c.status = DOOR
         kept.append(c)
     return kept
 
@@ -360,8 +404,7 @@ def protrusion_at(free: np.ndarray, points, radius_px: float, look_px: int) -> n
         for n, p in enumerate(points):
             out[n] = fr[min(max(int(round(float(p[0]))), 0), H - 1), min(max(int(round(float(p[1]))), 0), W - 1)]
         return out
-    y, x = np.ogrid[-r:r + 1, -r:r + 1]
-    k = (x * x + y * y <= r * r).astype(np.float32)
+    k = disk(r, np.float32)
     k /= k.sum()
     for n, p in enumerate(points):
         pr, pc = int(round(float(p[0]))), int(round(float(p[1])))
@@ -426,7 +469,7 @@ def _mouths(G, run, rad, arc, path, edge, reach_px, rise_px, beyond, tol_px: flo
             continue
         out.append(Candidate(edge=edge, centroid=path[i].astype(float), direction=_direction(path, i),
                              radius=float(r),
-                             status="mouth"))
+                             status=MOUTH))
     return out
 
 
@@ -441,8 +484,7 @@ def protrusion(obstacle_like_free: np.ndarray, radius_px: float) -> np.ndarray:
     import cv2
 
     r = max(int(round(radius_px)), 1)
-    y, x = np.ogrid[-r:r + 1, -r:r + 1]
-    k = (x * x + y * y <= r * r).astype(np.float32)
+    k = disk(r, np.float32)
     k /= k.sum()
     return cv2.filter2D(obstacle_like_free.astype(np.float32), -1, k, borderType=cv2.BORDER_CONSTANT)
 
@@ -493,10 +535,191 @@ def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, dept
         on_surface = surface[rr, cc]
         a = q[(~opp) & (d <= d[i] + depth_px) & on_surface]
         b = q[opp & (d <= d[j] + depth_px) & on_surface]
-        if depth_px > 0 and a.size and b.size and c.status != "mouth":
+        if depth_px > 0 and a.size and b.size and c.status != MOUTH:
             D = np.hypot(a[:, None, 0] - b[None, :, 0], a[:, None, 1] - b[None, :, 1])
             ia, ib = np.nonzero(D <= D.min() + 0.75)
             c.ip1, c.ip2 = a[ia].mean(axis=0), b[ib].mean(axis=0)
         else:
             c.ip1, c.ip2 = q[i], q[j]
     return candidates
+
+
+# --------------------------------------------------------------------------
+# The default method's door stages: bottlenecks, judging, duplicates
+# --------------------------------------------------------------------------
+
+def occupied_skeleton_lines(Go):
+    """The occupied-space skeleton's branches as one shapely MultiLineString
+    in ``(col, row)`` order (None when there is none), for
+    :func:`select_doors`."""
+    from shapely.geometry import MultiLineString
+
+    paths = [d["path"][:, ::-1].astype(float) for _, _, d in Go.edges(data=True) if d["path"].shape[0] >= 2]
+    return MultiLineString([p.tolist() for p in paths]) if paths else None
+
+
+def find_bottlenecks(Gf, obstacle: np.ndarray, opts, resolution: float, threshold_px: float) -> list:
+    """Stage "bottlenecks" of the default method: candidate doors with their posts.
+
+    Clearance minima along the free-space skeleton (and, with
+    ``opts.mouths``, corridor mouths; :func:`passage_minima`), then the
+    door posts of each at the nearest wall cells (:func:`nearest_wall_points`).
+
+    Parameters
+    ----------
+    Gf : networkx.MultiGraph
+        Free-space skeleton graph with ``radius`` along edges.
+    obstacle : (M, N) ndarray of bool
+        Cells a door post can be on (every non-free cell of the map doors
+        are searched in).
+    opts : TopomapOptions
+        With ``rise`` resolved.
+    resolution : float
+        m/px.
+    threshold_px : float
+        The map's wall-thickness threshold, pixels: posts are averaged over
+        cells up to this deep into the wall (at least 2 px).
+
+    Returns
+    -------
+    list of Candidate
+        Status :data:`CANDIDATE` or :data:`MOUTH`.
+    """
+    res = resolution
+    cands = passage_minima(Gf, window_px=opts.window / res, rise_px=opts.rise / res, reach_px=opts.reach / res,
+                           mouths=opts.mouths, min_run_px=opts.corridor_length / res,
+                           max_radius_px=opts.max_door_width / np.sqrt(2) / res)
+    nearest_wall_points(cands, obstacle, max_px=opts.max_door_width / res, depth_px=max(threshold_px, 2.0))
+    return cands
+
+
+def _posts_plausible(cands, opts, resolution: float) -> list:
+    """``(width m, candidate)`` of the candidates with posts on both sides, a
+    width in range and posts facing each other; the others get their status."""
+    judged = []
+    for c in cands:
+        if c.ip1 is None or c.ip2 is None:
+            c.status = NO_WALL_BOTH_SIDES
+            continue
+        width = np.linalg.norm(c.ip1 - c.ip2) * resolution
+        if not (opts.min_door_width <= width <= opts.max_door_width):
+            c.status = WIDTH_OUT_OF_RANGE
+            continue
+        if width < opts.facing * 2 * c.radius * resolution:
+            # the posts do not face each other across the bottleneck: it
+            # lies beside a corner, not in a doorway
+            c.status = POSTS_NOT_FACING
+            continue
+        judged.append((width, c))
+    return judged
+
+
+def _rule_accepts(rule: str, e_ok: bool, f1: float, f2: float, protrusion_min: float, flat_min: float) -> bool:
+    """Whether the protrusion evidence satisfies ``rule`` (see
+    :class:`topomap.options.TopomapOptions`): ``e_ok`` the paper's endpoint
+    test at both posts, ``f1``, ``f2`` the free fractions at the posts."""
+    p1, p2 = f1 >= protrusion_min, f2 >= protrusion_min
+    f_ok = p1 and p2
+    if rule == "either":
+        return e_ok or f_ok
+    if rule == "ep":
+        return e_ok
+    if rule == "frac":
+        return f_ok
+    if rule == "one":
+        return p1 or p2
+    # "oneflat"
+    return e_ok or f_ok or (max(f1, f2) >= protrusion_min and min(f1, f2) >= flat_min)
+
+
+def judge_doors(cands, free: np.ndarray, endpoints: np.ndarray, threshold_px: float, opts,
+                resolution: float) -> list:
+    """Stage "door judging" of the default method: which bottlenecks are doors.
+
+    A candidate needs posts on both sides, a width between
+    ``opts.min_door_width`` and ``opts.max_door_width``, posts facing each
+    other (``opts.facing``) and walls that protrude at the posts as
+    ``opts.rule`` asks: the paper's endpoint evidence (an occupied-skeleton
+    endpoint within the threshold of each post) and/or the convexity of the
+    wall (:func:`protrusion_at`, the most protruding obstacle cell within
+    half the wall thickness of each post). Corridor mouths need convexity
+    at both posts. Every candidate gets its status.
+
+    Parameters
+    ----------
+    cands : list of Candidate
+        From :func:`find_bottlenecks`.
+    free : (M, N) ndarray of bool
+        Free cells of the map doors are searched in.
+    endpoints : (K, 2) ndarray
+        Occupied-skeleton endpoints, pixels.
+    threshold_px : float
+        The map's wall-thickness threshold, pixels.
+    opts : TopomapOptions
+    resolution : float
+        m/px.
+
+    Returns
+    -------
+    list of (float, Candidate)
+        The accepted candidates (status :data:`DOOR`) with their width in
+        metres, in candidate order.
+    """
+    from scipy.spatial import cKDTree
+
+    tree = cKDTree(endpoints) if endpoints.shape[0] else None
+    judged = _posts_plausible(cands, opts, resolution)
+    posts = [p for _, c in judged for p in (c.ip1, c.ip2)]
+    look = max(int(round(threshold_px / 2)), 1)
+    pvals = protrusion_at(free, posts, max(threshold_px, 0.25 / resolution), look)
+    accepted = []
+    for n, (width, c) in enumerate(judged):
+        f1, f2 = pvals[2 * n], pvals[2 * n + 1]
+        if c.status == MOUTH:
+            # a corridor opening into a room: walls must end on both sides
+            ok = f1 >= opts.protrusion_min and f2 >= opts.protrusion_min
+            c.status = DOOR if ok else MOUTH_WITHOUT_PROTRUDING_WALLS
+        else:
+            e_ok = False
+            if tree is not None:
+                d1, _ = tree.query(c.ip1)
+                d2, _ = tree.query(c.ip2)
+                e_ok = d1 <= threshold_px and d2 <= threshold_px
+            ok = _rule_accepts(opts.rule, e_ok, f1, f2, opts.protrusion_min, opts.flat_min)
+            c.status = DOOR if ok else NO_PROTRUDING_WALL
+        if ok:
+            accepted.append((width, c))
+    return accepted
+
+
+def suppress_duplicates(accepted, resolution: float) -> list:
+    """Stage "duplicate suppression": keep the narrowest of doors lying across each other.
+
+    Doors are taken from the narrowest up; one whose midpoint lies within
+    half its width of a door kept before is a :data:`DUPLICATE`.
+
+    Parameters
+    ----------
+    accepted : list of (float, Candidate)
+        From :func:`judge_doors` (width in metres).
+    resolution : float
+        m/px.
+
+    Returns
+    -------
+    list of ((r1, c1), (r2, c2))
+        The door segments kept, pixels, narrowest first.
+    """
+    accepted = sorted(accepted, key=lambda t: t[0])
+    segs = []
+    A = np.zeros((len(accepted), 2))
+    B = np.zeros((len(accepted), 2))
+    for width, c in accepted:
+        mid = (c.ip1 + c.ip2) / 2
+        k = len(segs)
+        if k and (point_segment_distances(mid, A[:k], B[:k]) < 0.5 * width / resolution).any():
+            c.status = DUPLICATE
+            continue
+        A[k], B[k] = c.ip1, c.ip2
+        segs.append((c.ip1, c.ip2))
+    return segs

@@ -19,6 +19,9 @@ __all__ = [
     "ParameterError",
     "GraphFormatError",
     "BenchmarkNotFoundError",
+    "PlanningError",
+    "NotInRoomError",
+    "NoPathError",
 ]
 
 
@@ -52,3 +55,15 @@ class MapFileNotFoundError(MapFileError, FileNotFoundError):
 
 class BenchmarkNotFoundError(MapFileError, FileNotFoundError):
     """No benchmark maps in a directory (or the directory does not exist)."""
+
+
+class PlanningError(TopomapError, ValueError):
+    """A query or plan cannot be answered (base of the planning errors)."""
+
+
+class NotInRoomError(PlanningError):
+    """A start or goal point is not in the free space of any room, or a room ID does not exist."""
+
+
+class NoPathError(PlanningError):
+    """No route joins the start and the goal (walls, or every door too narrow)."""

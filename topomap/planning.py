@@ -46,22 +46,11 @@ import numbers
 import numpy as np
 import networkx as nx
 
-from .errors import TopomapError
+from .errors import NoPathError, NotInRoomError, PlanningError  # noqa: F401  (re-exported)
+from .geometry import line_pixels
 
 __all__ = ["PlanningError", "NotInRoomError", "NoPathError", "room_at", "neighbors", "doors_between",
            "room_distances", "travel_graph", "door_graph", "plan_path"]
-
-
-class PlanningError(TopomapError, ValueError):
-    """A query or plan cannot be answered (base of the planning errors)."""
-
-
-class NotInRoomError(PlanningError):
-    """A start or goal point is not in the free space of any room, or a room ID does not exist."""
-
-
-class NoPathError(PlanningError):
-    """No route joins the start and the goal (walls, or every door too narrow)."""
 
 
 # --------------------------------------------------------------------------
@@ -176,13 +165,8 @@ class _Ctx:
         return sorted(k for k, v in self.doors.items() if r in (v[0], v[1]))
 
     def door_cells(self, did):
-        from skimage.draw import line
-
         _, _, p1, p2, _, _ = self.doors[did]
-        H, W = self.shape
-        a = np.clip(np.rint(p1), 0, [H - 1, W - 1]).astype(int)
-        b = np.clip(np.rint(p2), 0, [H - 1, W - 1]).astype(int)
-        return line(a[0], a[1], b[0], b[1])
+        return line_pixels(p1, p2, self.shape)
 
 
 def _pixel(ctx, x, y):

@@ -7,10 +7,17 @@ up in exactly one room (label ``1..N``) and only free cells are labelled
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 from scipy import ndimage as ndi
 
-__all__ = ["fill_unlabeled", "relabel_sequential", "EIGHT", "FOUR"]
+from .geometry import line_pixels
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .io import OccupancyGrid
+
+__all__ = ["fill_unlabeled", "relabel_sequential", "cut_rooms", "doors_between_rooms", "EIGHT", "FOUR"]
 
 EIGHT = np.ones((3, 3), bool)
 FOUR = ndi.generate_binary_structure(2, 1)
@@ -124,3 +131,75 @@ def _grow(seeds: np.ndarray, todo: np.ndarray, max_steps: int = 8) -> np.ndarray
         if not todo.any():
             break
     return out.astype(np.int32)
+
+
+def cut_rooms(grid: OccupancyGrid, segments):
+    """Cut free space along door segments and label the pieces.
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+    segments : list of ((r1, c1), (r2, c2))
+        Door segments in pixels.
+
+    Returns
+    -------
+    labels : (M, N) ndarray of int32
+        4-connected pieces of free space between the cuts, each a room
+        (``1..N``, deterministic order); the cut cells themselves and any free
+        cell the pieces miss are given to the nearest room.
+    doors : list of Door
+        See :func:`doors_between_rooms`.
+    """
+    from ._fast import label as cc_label
+
+    free = grid.free
+    cut = np.zeros_like(free)  # stage "cutting rooms" of the Voronoi methods
+    for p, q in segments:
+        cut[line_pixels(p, q, free.shape)] = True
+    pieces, n = cc_label(free & ~cut, 4)
+    if n > 1:
+        # number pieces by area (largest = highest id): cut cells then go to
+        # the larger neighbour, whatever the map's orientation
+        area = np.bincount(pieces.ravel(), minlength=n + 1)
+        area[0] = -1
+        rank = np.empty(n + 1, np.int32)
+        rank[np.argsort(area, kind="stable")] = np.arange(n + 1, dtype=np.int32)
+        pieces = rank[pieces]
+    labels = fill_unlabeled(pieces, free)
+    return labels, doors_between_rooms(grid, labels, segments)
+
+
+_NR = np.array([-1, -1, -1, 0, 0, 1, 1, 1])
+_NC = np.array([-1, 0, 1, -1, 1, -1, 0, 1])
+
+
+def doors_between_rooms(grid: OccupancyGrid, labels: np.ndarray, segments) -> list:
+    """The segments that separate two different rooms, as :class:`Door` objects.
+
+    A segment's rooms are the two labels most frequent among the 8-neighbours
+    of its pixels; a segment with fewer than two labels around it separates
+    nothing and is dropped, and so is a repeat of a kept segment.
+    """
+    from .doors import Door
+
+    H, W = labels.shape
+    doors, seen = [], set()
+    for p, q in segments:
+        rr, cc = line_pixels(p, q, labels.shape)
+        labs = labels[np.clip(rr[:, None] + _NR, 0, H - 1), np.clip(cc[:, None] + _NC, 0, W - 1)].ravel()
+        vals, counts = np.unique(labs[labs > 0], return_counts=True)
+        if vals.size < 2:
+            continue
+        a, b = sorted(int(v) for v in vals[np.argsort(-counts, kind="stable")[:2]])
+        p = tuple(float(v) for v in p)
+        q = tuple(float(v) for v in q)
+        key = (a, b) + tuple(int(round(v)) for v in p + q)
+        if key in seen:
+            continue
+        seen.add(key)
+        x1, y1 = grid.pixel_to_world(*p)
+        x2, y2 = grid.pixel_to_world(*q)
+        doors.append(Door(id=len(doors), p1=p, p2=q, xy1=(float(x1), float(y1)), xy2=(float(x2), float(y2)),
+                          width=float(np.hypot(p[0] - q[0], p[1] - q[1]) * grid.resolution), rooms=(a, b)))
+    return doors

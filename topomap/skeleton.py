@@ -25,8 +25,8 @@ from scipy import sparse
 from scipy.sparse import csgraph
 
 
-__all__ = ["skeletonize", "skeleton_graph", "prune_spurs", "graph_endpoints", "graph_pixels",
-           "downsample"]
+__all__ = ["skeletonize", "skeleton_graph", "skeleton_topology", "graph_from_topology",
+           "SkeletonTopology", "prune_spurs", "graph_endpoints", "graph_pixels", "downsample"]
 
 _OFFSETS = np.array([(-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1)])
 
@@ -62,53 +62,31 @@ def neighbour_count(mask: np.ndarray) -> np.ndarray:
     return cv2.filter2D(np.asarray(mask, np.uint8), cv2.CV_16S, k, borderType=cv2.BORDER_CONSTANT)
 
 
-def skeleton_graph(skel: np.ndarray, *, radius: np.ndarray | None = None,
-                   resolution: float = 1.0, to_world=None, scale: int = 1) -> nx.MultiGraph:
-    """Convert a skeleton image to a graph of junctions, endpoints and branches.
+class _PixelGraph:
+    """The 8-neighbour adjacency of the pixels of a skeleton, as index arrays.
 
-    Parameters
-    ----------
-    skel : (M, N) ndarray of bool
-        One-pixel-wide skeleton (8-connected).
-    radius : (M, N) ndarray of float, optional
-        Clearance in *pixels* (a distance transform); stored on nodes and
-        along edges in metres.
-    resolution : float
-        Metres per pixel, for ``length`` and ``radius``.
-    to_world : callable, optional
-        ``(rows, cols) -> (x, y)`` in metres; adds ``x``, ``y`` to nodes.
-    scale : int
-        ``skel`` was taken on a grid ``scale`` times coarser than ``radius``
-        (see :func:`downsample`): paths and node pixels are given on the fine
-        grid (the centre cell of each coarse block), ``radius`` is sampled
-        there and ``resolution`` is the fine grid's. The topology comes from
-        the coarse skeleton, clearances and lengths from the fine grid.
-
-    Returns
-    -------
-    networkx.MultiGraph
-        See the module docstring for the attributes. Graph attribute
-        ``resolution`` (m/px).
+    ``pr``, ``pc``: pixel rows / columns (row-major order); ``nb`` (npx, 8):
+    index of each neighbour or -1; ``has``: ``nb >= 0``; ``deg``: neighbour
+    count; ``src``, ``dst``: every (pixel, neighbour) pair.
     """
-    skel = np.asarray(skel, bool)
-    H, W = skel.shape
-    G = nx.MultiGraph(resolution=float(resolution))
-    pr, pc = np.nonzero(skel)  # row-major order
-    npx = pr.size
-    if npx == 0:
-        return G
-    # sparse pixel adjacency: one full-size index image, everything else O(pixels)
-    pid = np.full((H + 2, W + 2), -1, np.int32)
-    pid[pr + 1, pc + 1] = np.arange(npx, dtype=np.int32)
-    nb = np.stack([pid[pr + 1 + dr, pc + 1 + dc] for dr, dc in _OFFSETS], 1)  # (npx, 8)
-    has = nb >= 0
-    deg = has.sum(1)
-    src = np.repeat(np.arange(npx), 8)[has.ravel()]
-    dst = nb.ravel()[has.ravel()]
 
-    def components(mask_px):
-        """Connected components of the pixels in ``mask_px`` (labels 1.., 0 = outside),
-        numbered in row-major order of their first pixel."""
+    def __init__(self, skel: np.ndarray):
+        H, W = skel.shape
+        self.pr, self.pc = np.nonzero(skel)
+        self.npx = npx = self.pr.size
+        # sparse pixel adjacency: one full-size index image, everything else O(pixels)
+        pid = np.full((H + 2, W + 2), -1, np.int32)
+        pid[self.pr + 1, self.pc + 1] = np.arange(npx, dtype=np.int32)
+        self.nb = np.stack([pid[self.pr + 1 + dr, self.pc + 1 + dc] for dr, dc in _OFFSETS], 1)
+        self.has = self.nb >= 0
+        self.deg = self.has.sum(1)
+        self.src = np.repeat(np.arange(npx), 8)[self.has.ravel()]
+        self.dst = self.nb.ravel()[self.has.ravel()]
+
+    def components(self, mask_px: np.ndarray) -> np.ndarray:
+        """Connected components of the pixels in ``mask_px`` (labels 1.., 0 =
+        outside), numbered in row-major order of their first pixel."""
+        npx, src, dst = self.npx, self.src, self.dst
         m = mask_px[src] & mask_px[dst]
         A = sparse.csr_matrix((np.ones(int(m.sum()), np.int8), (src[m], dst[m])), shape=(npx, npx))
         _, comp = csgraph.connected_components(A, directed=False)
@@ -121,18 +99,24 @@ def skeleton_graph(skel: np.ndarray, *, radius: np.ndarray | None = None,
             lab[idx] = rank[inv]
         return lab
 
-    # nodes: clusters of junction pixels (3+ neighbours), single end/isolated pixels
-    is_junc = deg >= 3
-    node_of = components(is_junc)
+
+def _find_nodes(px: _PixelGraph):
+    """Node label per pixel (0 = branch pixel), the node count, the branch
+    pixels and their components.
+
+    Nodes are clusters of junction pixels (3+ neighbours) and single end or
+    isolated pixels; a loop without any node gets its first pixel as node.
+    """
+    is_junc = px.deg >= 3
+    node_of = px.components(is_junc)
     nj = int(node_of.max())
-    single = np.flatnonzero(deg <= 1)
+    single = np.flatnonzero(px.deg <= 1)
     node_of[single] = nj + 1 + np.arange(single.size)
     n_nodes = nj + single.size
     is_br = node_of == 0
-    blab = components(is_br)
-    # loops without any node: the first pixel of each becomes a node
+    blab = px.components(is_br)
     if blab.max():
-        touches = ((node_of[np.where(has, nb, 0)] > 0) & has).any(1)
+        touches = ((node_of[np.where(px.has, px.nb, 0)] > 0) & px.has).any(1)
         has_node = np.zeros(int(blab.max()) + 1, bool)
         has_node[blab[is_br & touches]] = True
         loops = np.flatnonzero(~has_node[1:]) + 1
@@ -141,12 +125,16 @@ def skeleton_graph(skel: np.ndarray, *, radius: np.ndarray | None = None,
             node_of[firsts] = n_nodes + 1 + np.arange(firsts.size)
             n_nodes += firsts.size
             is_br = node_of == 0
-            blab = components(is_br)
+            blab = px.components(is_br)
+    return node_of, n_nodes, is_br, blab
 
-    # node attributes
+
+def _node_positions(px: _PixelGraph, node_of: np.ndarray, n_nodes: int):
+    """Per node (1-based rows): the mean pixel ``mr``, ``mc`` of its cluster
+    and its representative pixel ``rep`` (the cluster pixel nearest the mean)."""
     nidx = np.flatnonzero(node_of)
     nl = node_of[nidx]
-    nr, nc = pr[nidx], pc[nidx]
+    nr, nc = px.pr[nidx], px.pc[nidx]
     cnt = np.bincount(nl, minlength=n_nodes + 1).astype(float)
     cnt[cnt == 0] = 1
     mr = np.bincount(nl, weights=nr, minlength=n_nodes + 1) / cnt
@@ -156,100 +144,158 @@ def skeleton_graph(skel: np.ndarray, *, radius: np.ndarray | None = None,
     first_idx = order[np.r_[True, nl[order][1:] != nl[order][:-1]]]
     rep = np.zeros((n_nodes + 1, 2), int)
     rep[nl[first_idx]] = np.stack([nr[first_idx], nc[first_idx]], 1)
+    return rep, mr, mc
 
-    edges = []  # (u, v, path array)
-    if blab.max():
-        bidx = np.flatnonzero(is_br)
-        nbr = bidx.size
-        local = np.full(npx, -1, np.int64)
-        local[bidx] = np.arange(nbr)
-        br_r, br_c, br_l = pr[bidx], pc[bidx], blab[bidx]
-        m = is_br[src] & is_br[dst]
-        s_l, d_l = local[src[m]], local[dst[m]]
-        w = np.hypot(br_r[s_l] - br_r[d_l], br_c[s_l] - br_c[d_l])
-        A = sparse.csr_matrix((w, (s_l, d_l)), shape=(nbr, nbr))
-        # (branch pixel, node) pairs of touching pixels
-        m2 = is_br[src] & (node_of[dst] > 0)
-        en = np.unique(np.stack([local[src[m2]], node_of[dst[m2]]], 1), axis=0)
-        bdeg = np.bincount(s_l, minlength=nbr)
-        ends = np.flatnonzero(bdeg <= 1)
-        ends = ends[np.argsort(br_l[ends], kind="stable")]
-        e_l = br_l[ends]
-        starts = ends[np.r_[True, e_l[1:] != e_l[:-1]]] if ends.size else ends
-        dist = csgraph.dijkstra(A, directed=False, indices=starts, min_only=True)
-        porder = np.lexsort((dist, br_l))
-        bounds = np.flatnonzero(np.r_[True, br_l[porder][1:] != br_l[porder][:-1], True])
-        touch_px = {}
-        for p, nlab in en.tolist():
-            touch_px.setdefault(p, []).append(nlab)
-        extra = []
 
-        def new_node(r, c):
-            extra.append((int(r), int(c)))
-            return n_nodes + len(extra)
+class _Nodes:
+    """Node table while branches are traced: nodes ``1..n`` found so far plus
+    the endpoints added for branch ends that touch no node."""
 
-        def rep_of(n):
-            return rep[n] if n <= n_nodes else np.array(extra[n - n_nodes - 1])
+    def __init__(self, rep, mr, mc, n_nodes):
+        self.rep, self.mr, self.mc, self.n = rep, mr, mc, n_nodes
+        self.extra = []
 
-        for k in range(bounds.size - 1):
-            seg = porder[bounds[k]:bounds[k + 1]]
-            a_nodes = touch_px.get(int(seg[0]), [])
-            b_nodes = touch_px.get(int(seg[-1]), [])
-            path = np.stack([br_r[seg], br_c[seg]], 1)
-            if seg.size == 1 and len(set(a_nodes)) >= 2:
-                u, v = sorted(set(a_nodes))[:2]
-                path = np.vstack([rep_of(u)[None], path, rep_of(v)[None]])
-            else:
-                # a branch end that touches no node is an endpoint of its own
-                if a_nodes:
-                    u = a_nodes[0]
-                    head = [rep_of(u)[None]]
-                else:
-                    u = new_node(*path[0])
-                    head = []
-                if b_nodes and seg.size > 1:
-                    v = b_nodes[0]
-                    if v == u and len(b_nodes) > 1:
-                        v = b_nodes[1]
-                    tail = [rep_of(v)[None]]
-                elif seg.size > 1:
-                    v = new_node(*path[-1])
-                    tail = []
-                elif a_nodes:
-                    v = new_node(*path[-1])
-                    tail = []
-                else:
-                    v = u
-                    tail = []
-                path = np.vstack(head + [path] + tail)
-            edges.append((u, v, path))
-        if extra:
-            ex = np.array(extra, int)
-            rep = np.vstack([rep, ex])
-            mr = np.concatenate([mr, ex[:, 0].astype(float)])
-            mc = np.concatenate([mc, ex[:, 1].astype(float)])
-            n_nodes += len(extra)
-    # direct node-node adjacency (no branch pixel between them)
+    def new(self, r, c) -> int:
+        self.extra.append((int(r), int(c)))
+        return self.n + len(self.extra)
+
+    def pixel(self, n) -> np.ndarray:
+        return self.rep[n] if n <= self.n else np.array(self.extra[n - self.n - 1])
+
+    def commit(self):
+        """Append the added endpoints to ``rep``, ``mr``, ``mc``."""
+        if self.extra:
+            ex = np.array(self.extra, int)
+            self.rep = np.vstack([self.rep, ex])
+            self.mr = np.concatenate([self.mr, ex[:, 0].astype(float)])
+            self.mc = np.concatenate([self.mc, ex[:, 1].astype(float)])
+            self.n += len(self.extra)
+            self.extra = []
+
+
+def _ordered_branches(px: _PixelGraph, node_of, is_br, blab):
+    """The pixels of every branch in order along it, and the nodes each
+    branch pixel touches: ``(branch rows, cols, [pixel indices per branch],
+    {local pixel: [node, ...]})``."""
+    bidx = np.flatnonzero(is_br)
+    nbr = bidx.size
+    local = np.full(px.npx, -1, np.int64)
+    local[bidx] = np.arange(nbr)
+    br_r, br_c, br_l = px.pr[bidx], px.pc[bidx], blab[bidx]
+    src, dst = px.src, px.dst
+    m = is_br[src] & is_br[dst]
+    s_l, d_l = local[src[m]], local[dst[m]]
+    w = np.hypot(br_r[s_l] - br_r[d_l], br_c[s_l] - br_c[d_l])
+    A = sparse.csr_matrix((w, (s_l, d_l)), shape=(nbr, nbr))
+    # (branch pixel, node) pairs of touching pixels
+    m2 = is_br[src] & (node_of[dst] > 0)
+    en = np.unique(np.stack([local[src[m2]], node_of[dst[m2]]], 1), axis=0)
+    # order along each branch: one multi-source Dijkstra from one end per branch
+    bdeg = np.bincount(s_l, minlength=nbr)
+    ends = np.flatnonzero(bdeg <= 1)
+    ends = ends[np.argsort(br_l[ends], kind="stable")]
+    e_l = br_l[ends]
+    starts = ends[np.r_[True, e_l[1:] != e_l[:-1]]] if ends.size else ends
+    dist = csgraph.dijkstra(A, directed=False, indices=starts, min_only=True)
+    porder = np.lexsort((dist, br_l))
+    bounds = np.flatnonzero(np.r_[True, br_l[porder][1:] != br_l[porder][:-1], True])
+    touch_px = {}
+    for p, nlab in en.tolist():
+        touch_px.setdefault(p, []).append(nlab)
+    segs = [porder[bounds[k]:bounds[k + 1]] for k in range(bounds.size - 1)]
+    return br_r, br_c, segs, touch_px
+
+
+def _branch_edge(seg, path, a_nodes, b_nodes, nodes: _Nodes):
+    """``(u, v, path)`` of one ordered branch: its end nodes (a new endpoint
+    where an end touches no node) and its path with the node pixels added."""
+    if seg.size == 1 and len(set(a_nodes)) >= 2:
+        u, v = sorted(set(a_nodes))[:2]
+        return u, v, np.vstack([nodes.pixel(u)[None], path, nodes.pixel(v)[None]])
+    # a branch end that touches no node is an endpoint of its own
+    if a_nodes:
+        u = a_nodes[0]
+        head = [nodes.pixel(u)[None]]
+    else:
+        u = nodes.new(*path[0])
+        head = []
+    tail = []
+    if b_nodes and seg.size > 1:
+        v = b_nodes[0]
+        if v == u and len(b_nodes) > 1:
+            v = b_nodes[1]
+        tail = [nodes.pixel(v)[None]]
+    elif seg.size > 1 or a_nodes:
+        v = nodes.new(*path[-1])
+    else:
+        v = u
+    return u, v, np.vstack(head + [path] + tail)
+
+
+def _direct_edges(px: _PixelGraph, node_of, rep) -> list:
+    """Edges between adjacent nodes with no branch pixel between them."""
+    src, dst = px.src, px.dst
     m3 = (node_of[src] > 0) & (node_of[dst] > 0) & (node_of[src] < node_of[dst])
-    for u, v in sorted(set(zip(node_of[src[m3]].tolist(), node_of[dst[m3]].tolist()))):
-        edges.append((u, v, np.vstack([rep[u], rep[v]])))
+    return [(u, v, np.vstack([rep[u], rep[v]]))
+            for u, v in sorted(set(zip(node_of[src[m3]].tolist(), node_of[dst[m3]].tolist())))]
 
-    # dedupe the direct edges listed twice
-    seen_direct = set()
+
+class SkeletonTopology:
+    """Nodes and branches of a skeleton in pixels, before attributes are added.
+
+    Attributes
+    ----------
+    rep : (n + 1, 2) ndarray of int
+        Representative pixel of node ``1..n`` (row 0 unused).
+    mr, mc : (n + 1,) ndarray of float
+        Mean pixel row / column of each node's cluster.
+    n_nodes : int
+    edges : list of (u, v, path)
+        Branches between nodes ``u`` and ``v`` (1-based), ``path`` a (K, 2)
+        int array of pixels from ``u`` to ``v``.
+    """
+
+    def __init__(self, rep, mr, mc, n_nodes, edges):
+        self.rep, self.mr, self.mc, self.n_nodes, self.edges = rep, mr, mc, n_nodes, edges
+
+
+def skeleton_topology(skel: np.ndarray) -> SkeletonTopology:
+    """Junctions, endpoints and branches of a one-pixel-wide 8-connected
+    skeleton (see :func:`skeleton_graph`), in pixels."""
+    skel = np.asarray(skel, bool)
+    px = _PixelGraph(skel)
+    if px.npx == 0:
+        return SkeletonTopology(np.zeros((1, 2), int), np.zeros(1), np.zeros(1), 0, [])
+    node_of, n_nodes, is_br, blab = _find_nodes(px)
+    rep, mr, mc = _node_positions(px, node_of, n_nodes)
+    nodes = _Nodes(rep, mr, mc, n_nodes)
+    edges = []
+    if blab.max():
+        br_r, br_c, segs, touch_px = _ordered_branches(px, node_of, is_br, blab)
+        for seg in segs:
+            path = np.stack([br_r[seg], br_c[seg]], 1)
+            edges.append(_branch_edge(seg, path, touch_px.get(int(seg[0]), []),
+                                      touch_px.get(int(seg[-1]), []), nodes))
+        nodes.commit()
+    edges += _direct_edges(px, node_of, nodes.rep)
+    return SkeletonTopology(nodes.rep, nodes.mr, nodes.mc, nodes.n, edges)
+
+
+def graph_from_topology(topo: SkeletonTopology, *, radius: np.ndarray | None = None,
+                        resolution: float = 1.0, to_world=None) -> nx.MultiGraph:
+    """The :class:`networkx.MultiGraph` of a :class:`SkeletonTopology`, with
+    the attributes the module docstring lists (``radius`` sampled from the
+    clearance image ``radius``, in pixels, at every node and path pixel)."""
+    G = nx.MultiGraph(resolution=float(resolution))
+    if topo.n_nodes == 0:
+        return G
     res = float(resolution)
-    if scale > 1:
-        # coordinates on the fine grid: the centre cell of each coarse block
-        fh, fw = radius.shape
-        off = (scale - 1) // 2
-        lim = np.array([fh - 1, fw - 1])
-        rep = np.minimum(rep * scale + off, lim)
-        mr, mc = mr * scale + off, mc * scale + off
-        edges = [(u, v, np.minimum(p * scale + off, lim)) for u, v, p in edges]
+    rep, mr, mc = topo.rep, topo.mr, topo.mc
     # world coordinates of all nodes at once
     if to_world is not None:
         wx, wy = to_world(mr, mc)
         wx, wy = np.broadcast_to(wx, mr.shape), np.broadcast_to(wy, mr.shape)
-    for u in range(1, n_nodes + 1):
+    for u in range(1, topo.n_nodes + 1):
         r, c = rep[u]
         attrs = dict(row=float(mr[u]), col=float(mc[u]), pixel=(int(r), int(c)))
         if radius is not None:
@@ -257,7 +303,8 @@ def skeleton_graph(skel: np.ndarray, *, radius: np.ndarray | None = None,
         if to_world is not None:
             attrs["x"], attrs["y"] = float(wx[u]), float(wy[u])
         G.add_node(u - 1, **attrs)
-    for u, v, path in edges:
+    seen_direct = set()  # the direct edges are listed twice
+    for u, v, path in topo.edges:
         if path.shape[0] == 2:
             key = (min(u, v), max(u, v))
             if key in seen_direct:
@@ -275,6 +322,38 @@ def skeleton_graph(skel: np.ndarray, *, radius: np.ndarray | None = None,
         G.add_edge(u - 1, v - 1, **attrs)
     _set_kinds(G)
     return G
+
+
+def skeleton_graph(skel: np.ndarray, *, radius: np.ndarray | None = None,
+                   resolution: float = 1.0, to_world=None) -> nx.MultiGraph:
+    """Convert a skeleton image to a graph of junctions, endpoints and branches.
+
+    Parameters
+    ----------
+    skel : (M, N) ndarray of bool
+        One-pixel-wide skeleton (8-connected).
+    radius : (M, N) ndarray of float, optional
+        Clearance in *pixels* (a distance transform); stored on nodes and
+        along edges in metres.
+    resolution : float
+        Metres per pixel, for ``length`` and ``radius``.
+    to_world : callable, optional
+        ``(rows, cols) -> (x, y)`` in metres; adds ``x``, ``y`` to nodes.
+
+    Returns
+    -------
+    networkx.MultiGraph
+        See the module docstring for the attributes. Graph attribute
+        ``resolution`` (m/px).
+
+    See Also
+    --------
+    skeleton_topology, graph_from_topology : the two steps, for callers that
+        move the pixels in between (the default method's coarse skeleton,
+        :func:`topomap.segmentation.coarse_skeleton_graph`).
+    """
+    return graph_from_topology(skeleton_topology(skel), radius=radius, resolution=resolution,
+                               to_world=to_world)
 
 
 def _set_kinds(G):

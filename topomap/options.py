@@ -1,0 +1,292 @@
+"""The options of each segmentation method, validated in one place.
+
+Each Voronoi method has a frozen dataclass of its options:
+:class:`TopomapOptions` (the default method,
+:func:`topomap.segmentation.segment_topomap`) and :class:`PaperOptions`
+(:func:`topomap.segmentation.segment_paper`). Lengths are in metres. Every
+field is checked when the object is made: a wrong type, a negative or
+non-finite length, a fraction outside ``[0, 1]``, an unknown ``rule`` or a
+non-bool flag raises :class:`~topomap.errors.ParameterError` naming the
+option and echoing the value; so does an unknown keyword
+(:func:`options_from_kwargs`).
+
+``segment(grid, window=0.4)`` builds the options from the keywords;
+``segment(grid, options=TopomapOptions(window=0.4))`` passes them whole.
+``seg.params`` is ``dataclasses.asdict`` of the options that ran (with
+defaults that depend on the map, such as ``rise``, filled in).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import numbers
+from dataclasses import dataclass, field
+from typing import Optional
+
+import numpy as np
+
+from .errors import ParameterError
+
+__all__ = ["TopomapOptions", "PaperOptions", "RULES", "options_from_kwargs", "check_length",
+           "check_keywords"]
+
+#: Values of :attr:`TopomapOptions.rule`.
+RULES = ("oneflat", "either", "ep", "frac", "one")
+
+
+def check_length(name: str, value, *, optional: bool = False) -> Optional[float]:
+    """``value`` as a float length in metres (finite, >= 0), else ParameterError.
+
+    ``optional=True`` also lets ``None`` through (returned as None).
+    """
+    if value is None and optional:
+        return None
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise ParameterError(f"{name} must be a length in metres, got {value!r}")
+    m = float(value)
+    if not np.isfinite(m) or m < 0:
+        raise ParameterError(f"{name} must be a length >= 0 m, got {value!r}")
+    return m
+
+
+def _check_fraction(name: str, value) -> float:
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise ParameterError(f"{name} must be a number in [0, 1], got {value!r}")
+    v = float(value)
+    if not (0.0 <= v <= 1.0):
+        raise ParameterError(f"{name} must be a number in [0, 1], got {value!r}")
+    return v
+
+
+def _check_ratio(name: str, value) -> float:
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise ParameterError(f"{name} must be a number >= 0, got {value!r}")
+    v = float(value)
+    if not np.isfinite(v) or v < 0:
+        raise ParameterError(f"{name} must be a finite number >= 0, got {value!r}")
+    return v
+
+
+def _check_bool(name: str, value) -> bool:
+    if not isinstance(value, (bool, np.bool_)):
+        raise ParameterError(f"{name} must be True or False, got {value!r}")
+    return bool(value)
+
+
+def _check_rule(name: str, value) -> str:
+    if not isinstance(value, str) or value not in RULES:
+        raise ParameterError(f"{name} must be one of {', '.join(RULES)}; got {value!r}")
+    return value
+
+
+_CHECKS = {"length": check_length, "fraction": _check_fraction, "ratio": _check_ratio,
+           "bool": _check_bool, "rule": _check_rule,
+           "optional length": lambda n, v: check_length(n, v, optional=True)}
+
+
+def _opt(default, kind: str):
+    """A dataclass field whose value is checked as ``kind`` (see ``_CHECKS``)."""
+    return field(default=default, metadata={"kind": kind})
+
+
+class _Options:
+    """Validation shared by the option classes: every field is checked by the
+    checker its ``kind`` names and stored converted (float / bool / str)."""
+
+    def __post_init__(self):
+        for f in dataclasses.fields(self):
+            value = _CHECKS[f.metadata["kind"]](f.name, getattr(self, f.name))
+            object.__setattr__(self, f.name, value)
+
+    def as_params(self) -> dict:
+        """The options as a plain dict (``seg.params``)."""
+        return dataclasses.asdict(self)
+
+
+@dataclass(frozen=True)
+class TopomapOptions(_Options):
+    """Options of topomap's default method (:func:`~topomap.segmentation.segment_topomap`).
+
+    Attributes
+    ----------
+    erosion_radius : float
+        Radius (m) of the disk free space is eroded with before its skeleton
+        is taken: 0.05 m (one cell at 0.05 m/px) removes free-space speckle
+        without narrowing any door by more than a cell on each side.
+    median_size : float
+        Side (m) of the median filter that smooths the eroded free space:
+        0.25 m rounds corners so they add no skeleton spurs.
+    dilation_size : float
+        Side (m) of the square occupied space is dilated with before its
+        skeleton: 0.15 m closes one-cell gaps in scanned walls.
+    wall_band : float
+        Obstacle cells farther than this (m) from free space are left out of
+        the occupied-space analysis (the outside of the building): 0.5 m
+        keeps walls up to 1 m thick whole.
+    min_occupied_branch : float
+        End branches of the occupied skeleton shorter than this (m) are
+        pruned: 0.3 m, about a wall's thickness — a spur shorter than the
+        wall is thick is a corner artefact, not a protrusion (the paper's
+        1 m also removes real wall stubs beside doors).
+    min_door_width : float
+        Narrowest door (m): 0.5 m is narrower than any door a person or
+        robot uses.
+    max_door_width : float
+        Widest door (m): 3.0 m admits double doors and the wide openings
+        between a room and a hall or an open office bay, which floor plans
+        separate as rooms of their own.
+    window : float
+        A bottleneck is the narrowest point within this distance (m) along
+        the skeleton: 0.5 m, half a door's width either way.
+    rise : float or None
+        The clearance must grow by this much (m) on both sides of a
+        bottleneck within ``reach``: doors lead from one space into a wider
+        one. None (default): the discretisation noise of a clearance read
+        along the skeleton — the skeleton may run half a cell's diagonal off
+        the true medial axis, and clearances are compared to half a cell —
+        so ``(sqrt(2)/2 + 1/2) * max(skeleton_cell, resolution)`` (0.12 m):
+        any smaller rise may be the grid's, not the building's. Filled in
+        by :meth:`resolved` before the method runs.
+    reach : float
+        How far (m) along the skeleton the rise is looked for: 1.5 m, a
+        door's frame and the first step into the room behind it.
+    protrusion_min : float
+        Fraction (0..1) of free cells in a disk of the map's wall-thickness
+        threshold (at least 0.25 m) around a door post above which the wall
+        protrudes there: 0.6 lies between a straight wall (0.5) and a
+        right-angled convex corner (0.75).
+    flat_min : float
+        With ``rule="oneflat"``, the fraction (0..1) the other post must
+        reach: 0.45, a straight wall (0.5), not a concave corner (0.25).
+    rule : {"oneflat", "either", "ep", "frac", "one"}
+        Which protrusion evidence accepts a door: ``"ep"`` the paper's
+        endpoint test at both posts; ``"frac"`` the convexity test at both
+        posts; ``"either"`` one of these; ``"one"`` convexity at one post;
+        ``"oneflat"`` (default) ``"either"``, or convexity at one post and a
+        straight wall at the other (a door beside a wall).
+    skeleton_cell : float
+        Cell size (m) of the grid the free-space skeleton is taken on; the
+        clearances are always sampled at the map's own resolution. 0.1 m:
+        the narrowest door (0.5 m) is still five cells wide. Maps coarser
+        than this use their own grid.
+    mouths : bool
+        Also look for corridor mouths: one-sided bottlenecks where a run of
+        even clearance opens into a space at least ``2 * rise`` wider; they
+        are doors only where the walls protrude on both sides.
+    corridor_length : float
+        A run of even clearance (within one cell) must be at least this long
+        (m) to count as a corridor whose mouth can be a door: 1.0 m, longer
+        than any door frame or gap between pieces of furniture.
+    min_wall_length : float
+        Free-standing obstacles less than this (m) across (bounding box) are
+        clutter — chairs, plants, small tables, pillars — and are looked
+        through while doors are searched: doors are in walls, and 1.0 m is
+        shorter than any wall piece between two doors. Rooms are still cut
+        from the map as it is (clutter cells stay out of every room). 0
+        turns this off.
+    facing : float
+        The posts must face each other across the bottleneck: their distance
+        must be at least ``facing`` times the bottleneck's diameter (0.9:
+        about 130° apart seen from the narrowest point). Posts at a right
+        angle to each other are a room's corner, not a doorway.
+    """
+
+    erosion_radius: float = _opt(0.05, "length")
+    median_size: float = _opt(0.25, "length")
+    dilation_size: float = _opt(0.15, "length")
+    wall_band: float = _opt(0.5, "length")
+    min_occupied_branch: float = _opt(0.3, "length")
+    min_door_width: float = _opt(0.5, "length")
+    max_door_width: float = _opt(3.0, "length")
+    window: float = _opt(0.5, "length")
+    rise: Optional[float] = _opt(None, "optional length")
+    reach: float = _opt(1.5, "length")
+    protrusion_min: float = _opt(0.6, "fraction")
+    flat_min: float = _opt(0.45, "fraction")
+    rule: str = _opt("oneflat", "rule")
+    skeleton_cell: float = _opt(0.1, "length")
+    mouths: bool = _opt(True, "bool")
+    corridor_length: float = _opt(1.0, "length")
+    min_wall_length: float = _opt(1.0, "length")
+    facing: float = _opt(0.9, "ratio")
+
+    def resolved(self, resolution: float) -> "TopomapOptions":
+        """These options with the map-dependent default ``rise`` filled in
+        for a map of ``resolution`` m/px (what actually runs)."""
+        if self.rise is not None:
+            return self
+        return dataclasses.replace(self, rise=max(self.skeleton_cell, resolution) * (np.sqrt(2) / 2 + 0.5))
+
+
+@dataclass(frozen=True)
+class PaperOptions(_Options):
+    """Options of the paper's method (:func:`~topomap.segmentation.segment_paper`).
+
+    Attributes
+    ----------
+    erosion_radius : float
+        Radius (m) of the disk free space is eroded with before its skeleton
+        is taken. 0.10 m (2 px at 0.05 m/px) removes free-space speckle and
+        one-cell slits, which would otherwise add skeleton branches; it is
+        far below any door's half width.
+    median_size : float
+        Side (m) of the median filter that rounds corners after the erosion.
+        0.25 m (5 px): the smallest window that rounds a right-angled corner
+        by more than one cell.
+    dilation_size : float
+        Side (m) of the square occupied space is dilated with. 0.15 m (3 px)
+        closes one-cell gaps in scanned walls without rounding corners.
+    wall_band : float
+        Occupied cells farther than this (m) from free space are left out of
+        the occupied-space analysis: what lies beyond is the outside of the
+        building (or solid rock), not wall shape. 0.5 m keeps any wall up to
+        1 m thick whole.
+    min_free_branch : float
+        Free-space branches shorter than this (m) are not analysed: the
+        paper's 10 px at 0.05 m/px.
+    min_occupied_branch : float
+        Occupied-space end branches shorter than this (m) are pruned: the
+        paper's 20 px at 0.05 m/px.
+    max_door_search : float
+        Longest ray (m) searched for a wall on either side of a passage: 3 m,
+        the widest door.
+    """
+
+    erosion_radius: float = _opt(0.10, "length")
+    median_size: float = _opt(0.25, "length")
+    dilation_size: float = _opt(0.15, "length")
+    wall_band: float = _opt(0.5, "length")
+    min_free_branch: float = _opt(0.5, "length")
+    min_occupied_branch: float = _opt(1.0, "length")
+    max_door_search: float = _opt(3.0, "length")
+
+    def resolved(self, resolution: float) -> "PaperOptions":
+        """These options (none depends on the map)."""
+        return self
+
+
+def check_keywords(method: str, given, allowed) -> None:
+    """Raise ParameterError naming the first of ``given`` not in ``allowed``."""
+    for k in given:
+        if k not in allowed:
+            raise ParameterError(f"unknown option {k!r} for method {method!r} (got {given[k]!r}); "
+                                 f"options: {', '.join(sorted(allowed))}")
+
+
+def options_from_kwargs(cls, method: str, options=None, kwargs=None):
+    """The ``cls`` options of one run: ``options`` (an instance of ``cls`` or
+    None for the defaults) with the keyword options in ``kwargs`` replaced.
+
+    Raises
+    ------
+    ParameterError
+        ``options`` is not a ``cls``, a keyword is not an option of
+        ``method``, or a value is invalid.
+    """
+    kwargs = kwargs or {}
+    if options is None:
+        options = cls()
+    elif not isinstance(options, cls):
+        raise ParameterError(f"options for method {method!r} must be a {cls.__name__}, got {options!r}")
+    check_keywords(method, kwargs, {f.name for f in dataclasses.fields(cls)})
+    return dataclasses.replace(options, **kwargs) if kwargs else options
