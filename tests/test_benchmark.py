@@ -17,8 +17,8 @@ import pytest
 from click.testing import CliRunner
 from PIL import Image
 
-from topomap.benchmark import (ROW_COLUMNS, benchmark_grid, format_table, run_benchmark,
-                               run_map, write_rows)
+from topomap.benchmark import (ROW_COLUMNS, TABLE_CAPTION, benchmark_grid, format_table,
+                               run_benchmark, run_map, write_rows)
 from topomap.cli import main
 from topomap.datasets import benchmark_dir, load_benchmark
 from topomap.errors import ParameterError
@@ -70,6 +70,13 @@ def _draw(kind):
 
 
 KINDS = ("one_room", "two_rooms", "three_rooms")
+# recall of the ground truth itself, original protocol: furniture cells stay in their room
+CEILING_R = {("unfurnished", k): 1.0 for k in KINDS}
+CEILING_R.update({
+    ("furnished", "one_room"): 1 - 20 * 30 / (80 * 120),
+    ("furnished", "two_rooms"): 1 - (15 * 20 / TWO_LEFT + 20 * 30 / TWO_RIGHT) / 2,
+    ("furnished", "three_rooms"): (2 + 1 - 15 * 40 / (120 * 90 + 20 * 8)) / 3,
+})
 N_TRUE = {"one_room": 1, "two_rooms": 2, "three_rooms": 3}
 
 
@@ -101,16 +108,19 @@ def _row(rows, method, variant, name):
 # benchmark_grid
 # --------------------------------------------------------------------------
 
-def test_benchmark_grid_uses_the_data_sets_threshold(tmp_path):
+def test_benchmark_grid_is_the_users_grid(tmp_path):
+    # a bare image as load_map(path, resolution=0.05) reads it: free from
+    # gray 250 up, map_saver's 205 unknown, the rest occupied
     g = np.array([[255, 250, 249, 205], [0, 254, 170, 251]], np.uint8)
     for name in ("m.png", "m_furnitures.png", "m_gt_segmentation.png"):
         Image.fromarray(g).save(tmp_path / name)
     (bm,) = load_benchmark(tmp_path, variant="unfurnished")
     grid = benchmark_grid(bm)
     assert grid.cells.dtype == np.int8
-    np.testing.assert_array_equal(grid.cells, [[0, 0, 100, 100], [100, 0, 100, 0]])
+    np.testing.assert_array_equal(grid.cells, [[0, 0, 100, -1], [100, 0, 100, 0]])
     np.testing.assert_array_equal(grid.gray, g)
     assert grid.resolution == 0.05
+    assert bm.command == "topomap segment m.png --resolution 0.05"
 
 
 # --------------------------------------------------------------------------
@@ -129,8 +139,15 @@ def test_every_method_every_map_every_variant(all_rows):
                   "door_recall", "door_f1", "adjacency_f1"):
             assert 0.0 <= r[k] <= 1.0, (k, r)
         assert r["n_true_rooms"] == N_TRUE[r["map"]]
-        assert r["runtime_s"] > 0 and r["t_total"] > 0
-        assert r["t_total"] <= r["runtime_s"] + 1e-6
+        assert r["runtime_s"] > 0 and r["t_total"] > 0 and r["t_load"] > 0
+        assert r["t_total"] + r["t_load"] <= r["runtime_s"] + 1e-6
+        # the ground truth scores 100 % but for the furniture, which stays in
+        # the true rooms under the original protocol only
+        for k in ("ceiling_precision", "ceiling_precision_free", "ceiling_recall_free"):
+            assert r[k] == 1.0, (k, r)
+        assert r["ceiling_recall"] == pytest.approx(CEILING_R[r["variant"], r["map"]], abs=1e-12), r
+        assert r["recall"] <= r["ceiling_recall"] + 1e-12
+        assert 0.0 <= r["precision_free"] <= 1.0 and 0.0 <= r["recall_free"] <= 1.0
         assert r["jobs"] == 1
         assert any(k.startswith("t_") and k != "t_total" for k in r)
 
@@ -148,8 +165,12 @@ def test_paper_method_on_the_two_room_map(all_rows):
     rows, _ = all_rows
     for variant in ("unfurnished", "furnished"):
         r = _row(rows, "paper", variant, "two_rooms")
-        # P = R = 1 but for the door-line cells, which are free in the map and in no true room
-        assert r["recall"] == 1.0
+        # P = R = 1 but for the door-line cells, which are free in the map and
+        # in no true room, and (original protocol) the furniture in the rooms
+        assert r["recall_free"] == 1.0
+        assert r["recall"] == pytest.approx(r["ceiling_recall"], abs=1e-12)
+        assert r["recall"] == (1.0 if variant == "unfurnished" else pytest.approx(
+            CEILING_R[variant, "two_rooms"], abs=1e-12))
         assert r["precision"] == pytest.approx(1 - TWO_LINE / 2 / (TWO_LEFT + TWO_LINE / 2), abs=0.004)
         assert r["n_rooms"] == 2 and r["n_doors"] == 1
         assert r["door_f1"] == 1.0 and r["adjacency_f1"] == 1.0
@@ -220,7 +241,10 @@ def test_parallel_jobs_give_the_same_scores(dataset, all_rows):
 def test_format_table(all_rows):
     rows, _ = all_rows
     table = format_table(rows)
-    lines = table.splitlines()
+    assert table.startswith(TABLE_CAPTION + "\n\n")
+    assert "ORIGINAL protocol" in TABLE_CAPTION and "<= 100 cells" in TABLE_CAPTION
+    assert format_table(rows, caption=False) == table[len(TABLE_CAPTION) + 2:]
+    lines = format_table(rows, caption=False).splitlines()
     assert lines[0].startswith("| method | variant | maps | P ± sd (%) | R ± sd (%)")
     body = [ln for ln in lines[2:] if ln.startswith("| ")]
     assert len(body) == 2 * len(METHODS)
@@ -231,17 +255,21 @@ def test_format_table(all_rows):
     assert "±" in body[0]
     # watershed reports no doors: no door score
     ws = [ln for ln in body if ln.startswith("| watershed | unfurnished")][0]
-    assert ws.split("|")[7].strip() == "–"
+    assert ws.split("|")[11].strip() == "–"
 
 
 def test_format_table_by_hand():
     rows = [dict(method="m", variant="unfurnished", map=f"x{i}", precision=p, recall=r, door_f1=d,
+                 precision_free=p, recall_free=1.0, ceiling_precision=1.0, ceiling_recall=c,
+                 ceiling_precision_free=1.0, ceiling_recall_free=1.0, n_rooms=n, n_true_rooms=2,
                  n_doors=1, runtime_s=t, jobs=1, error="")
-            for i, (p, r, d, t) in enumerate([(1.0, 0.5, 1.0, 1.0), (0.5, 1.0, 0.0, 2.0),
-                                              (0.75, 0.75, 0.5, 6.0)])]
+            for i, (p, r, d, t, c, n) in enumerate([(1.0, 0.5, 1.0, 1.0, 0.9, 2),
+                                                    (0.5, 1.0, 0.0, 2.0, 0.9, 7),
+                                                    (0.75, 0.75, 0.5, 6.0, 0.6, 3)])]
     (line,) = [ln for ln in format_table(rows).splitlines() if ln.startswith("| m |")]
     cells = [c.strip() for c in line.strip("|").split("|")]
-    assert cells == ["m", "unfurnished", "3", "75.0 ± 25.0", "75.0 ± 25.0", "75.0", "50.0",
+    assert cells == ["m", "unfurnished", "3", "75.0 ± 25.0", "75.0 ± 25.0", "75.0",
+                     "100.0 / 80.0", "75.0 / 100.0", "100.0 / 100.0", "12 / 6", "50.0",
                      "3.000", "2.000", "0"]
 
 

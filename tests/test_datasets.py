@@ -9,11 +9,18 @@ import pytest
 from PIL import Image
 
 from topomap.datasets import (
+    FREE_GRAY,
+    LABELLED_VARIANT,
+    VARIANTS,
     BenchmarkMap,
     BenchmarkNotFoundError,
     LabeledMap,
     benchmark_dir,
+    detect_layout,
     load_benchmark,
+    load_dataset,
+    load_labelled,
+    select_names,
     load_pairs,
     read_gray,
     read_label_image,
@@ -89,8 +96,87 @@ def test_load_benchmark_synthetic(bench_dir, variant):
 
 def test_load_benchmark_names_filter(bench_dir):
     assert [m.name for m in load_benchmark(bench_dir, names=["b_map"])] == ["b_map"]
-    with pytest.raises(BenchmarkNotFoundError, match="none of the maps"):
-        load_benchmark(bench_dir, names=["nope"])
+    assert [m.name for m in load_benchmark(bench_dir, names="?_map")] == ["a_map", "b_map"]
+    assert [m.name for m in load_benchmark(bench_dir, names="b_*,a_map")] == ["a_map", "b_map"]
+    # a pattern that matches nothing is an error that names it
+    with pytest.raises(BenchmarkNotFoundError, match="no map matches 'nope'"):
+        load_benchmark(bench_dir, names=["b_map", "nope"])
+
+
+def test_select_names():
+    names = ["freiburg_full", "freiburg_partial_02", "freiburg_partial_10", "bremen_full"]
+    assert select_names(names, None) == sorted(names)
+    assert select_names(names, "freiburg_partial_*") == ["freiburg_partial_02", "freiburg_partial_10"]
+    assert select_names(names, ["*_full", "bremen_full"]) == ["bremen_full", "freiburg_full"]
+    with pytest.raises(BenchmarkNotFoundError):
+        select_names(names, " , ")
+
+
+def _labelled_dir(tmp_path, names=("m1", "m2")):
+    """Labelled layout: NAME.png (map_server gray), NAME.yaml (ROSE² thresholds), NAME_gt.png (16-bit)."""
+    m, _ = _drawing()
+    m = m.copy()
+    m[m == 255] = 240           # free only by the YAML's free_thresh 0.098 (gray > 230)
+    m[2:4, 2:10] = 205          # unknown
+    gt = np.zeros(m.shape, np.uint16)
+    gt[1:29, 1:30] = 300        # 16-bit label values
+    gt[1:29, 32:61] = 7
+    gt[1:29, 30:32] = 0
+    for n in names:
+        Image.fromarray(m).save(tmp_path / f"{n}.png")
+        (tmp_path / f"{n}.yaml").write_text(
+            f"image: {n}.png\nresolution: 0.05\norigin: [0.0, 0.0, 0.0]\nnegate: 0\n"
+            "occupied_thresh: 0.41\nfree_thresh: 0.098\n")
+        Image.fromarray(gt).save(tmp_path / f"{n}_gt.png")
+    return tmp_path, m, gt
+
+
+def test_labelled_layout(tmp_path):
+    d, m, gt = _labelled_dir(tmp_path)
+    (tmp_path / "lonely_gt.png").write_bytes(b"")  # no map, no YAML: not a map
+    assert detect_layout(d) == "labelled"
+    maps = load_labelled(d)
+    assert [bm.name for bm in maps] == ["m1", "m2"]
+    bm = maps[0]
+    assert bm.variant == LABELLED_VARIANT == "map" and bm.gt_gray is None
+    assert bm.load_path == d / "m1.yaml" and bm.load_kwargs == {}
+    assert bm.command == "topomap segment m1.yaml"
+    np.testing.assert_array_equal(bm.gt_rooms, gt.astype(np.int32))
+    # scored on the free cells of the map as read through its YAML (gray > 230)
+    np.testing.assert_array_equal(bm.scored, m > 230)
+    assert [b.name for b in load_dataset(d, names="*2")] == ["m2"]
+    s = score_segmentation(bm.gt_rooms, bm.gt_rooms, scored=bm.scored, protocol="free-cells")
+    assert s["precision"] == s["recall"] == 1.0 and s["n_rooms"] == 2
+
+
+def test_detect_layout(bench_dir):
+    assert detect_layout(bench_dir) == "ipa"
+    assert [b.variant for b in load_dataset(bench_dir, variant="furnished")] == ["furnished"] * 2
+    other = bench_dir / "other"
+    other.mkdir()
+    (other / "x.png").write_bytes(b"")
+    with pytest.raises(BenchmarkNotFoundError, match="no benchmark maps"):
+        detect_layout(other)
+    with pytest.raises(BenchmarkNotFoundError, match="does not exist"):
+        detect_layout(other / "none")
+    with pytest.raises(BenchmarkNotFoundError):
+        load_labelled(other)
+
+
+def test_labelled_size_mismatch(tmp_path):
+    d, _, _ = _labelled_dir(tmp_path, names=("m1",))
+    Image.fromarray(np.zeros((5, 5), np.uint16)).save(d / "m1_gt.png")
+    with pytest.raises(MapError, match="m1_gt.png"):
+        load_labelled(d)
+
+
+def test_constants_have_one_home():
+    import topomap.benchmark as B
+    import topomap.evaluation as E
+    import topomap.io as IO
+
+    assert IO.FREE_GRAY == FREE_GRAY == E.FREE_GRAY == 250
+    assert B.VARIANTS is VARIANTS == ("unfurnished", "furnished")
 
 
 def test_load_benchmark_missing_directory(tmp_path):

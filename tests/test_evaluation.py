@@ -10,6 +10,8 @@ import pytest
 
 from topomap.errors import ParameterError
 from topomap.evaluation import (
+    PROTOCOLS,
+    ceiling,
     door_distance_matrix,
     evaluate,
     gt_doors_from_images,
@@ -142,13 +144,58 @@ def test_scored_mask_restricts_sizes():
     lab[15:, 20:] = 1
     scored = np.zeros(gt.shape, bool)
     scored[:15] = True
-    s = score_segmentation(lab, gt, scored=scored)
+    s = score_segmentation(lab, gt, scored=scored, protocol="free-cells")
     assert (s["precision"], s["recall"]) == (1.0, 1.0)
+    # original protocol: the rooms stay whole (400 px each), the segments are
+    # the scored 300 px: P = (1 + 1)/2, R = (300/400 + 300/400)/2 = 0.75
+    s = score_segmentation(lab, gt, scored=scored, protocol="original")
+    assert s["precision"] == 1.0 and s["recall"] == pytest.approx(0.75)
+    assert s == score_segmentation(lab, gt, scored=scored)  # the default
     # unscored: segment 1 = 400 + 100 = 500 px, P = (400/500 + 1)/2 = 0.9,
     # room 2 best overlap 300/400 -> R = (1 + 0.75)/2 = 0.875
     s = score_segmentation(lab, gt)
     assert s["precision"] == pytest.approx(0.9)
     assert s["recall"] == pytest.approx(0.875)
+
+
+def test_original_protocol_keeps_furnished_rooms_whole():
+    # Room 1 has a 10 x 10 block of furniture (100 cells) the method is not
+    # given; the method labels the rest of room 1 and room 2 exactly.
+    gt = two_rooms()
+    scored = np.ones(gt.shape, bool)
+    scored[5:15, 5:15] = False
+    lab = np.where(scored, gt, 0)
+    orig = score_segmentation(lab, gt, scored=scored, protocol="original")
+    free = score_segmentation(lab, gt, scored=scored, protocol="free-cells")
+    # original: R = (300/400 + 400/400)/2 -- the furniture stays in room 1
+    assert orig["precision"] == 1.0 and orig["recall"] == pytest.approx((300 / 400 + 1) / 2)
+    assert orig["recall_macro"] == pytest.approx(700 / 800)
+    assert free["precision"] == 1.0 and free["recall"] == 1.0
+    # labels on cells the method was not given are dropped, not counted
+    lab2 = gt.copy()
+    assert score_segmentation(lab2, gt, scored=scored, protocol="original") == orig
+    # that is the ceiling: the ground truth itself scores the same
+    c = ceiling(gt, scored=scored)
+    assert c["original"] == orig and c["free-cells"] == free
+    assert set(c) == set(PROTOCOLS) == {"original", "free-cells"}
+
+
+def test_original_protocol_size_filter_counts_whole_rooms():
+    # a 12 x 10 room (120 cells) of which 30 cells are scored: kept whole
+    # under the original protocol, dropped (30 <= 100) under free-cells
+    gt = np.zeros((12, 30), np.int32)
+    gt[:, :10] = 1
+    gt[:, 10:] = 2
+    scored = np.ones(gt.shape, bool)
+    scored[3:, :10] = False
+    lab = np.where(scored, gt, 0)
+    assert score_segmentation(lab, gt, scored=scored)["n_rooms"] == 2
+    assert score_segmentation(lab, gt, scored=scored, protocol="free-cells")["n_rooms"] == 1
+
+
+def test_unknown_protocol_raises():
+    with pytest.raises(ParameterError, match="protocol"):
+        score_segmentation(two_rooms(), two_rooms(), protocol="bormann")
 
 
 def test_segment_cells_outside_rooms_count_in_size():
@@ -186,8 +233,12 @@ def test_degenerate(labels, gt, expected):
 
 
 def test_all_unscored():
-    s = score_segmentation(two_rooms(), two_rooms(), scored=np.zeros((20, 40), bool))
+    none = np.zeros((20, 40), bool)
+    s = score_segmentation(two_rooms(), two_rooms(), scored=none, protocol="free-cells")
     assert s["n_segments"] == 0 and s["n_rooms"] == 0 and s["precision"] == 1.0
+    # the original protocol keeps the rooms: nothing labels them
+    s = score_segmentation(two_rooms(), two_rooms(), scored=none)
+    assert s["n_segments"] == 0 and s["n_rooms"] == 2 and s["recall"] == 0.0
 
 
 def test_shape_mismatch_raises():
@@ -451,12 +502,24 @@ def test_evaluate_on_drawn_map():
     lab[:, 31:] = 2
     lab[m < 250] = 0
     out = evaluate(lab, m, g, pred_doors=[((10, 30.5), (17, 30.5))])
-    assert out["recall"] == 1.0
+    assert out["recall_free"] == 1.0
+    # original protocol: room 1 keeps its white wall pixel (0, 10), which is
+    # not free in the map, so no method labels it: R = (810/811 + 1)/2,
+    # exactly the ceiling
+    assert out["recall"] == pytest.approx((810 / 811 + 1) / 2)
+    assert out["ceiling_recall"] == out["recall"] and out["ceiling_precision"] == 1.0
+    assert out["ceiling_recall_free"] == 1.0 == out["ceiling_precision_free"]
+    assert out["n_true_rooms"] == 2 and out["n_segments"] == 2
     # segment 1: 812 room-1 cells... minus nothing: 811 room cells + 2 speckle
     # cells + 8 door cells (col 30) + wall speckle? (0, 10) is a wall in the map
     # -> not scored. |S1| = 812 + 8 = 820, overlap = 812 - 2 = 810 (speckle is
     # black in GT) -> 810/820; |S2| = 812 + 8, overlap 812 -> 812/820
     assert out["precision"] == pytest.approx((810 / 820 + 812 / 820) / 2)
+    assert out["precision_free"] == out["precision"]
+    # the same scores from a label image and an explicit scored mask
+    gt = gt_rooms_from_image(g)
+    out2 = evaluate(lab, m, None, gt_rooms=gt, scored=m >= 250)
+    assert {k: out[k] for k in out2} == out2 and "door_f1" not in out2
     assert out["door_f1"] == 1.0 and out["adjacency_f1"] == 1.0
     assert 0 < out["f1"] < 1
 

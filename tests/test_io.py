@@ -246,6 +246,56 @@ def test_trinary_thresholds_exact():
     assert tio.classify_gray(np.array([[254, 0, 205]], np.uint8)).tolist() == [[FREE, OCCUPIED, UNKNOWN]]
 
 
+def _all_grays():
+    return np.arange(256, dtype=np.uint8).reshape(16, 16)
+
+
+def test_bare_image_is_read_as_a_floor_plan(tmp_path):
+    """No YAML: free from gray 250 up, map_saver's 205 unknown, every other gray occupied."""
+    v = _all_grays()
+    write_pgm(tmp_path / "plan.pgm", v)
+    g = load_map(tmp_path / "plan.pgm")
+    flat = np.arange(256)
+    expect = np.where(flat >= 250, FREE, np.where(flat == 205, UNKNOWN, OCCUPIED)).reshape(16, 16)
+    np.testing.assert_array_equal(g.cells, expect)
+    np.testing.assert_array_equal(tio.classify_plan(v), expect)
+    assert tio.FREE_GRAY == 250
+    # an anti-aliased wall fringe (206..249) is wall, not free as map_server's defaults say
+    assert (g.cells[(v >= 206) & (v <= 249)] == OCCUPIED).all()
+    assert (tio.classify_gray(v)[(v >= 206) & (v <= 249)] == FREE).all()
+    # negate inverts the gray values first
+    np.testing.assert_array_equal(load_map(tmp_path / "plan.pgm", negate=True).cells,
+                                  tio.classify_plan(255 - v))
+
+
+def test_bare_image_with_thresholds_reads_as_map_server(tmp_path):
+    v = _all_grays()
+    write_pgm(tmp_path / "plan.pgm", v)
+    for kw in ({"free_thresh": 0.196}, {"occupied_thresh": 0.65}, {"mode": "trinary"}):
+        np.testing.assert_array_equal(load_map(tmp_path / "plan.pgm", **kw).cells,
+                                      tio.classify_gray(v), err_msg=str(kw))
+    g = load_map(tmp_path / "plan.pgm", free_thresh=0.1, occupied_thresh=0.5)
+    np.testing.assert_array_equal(g.cells, tio.classify_gray(v, free_thresh=0.1, occupied_thresh=0.5))
+
+
+def test_map_saver_image_reads_the_same_with_and_without_its_yaml(mapdir):
+    # GRAY3 holds map_saver's three values; good_yaml has map_server's defaults
+    bare = load_map(mapdir / "map.pgm")
+    yml = load_map(write_yaml(mapdir / "map.yaml", good_yaml()))
+    np.testing.assert_array_equal(bare.cells, yml.cells)
+    np.testing.assert_array_equal(bare.cells, CELLS3)
+
+
+def test_a_yaml_keeps_map_servers_thresholds(tmp_path):
+    v = _all_grays()
+    write_pgm(tmp_path / "map.pgm", v)
+    g = load_map(write_yaml(tmp_path / "map.yaml", good_yaml()))
+    np.testing.assert_array_equal(g.cells, tio.classify_gray(v))
+    g = load_map(write_yaml(tmp_path / "m2.yaml", good_yaml(free_thresh="0.098", occupied_thresh="0.41")))
+    np.testing.assert_array_equal(g.cells, tio.classify_gray(v, free_thresh=0.098, occupied_thresh=0.41))
+    assert (g.cells[v > 230] == FREE).all() and (g.cells[v <= 230] != FREE).all()
+
+
 def test_pgm_and_png_and_yaml_agree(mapdir):
     Image.fromarray(GRAY3).save(mapdir / "map.png")
     a = load_map(mapdir / "map.pgm")
@@ -346,6 +396,11 @@ def test_image_modes(tmp_path, mode):
         np.testing.assert_array_equal(g.cells, np.where(GRAY3 > 127, FREE, OCCUPIED))
     elif mode == "I":  # 32-bit integer images are taken as 16-bit data
         assert (g.gray <= 1).all()
+    elif mode == "P":
+        # the web palette turns 205 into 204: no longer map_saver's unknown
+        # gray, so a bare image reads it as a drawn obstacle
+        np.testing.assert_array_equal(g.gray, [[0, 255, 204], [255, 0, 204]])
+        np.testing.assert_array_equal(g.cells, np.where(CELLS3 == UNKNOWN, OCCUPIED, CELLS3))
     else:
         np.testing.assert_array_equal(g.cells, CELLS3)
 

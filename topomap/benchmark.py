@@ -1,25 +1,37 @@
-"""Running every segmentation method on a room-segmentation benchmark.
+"""Running segmentation methods on a room-segmentation benchmark.
 
-:func:`run_benchmark` segments every map of a benchmark directory (the
-layout of Bormann et al. 2016, see :mod:`topomap.datasets`) with every
-method of :data:`topomap.segmentation.METHODS` and scores the result with
+:func:`run_benchmark` segments every map of a benchmark directory -- either
+layout of :mod:`topomap.datasets`: the ipa_room_segmentation maps of Bormann
+et al. 2016, or real maps with a YAML and a label image -- with every method
+of :data:`topomap.segmentation.METHODS`, and scores the result with
 :func:`topomap.evaluation.evaluate`; :func:`format_table` turns the per-map
-rows into a table like Tables 1 and 2 of the paper, and :func:`write_rows`
-saves them as CSV or JSON.
+rows into a summary table and :func:`write_rows` saves them as CSV or JSON.
 
-Conventions (those of the data set's README):
+Conventions:
 
-* the map is classified as the peers were given it: a cell is free where the
-  map's gray value is >= 250 and occupied everywhere else
-  (:func:`benchmark_grid`); no cell is unknown;
-* true doors are extracted from the *unfurnished* map in both variants;
-* ``runtime_s`` is the wall time of the ``segment(...)`` call only: file
-  reading, building the grid and scoring are excluded. Every method runs in
-  the same process and the same run, map after map, after one untimed
-  warm-up call per method on a small synthetic map (so that lazy imports
-  and first-call costs are not charged to the first benchmark map). With
-  ``jobs > 1`` the maps run in parallel worker processes that compete for
-  the CPU and memory bandwidth, so their timings are less comparable.
+* **the user's path**: each map is loaded as a user loads it with the CLI --
+  ``load_map(NAME.png, resolution=0.05)`` (``topomap segment NAME.png
+  --resolution 0.05``) for the ipa maps, ``load_map(NAME.yaml)`` where the
+  data set provides a YAML -- so the benchmark's labels are the CLI's;
+* **scores** (Bormann et al.): the headline precision / recall is the
+  *original* protocol (true rooms kept whole, furniture included; segments
+  restricted to the cells the method was given, the free cells of the grid
+  as loaded); beside it the *free-cells* protocol (true rooms restricted to
+  those cells too) and the *ceiling* (the ground truth itself scored under
+  each protocol); segments and rooms of <= 100 cells are ignored. See
+  :mod:`topomap.evaluation`;
+* **rooms**: ``n_rooms`` is every room the method reports (all labels, as
+  the user sees them), ``n_true_rooms`` the ground truth's rooms;
+* true doors (ipa layout) are extracted from the *unfurnished* map in both
+  variants;
+* ``runtime_s`` is the wall time of the user's job up to the segmentation:
+  ``load_map(...)`` plus ``segment(...)`` (``t_load`` is the loading part);
+  scoring is excluded. Every method runs in the same process and the same
+  run, map after map, after one untimed warm-up call per method on a small
+  synthetic map (so that lazy imports and first-call costs are not charged
+  to the first benchmark map). With ``jobs > 1`` the maps run in parallel
+  worker processes that compete for the CPU and memory bandwidth, so their
+  timings are less comparable.
 """
 
 from __future__ import annotations
@@ -35,39 +47,45 @@ from typing import Callable, Iterable, Optional, Sequence
 
 import numpy as np
 
+from .datasets import LABELLED_VARIANT, VARIANTS
 from .errors import ParameterError
 
 __all__ = [
     "VARIANTS",
     "ROW_COLUMNS",
+    "TABLE_CAPTION",
     "benchmark_grid",
+    "segment_map",
     "run_benchmark",
     "run_map",
     "format_table",
     "write_rows",
 ]
 
-#: The two map variants of the benchmark.
-VARIANTS = ("unfurnished", "furnished")
-
 #: Columns every row has, in this order (per-stage timings ``t_<stage>``
 #: follow; their names depend on the method).
 ROW_COLUMNS = (
-    "method", "variant", "map", "precision", "recall", "precision_macro", "recall_macro", "f1",
+    "method", "variant", "map", "precision", "recall", "f1",
+    "precision_free", "recall_free", "f1_free",
+    "ceiling_precision", "ceiling_recall", "ceiling_precision_free", "ceiling_recall_free",
+    "precision_macro", "recall_macro", "precision_macro_free", "recall_macro_free",
     "door_precision", "door_recall", "door_f1", "door_tp", "door_fp", "door_fn",
     "adjacency_precision", "adjacency_recall", "adjacency_f1",
-    "n_rooms", "n_segments", "n_true_rooms", "room_count_error", "n_doors",
-    "runtime_s", "jobs", "error",
+    "n_rooms", "n_true_rooms", "n_segments", "room_count_error", "n_doors",
+    "runtime_s", "t_load", "jobs", "error",
 )
 
-_SCORE_KEYS = ("precision", "recall", "precision_macro", "recall_macro", "f1",
+_SCORE_KEYS = ("precision", "recall", "f1", "precision_free", "recall_free", "f1_free",
+               "ceiling_precision", "ceiling_recall", "ceiling_precision_free",
+               "ceiling_recall_free", "precision_macro", "recall_macro",
+               "precision_macro_free", "recall_macro_free",
                "door_precision", "door_recall", "door_f1", "door_tp", "door_fp", "door_fn",
                "adjacency_precision", "adjacency_recall", "adjacency_f1",
-               "n_segments", "room_count_error")
+               "n_true_rooms", "n_segments", "room_count_error")
 
 
 def benchmark_grid(bm):
-    """The occupancy grid of a benchmark map, with the data set's convention.
+    """The occupancy grid of a benchmark map, loaded as a user loads it.
 
     Parameters
     ----------
@@ -76,15 +94,31 @@ def benchmark_grid(bm):
     Returns
     -------
     topomap.io.OccupancyGrid
-        ``cells`` int8: 0 (free) where ``bm.map_gray >= 250``, 100
-        (occupied) everywhere else; ``gray`` is ``bm.map_gray``; resolution
-        ``bm.resolution``; source the map file.
+        ``load_map(bm.load_path, **bm.load_kwargs)``: for an ipa map
+        ``load_map(NAME.png, resolution=0.05)`` (a bare image: free where
+        gray >= 250, see :func:`topomap.io.load_map`), for a labelled map
+        ``load_map(NAME.yaml)``.
     """
-    from .io import FREE, OCCUPIED, OccupancyGrid
+    return bm.load()
 
-    gray = np.asarray(bm.map_gray)
-    cells = np.where(gray >= 250, FREE, OCCUPIED).astype(np.int8)
-    return OccupancyGrid(cells, bm.resolution, (0.0, 0.0, 0.0), str(bm.map_path), gray=gray)
+
+def segment_map(bm, method: str):
+    """Load ``bm`` as a user does and segment it, timed: ``(grid, seg, seconds)``.
+
+    The same job as ``topomap segment`` up to writing the outputs; the
+    seconds cover loading and segmentation (``seg.timings["load"]`` is set
+    to the loading part).
+    """
+    from .segmentation import segment
+
+    gc.collect()
+    t0 = time.perf_counter()
+    grid = bm.load()
+    t1 = time.perf_counter()
+    seg = segment(grid, method=method)
+    t2 = time.perf_counter()
+    seg.timings["load"] = t1 - t0
+    return grid, seg, t2 - t0
 
 
 def _check_methods(methods) -> list:
@@ -143,8 +177,16 @@ def _warm_up(method: str) -> None:
         pass
 
 
+def _error_row(row, exc, runtime, jobs):
+    msg = " ".join(str(exc).split()) or type(exc).__name__
+    row.update({k: math.nan for k in _SCORE_KEYS})
+    row.update(n_rooms=math.nan, n_doors=math.nan, runtime_s=runtime, t_load=math.nan,
+               jobs=jobs, error=f"{type(exc).__name__}: {msg}"[:300])
+    return row
+
+
 def run_map(bm, method: str, *, jobs: int = 1, warm_up: bool = True) -> dict:
-    """Segment one benchmark map with one method and score it.
+    """Segment one benchmark map with one method, as a user would, and score it.
 
     Parameters
     ----------
@@ -159,37 +201,30 @@ def run_map(bm, method: str, *, jobs: int = 1, warm_up: bool = True) -> dict:
     Returns
     -------
     dict
-        One row: see :data:`ROW_COLUMNS`, plus ``t_<stage>`` per-stage
-        seconds from ``Segmentation.timings``. If the method raises, the row
-        has ``error`` set to a one-line message and NaN scores.
+        One row: see :data:`ROW_COLUMNS` and :func:`topomap.evaluation.evaluate`
+        (scores are scored on ``grid.free`` of the grid as loaded), plus
+        ``t_<stage>`` per-stage seconds from ``Segmentation.timings``. If
+        loading or the method raises, the row has ``error`` set to a
+        one-line message and NaN scores.
     """
     from .evaluation import evaluate
-    from .segmentation import segment
 
     row = {"method": method, "variant": bm.variant, "map": bm.name}
     if warm_up:
         _warm_up(method)
-    grid = benchmark_grid(bm)
-    gc.collect()
     t0 = time.perf_counter()
     try:
-        seg = segment(grid, method=method)
+        grid, seg, runtime = segment_map(bm, method)
     except Exception as exc:  # noqa: BLE001 - one failing map does not stop the benchmark
-        runtime = time.perf_counter() - t0
-        msg = " ".join(str(exc).split()) or type(exc).__name__
-        row.update({k: math.nan for k in _SCORE_KEYS})
-        row.update(n_rooms=math.nan, n_true_rooms=math.nan, n_doors=math.nan,
-                   runtime_s=runtime, jobs=jobs, error=f"{type(exc).__name__}: {msg}"[:300])
-        return row
-    runtime = time.perf_counter() - t0
+        return _error_row(row, exc, time.perf_counter() - t0, jobs)
     doors = [d.segment for d in seg.doors]
     ev = evaluate(seg.labels, bm.map_gray, bm.gt_gray, pred_doors=doors,
-                  resolution=bm.resolution, door_map_gray=bm.unfurnished_gray)
+                  resolution=grid.resolution, door_map_gray=bm.unfurnished_gray,
+                  scored=grid.free, gt_rooms=bm.gt_rooms)
     for k in _SCORE_KEYS:
         v = ev.get(k, math.nan)
         row[k] = int(v) if isinstance(v, (int, np.integer)) and not isinstance(v, bool) else float(v)
     row["n_rooms"] = int(seg.n_rooms)
-    row["n_true_rooms"] = int(ev["n_rooms"])
     row["n_doors"] = len(seg.doors)
     row["runtime_s"] = runtime
     row["jobs"] = int(jobs)
@@ -216,31 +251,78 @@ def _pool_task(bm, method, jobs):
     return run_map(bm, method, jobs=jobs)
 
 
+def _load_maps(directory, variants, maps) -> dict:
+    """``{variant: [BenchmarkMap]}`` for either layout (the labelled one has one variant)."""
+    from .datasets import detect_layout, load_benchmark, load_labelled
+
+    if detect_layout(directory) == "labelled":
+        return {LABELLED_VARIANT: load_labelled(directory, names=maps)}
+    return {v: load_benchmark(directory, variant=v, names=maps) for v in variants}
+
+
+def _execute(tasks, jobs, progress) -> dict:
+    """Run ``(variant, map, method)`` tasks; ``{(method, variant, name): row}``."""
+    results = {}
+    total = len(tasks)
+    if jobs == 1:
+        for m in dict.fromkeys(t[2] for t in tasks):
+            _warm_up(m)
+        for i, (v, bm, m) in enumerate(tasks):
+            row = run_map(bm, m, jobs=1)
+            results[(m, v, bm.name)] = row
+            if progress is not None:
+                progress(i + 1, total, row)
+        return results
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    with ProcessPoolExecutor(max_workers=jobs, initializer=_pool_init) as ex:
+        futs = {ex.submit(_pool_task, bm, m, jobs): (m, v, bm.name) for v, bm, m in tasks}
+        try:
+            for i, fut in enumerate(as_completed(futs)):
+                row = fut.result()
+                results[futs[fut]] = row
+                if progress is not None:
+                    progress(i + 1, total, row)
+        except BaseException:
+            for f in futs:
+                f.cancel()
+            raise
+    return results
+
+
 def run_benchmark(directory, *, methods: Optional[Sequence[str]] = None,
                   variants: Iterable[str] | str = VARIANTS, jobs: int = 1,
                   progress: Optional[Callable[[int, int, dict], None]] = None,
-                  names: Optional[Iterable[str]] = None) -> list:
+                  names: Optional[Iterable[str]] = None,
+                  maps: Optional[Iterable[str] | str] = None) -> list:
     """Run methods on every map of a benchmark directory and score them.
 
     Parameters
     ----------
     directory : str or Path
-        Folder in the data set's layout (``NAME.png``,
-        ``NAME_furnitures.png``, ``NAME_gt_segmentation.png``).
+        A folder in either layout of :mod:`topomap.datasets`, picked by what
+        it holds (:func:`topomap.datasets.detect_layout`): ``NAME.png``,
+        ``NAME_furnitures.png``, ``NAME_gt_segmentation.png`` (ipa), or
+        ``NAME.png`` + ``NAME.yaml`` + ``NAME_gt.png`` (labelled).
     methods : sequence of str or str, optional
         Method names (or one comma-separated string); default every method
         of :data:`topomap.segmentation.METHODS`.
     variants : iterable of str or str, optional
-        ``"unfurnished"``, ``"furnished"`` or both (default; the string
-        ``"both"`` is accepted too).
+        ipa layout: ``"unfurnished"``, ``"furnished"`` or both (default; the
+        string ``"both"`` is accepted too). Ignored for the labelled layout,
+        whose rows have the variant ``"map"``.
     jobs : int, optional
         Number of worker processes (:class:`concurrent.futures.ProcessPoolExecutor`);
         1 (default) runs everything in this process, the only setting whose
         timings are fully comparable.
     progress : callable, optional
         Called as ``progress(done, total, row)`` after every (map, method).
+    maps : iterable of str or str, optional
+        Only these maps: names or shell patterns (``freiburg079_*``), or one
+        comma-separated string of them. A pattern that matches no map is an
+        error.
     names : iterable of str, optional
-        Only these maps.
+        The same as ``maps`` (kept for older callers).
 
     Returns
     -------
@@ -253,10 +335,8 @@ def run_benchmark(directory, *, methods: Optional[Sequence[str]] = None,
     ParameterError
         An unknown method or variant, or ``jobs < 1``.
     topomap.datasets.BenchmarkNotFoundError
-        No benchmark maps in ``directory``.
+        No benchmark maps in ``directory``, or a ``maps`` pattern matches none.
     """
-    from .datasets import load_benchmark
-
     methods = _check_methods(methods)
     variants = _check_variants(variants)
     try:
@@ -265,43 +345,15 @@ def run_benchmark(directory, *, methods: Optional[Sequence[str]] = None,
         raise ParameterError(f"jobs must be an integer >= 1, got {jobs!r}") from None
     if jobs < 1:
         raise ParameterError(f"jobs must be an integer >= 1, got {jobs!r}")
-    names = None if names is None else list(names)
+    if maps is None and names is not None:
+        maps = list(names)
 
-    maps = {v: load_benchmark(directory, variant=v, names=names) for v in variants}
+    loaded = _load_maps(directory, variants, maps)
     # map after map, every method on the map before the next one: all methods
     # see the same machine state over the run
-    tasks = [(v, bm, m) for v in variants for bm in maps[v] for m in methods]
-    total = len(tasks)
-    results = {}
-    if jobs == 1:
-        for m in methods:
-            _warm_up(m)
-        for i, (v, bm, m) in enumerate(tasks):
-            row = run_map(bm, m, jobs=1)
-            results[(m, v, bm.name)] = row
-            if progress is not None:
-                progress(i + 1, total, row)
-    else:
-        from concurrent.futures import ProcessPoolExecutor, as_completed
-
-        with ProcessPoolExecutor(max_workers=jobs, initializer=_pool_init) as ex:
-            futs = {ex.submit(_pool_task, bm, m, jobs): (m, v, bm.name) for v, bm, m in tasks}
-            try:
-                for i, fut in enumerate(as_completed(futs)):
-                    row = fut.result()
-                    results[futs[fut]] = row
-                    if progress is not None:
-                        progress(i + 1, total, row)
-            except BaseException:
-                for f in futs:
-                    f.cancel()
-                raise
-    rows = []
-    for m in methods:
-        for v in variants:
-            for bm in maps[v]:
-                rows.append(_ordered(results[(m, v, bm.name)]))
-    return rows
+    tasks = [(v, bm, m) for v in loaded for bm in loaded[v] for m in methods]
+    results = _execute(tasks, jobs, progress)
+    return [_ordered(results[(m, v, bm.name)]) for m in methods for v in loaded for bm in loaded[v]]
 
 
 def _stats(rows, key):
@@ -332,20 +384,80 @@ def _num(v, fmt):
     return format(v, fmt) if np.isfinite(v) else "–"
 
 
-def format_table(rows: Sequence[dict]) -> str:
+#: What the columns of :func:`format_table` mean (printed above the table).
+TABLE_CAPTION = (
+    "P / R: Bormann et al. precision / recall (%), mean ± sd over the maps, ORIGINAL protocol "
+    "(ground-truth rooms whole, furniture included; segments restricted to the cells the method "
+    "was given, the free cells of the map as loaded). free P / R: the free-cells protocol (rooms "
+    "restricted to those cells too). ceiling: the ground truth itself scored under each protocol. "
+    "Segments and rooms of <= 100 cells are ignored in every score. rooms: rooms reported (every "
+    "label) / true rooms, summed over the maps. door F1: detected doors vs the ground truth's door "
+    "lines (0.5 m). runtime: load_map + segment per map (s).")
+
+
+def _group(rows) -> list:
+    """``[((method, variant), rows)]``: variants in :data:`VARIANTS` order, methods as first seen."""
+    groups = {}
+    for r in rows:
+        groups.setdefault((r["method"], r["variant"]), []).append(r)
+    keys = list(groups)
+    vorder = [v for v in VARIANTS if any(k[1] == v for k in keys)]
+    vorder += [k[1] for k in keys if k[1] not in vorder]
+    morder = list(dict.fromkeys(k[0] for k in keys))
+    keys.sort(key=lambda k: (vorder.index(k[1]), morder.index(k[0])))
+    return [(k, groups[k]) for k in keys]
+
+
+def _pair(ok, kp, kr) -> str:
+    p, r = _stats(ok, kp)[0], _stats(ok, kr)[0]
+    return f"{_num(100 * p, '.1f')} / {_num(100 * r, '.1f')}"
+
+
+def _sum(rows, key) -> str:
+    vals = [float(r[key]) for r in rows if r.get(key) not in (None, "")]
+    vals = [v for v in vals if np.isfinite(v)]
+    return str(int(sum(vals))) if vals else "–"
+
+
+def _table_line(key, g) -> tuple:
+    """One summary line of :func:`format_table` and whether the method reports no doors."""
+    ok = [r for r in g if not r.get("error")]
+    p, psd, _, _ = _stats(ok, "precision")
+    r_, rsd, _, _ = _stats(ok, "recall")
+    f1 = 2 * p * r_ / (p + r_) if np.isfinite(p) and np.isfinite(r_) and p + r_ > 0 else math.nan
+    df1 = _stats(ok, "door_f1")[0]
+    doorless = bool(ok) and all(_is_zero(r.get("n_doors")) for r in ok)
+    if doorless:
+        df1 = math.nan  # the method reports no doors: no door score
+    tm, _, tmed, _ = _stats(g, "runtime_s")
+    line = (f"| {key[0]} | {key[1]} | {len(ok)} | {_pct(p, psd)} | {_pct(r_, rsd)} "
+            f"| {_num(100 * f1, '.1f')} | {_pair(ok, 'ceiling_precision', 'ceiling_recall')} "
+            f"| {_pair(ok, 'precision_free', 'recall_free')} "
+            f"| {_pair(ok, 'ceiling_precision_free', 'ceiling_recall_free')} "
+            f"| {_sum(ok, 'n_rooms')} / {_sum(ok, 'n_true_rooms')} | {_num(100 * df1, '.1f')} "
+            f"| {_num(tm, '.3f')} | {_num(tmed, '.3f')} | {len(g) - len(ok)} |")
+    return line, doorless
+
+
+def format_table(rows: Sequence[dict], *, caption: bool = True) -> str:
     """A markdown table of the benchmark, one line per method and variant.
 
-    Like Tables 1 and 2 of the paper: mean ± sample standard deviation over
-    the maps of precision P and recall R (Bormann et al.'s micro figures, in
-    %), their F1 (harmonic mean of the mean P and mean R), the mean door F1
-    (%) and the runtime per map (segmentation call only) as mean and median
-    seconds. Methods keep the order of their first row; maps that failed are
-    counted in the ``failed`` column and left out of the means.
+    Per method and variant: mean ± sample standard deviation over the maps
+    of precision P and recall R (Bormann et al.'s micro figures, in %,
+    original protocol), their F1 (harmonic mean of the mean P and mean R),
+    the ceiling (the ground truth's own P / R), the free-cells protocol's
+    P / R and its ceiling, the rooms reported against the true rooms
+    (summed over the maps), the mean door F1 (%) and the runtime per map
+    (load_map + segment) as mean and median seconds. Maps that failed are
+    counted in the ``failed`` column and left out of the other columns.
 
     Parameters
     ----------
     rows : sequence of dict
         As :func:`run_benchmark` returns them (or read back from its CSV).
+    caption : bool, optional
+        Print :data:`TABLE_CAPTION` (the protocols, the 100-cell rule) above
+        the table (default).
 
     Returns
     -------
@@ -353,37 +465,16 @@ def format_table(rows: Sequence[dict]) -> str:
         Markdown, ending with a newline. A note line follows the table when
         the rows were measured with several parallel jobs.
     """
-    order = []
-    groups = {}
-    for r in rows:
-        key = (r["method"], r["variant"])
-        if key not in groups:
-            groups[key] = []
-            order.append(key)
-        groups[key].append(r)
-    vorder = [v for v in VARIANTS if any(k[1] == v for k in order)]
-    vorder += [v for k in order for v in [k[1]] if v not in vorder]
-    morder = list(dict.fromkeys(k[0] for k in order))
-    order.sort(key=lambda k: (vorder.index(k[1]), morder.index(k[0])))
-    head = ("| method | variant | maps | P ± sd (%) | R ± sd (%) | F1 (%) | door F1 (%) "
+    head = ("| method | variant | maps | P ± sd (%) | R ± sd (%) | F1 (%) | ceiling P / R (%) "
+            "| free P / R (%) | free ceiling P / R (%) | rooms found / true | door F1 (%) "
             "| runtime mean (s) | runtime median (s) | failed |")
-    lines = [head, "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
+    lines = [head, "| --- | --- " + "| ---: " * 12 + "|"]
     doorless = False
-    for key in order:
-        g = groups[key]
-        ok = [r for r in g if not r.get("error")]
-        p, psd, _, _ = _stats(ok, "precision")
-        r_, rsd, _, _ = _stats(ok, "recall")
-        f1 = 2 * p * r_ / (p + r_) if np.isfinite(p) and np.isfinite(r_) and p + r_ > 0 else math.nan
-        df1, _, _, _ = _stats(ok, "door_f1")
-        if ok and all(_is_zero(r.get("n_doors")) for r in ok):
-            df1 = math.nan  # the method reports no doors: no door score
-            doorless = True
-        tm, _, tmed, _ = _stats(g, "runtime_s")
-        lines.append(f"| {key[0]} | {key[1]} | {len(ok)} | {_pct(p, psd)} | {_pct(r_, rsd)} "
-                     f"| {_num(100 * f1, '.1f')} | {_num(100 * df1, '.1f')} "
-                     f"| {_num(tm, '.3f')} | {_num(tmed, '.3f')} | {len(g) - len(ok)} |")
-    out = "\n".join(lines) + "\n"
+    for key, g in _group(rows):
+        line, no_doors = _table_line(key, g)
+        lines.append(line)
+        doorless |= no_doors
+    out = (TABLE_CAPTION + "\n\n" if caption else "") + "\n".join(lines) + "\n"
     if doorless:
         out += "\n(–: the method reports no doors, so it has no door score.)\n"
     jobs = {int(float(r["jobs"])) for r in rows if r.get("jobs") not in (None, "")}

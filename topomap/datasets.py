@@ -1,22 +1,34 @@
 """Loading room-segmentation benchmarks and labelled map pairs.
 
-The benchmark is the one of Bormann et al. (ICRA 2016), from the
+Two data-set layouts are read (:func:`detect_layout` tells them apart):
+
+``"ipa"`` -- the benchmark of Bormann et al. (ICRA 2016), from the
 ``ipa_room_segmentation`` package: per map ``NAME``, ``NAME.png`` (map
 without furniture), ``NAME_furnitures.png`` (with furniture) and
 ``NAME_gt_segmentation.png`` (ground truth drawing: room space white, rooms
-separated by black lines across doorways). Resolution 0.05 m per pixel.
+separated by black lines across doorways). Resolution 0.05 m per pixel. The
+maps are bare images, loaded as a user loads them
+(``load_map(path, resolution=0.05)``, i.e. ``topomap segment PATH
+--resolution 0.05``).
 
-The data set's licence forbids redistributing it, so topomap never ships
-it: code reads it from a directory given at run time (see
+``"labelled"`` -- real SLAM maps with label images (e.g. the ROSE² data of
+Luperto et al. 2022): per map ``NAME.png``, a map_server ``NAME.yaml`` for it
+and ``NAME_gt.png``, an 8- or 16-bit label image (0 = no room, 1..K = rooms;
+a room may be several pieces). The map is loaded through its YAML
+(``load_map("NAME.yaml")``, i.e. ``topomap segment NAME.yaml``).
+
+The data sets' licences may forbid redistributing them, so topomap never
+ships them: code reads them from a directory given at run time (see
 :func:`benchmark_dir`).
 
-All images are read as 8-bit gray with Pillow's ``convert("L")`` whatever
-their mode (L, LA, RGB, RGBA, P; alpha is dropped), as the original
+Ground-truth drawings are read as 8-bit gray with Pillow's ``convert("L")``
+whatever their mode (L, LA, RGB, RGBA, P; alpha is dropped), as the original
 evaluation does.
 """
 
 from __future__ import annotations
 
+import fnmatch
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -25,25 +37,39 @@ from typing import Iterable, Optional
 import numpy as np
 
 from .errors import MapError, MapFileError, ParameterError
+from .io import FREE_GRAY  # noqa: F401  (re-exported: the benchmark's white level)
 
 __all__ = [
     "BENCHMARK_RESOLUTION",
+    "FREE_GRAY",
+    "VARIANTS",
+    "LABELLED_VARIANT",
     "BenchmarkNotFoundError",
     "BenchmarkMap",
     "LabeledMap",
     "read_gray",
     "read_label_image",
+    "detect_layout",
     "load_benchmark",
+    "load_labelled",
+    "load_dataset",
     "load_pairs",
+    "select_names",
     "benchmark_dir",
+    "real_maps_dir",
 ]
 
 #: Metres per pixel of every benchmark map.
 BENCHMARK_RESOLUTION = 0.05
 
+#: The two map variants of the ipa_room_segmentation layout.
+VARIANTS = ("unfurnished", "furnished")
+#: The one variant of the labelled layout: the map as given.
+LABELLED_VARIANT = "map"
+
 _GT_SUFFIX = "_gt_segmentation.png"
 _FURN_SUFFIX = "_furnitures.png"
-_VARIANTS = ("unfurnished", "furnished")
+_LABEL_SUFFIX = "_gt.png"
 
 
 class BenchmarkNotFoundError(MapFileError, FileNotFoundError):
@@ -59,11 +85,15 @@ class BenchmarkMap:
     name : str
         Map name (``NAME`` of the files).
     variant : str
-        ``"unfurnished"`` or ``"furnished"``.
+        ``"unfurnished"`` or ``"furnished"`` (ipa layout), ``"map"``
+        (:data:`LABELLED_VARIANT`, labelled layout).
     map_path, gt_path : Path
-        The map image read and the ground-truth drawing.
-    map_gray, gt_gray : (M, N) ndarray of uint8
-        Both images as 8-bit gray.
+        The map image and the ground truth (drawing or label image).
+    map_gray : (M, N) ndarray of uint8
+        The map image as 8-bit gray.
+    gt_gray : (M, N) ndarray of uint8 or None
+        The ground-truth drawing as 8-bit gray (ipa layout); None for a
+        label image.
     resolution : float
         Metres per pixel (0.05 for the benchmark).
     unfurnished_gray : (M, N) ndarray of uint8, optional
@@ -71,6 +101,16 @@ class BenchmarkMap:
         ``map_gray`` for the unfurnished variant. Extract true doors from it
         in both variants (furniture next to a door line would otherwise
         merge into the door's cell group). Defaults to ``map_gray``.
+    load_path : Path, optional
+        What a user passes to ``topomap segment``: the map image (ipa
+        layout, default) or its YAML (labelled layout).
+    load_kwargs : dict, optional
+        Keyword arguments of :func:`topomap.io.load_map` a user gives with
+        it; default ``{"resolution": resolution}`` for an image, ``{}`` for a
+        YAML.
+    gt_rooms : (M, N) ndarray of int32, optional
+        Ground-truth room labels (0 = no room); default derived from
+        ``gt_gray`` (:func:`topomap.evaluation.gt_rooms_from_image`).
     """
 
     name: str
@@ -78,18 +118,49 @@ class BenchmarkMap:
     map_path: Path
     gt_path: Path
     map_gray: np.ndarray = field(repr=False)
-    gt_gray: np.ndarray = field(repr=False)
+    gt_gray: Optional[np.ndarray] = field(repr=False)
     resolution: float = BENCHMARK_RESOLUTION
     unfurnished_gray: Optional[np.ndarray] = field(default=None, repr=False)
+    load_path: Optional[Path] = None
+    load_kwargs: Optional[dict] = None
+    gt_rooms: Optional[np.ndarray] = field(default=None, repr=False)
 
     def __post_init__(self):
         if self.unfurnished_gray is None:
             object.__setattr__(self, "unfurnished_gray", self.map_gray)
+        if self.load_path is None:
+            object.__setattr__(self, "load_path", Path(self.map_path))
+        if self.load_kwargs is None:
+            is_yaml = Path(self.load_path).suffix.lower() in (".yaml", ".yml")
+            object.__setattr__(self, "load_kwargs", {} if is_yaml else {"resolution": self.resolution})
+        if self.gt_rooms is None:
+            if self.gt_gray is None:
+                raise ParameterError(f"{self.gt_path}: a benchmark map needs gt_gray or gt_rooms")
+            from .evaluation import gt_rooms_from_image
+
+            object.__setattr__(self, "gt_rooms", gt_rooms_from_image(self.gt_gray))
+
+    def load(self):
+        """The map as a user loads it: ``load_map(load_path, **load_kwargs)``.
+
+        Returns
+        -------
+        topomap.io.OccupancyGrid
+        """
+        from .io import load_map
+
+        return load_map(self.load_path, **self.load_kwargs)
+
+    @property
+    def command(self) -> str:
+        """The ``topomap segment`` command line that loads the map the same way."""
+        opts = "".join(f" --{k} {v}" for k, v in self.load_kwargs.items())
+        return f"topomap segment {Path(self.load_path).name}{opts}"
 
     @property
     def scored(self) -> np.ndarray:
-        """Cells the metric scores: ``map_gray >= 250`` (bool array)."""
-        return self.map_gray >= 250
+        """Cells the metric scores: the free cells of the map as a user loads it (bool)."""
+        return self.load().free
 
 
 @dataclass(frozen=True, eq=False)
@@ -190,19 +261,23 @@ def load_benchmark(directory, *, variant: str = "unfurnished",
         ground-truth files; other files (e.g. ``*.pgm``) are ignored.
     variant : {"unfurnished", "furnished"}
         Which map image to read: ``NAME.png`` or ``NAME_furnitures.png``.
-    names : iterable of str, optional
-        Load only these maps.
+    names : iterable of str or str, optional
+        Load only these maps (names or shell patterns, see
+        :func:`select_names`).
 
     Returns
     -------
     list of BenchmarkMap
-        Sorted by name.
+        Sorted by name; ``load_path`` the map image, loaded with
+        ``resolution=0.05`` as ``topomap segment PATH --resolution 0.05``
+        loads it.
 
     Raises
     ------
     BenchmarkNotFoundError
-        The directory does not exist or holds no ground-truth file (a
-        ``FileNotFoundError`` and :class:`~topomap.errors.MapFileError`).
+        The directory does not exist or holds no ground-truth file, or a
+        name pattern matches no map (a ``FileNotFoundError`` and
+        :class:`~topomap.errors.MapFileError`).
     MapFileError
         A ground-truth file has no map image for ``variant``.
     MapError
@@ -210,19 +285,19 @@ def load_benchmark(directory, *, variant: str = "unfurnished",
     ParameterError
         ``variant`` is not one of the two variants.
     """
-    if variant not in _VARIANTS:
+    if variant not in VARIANTS:
         raise ParameterError(
             f"<array>: variant must be 'unfurnished' or 'furnished', got {variant!r}")
     directory = Path(directory)
     if not directory.is_dir():
         raise BenchmarkNotFoundError(f"{directory}: benchmark directory does not exist")
-    gts = sorted(directory.glob("*" + _GT_SUFFIX))
-    wanted = None if names is None else set(names)
+    found = {p.name[: -len(_GT_SUFFIX)]: p for p in directory.glob("*" + _GT_SUFFIX)}
+    found.pop("", None)
+    if not found:
+        raise BenchmarkNotFoundError(f"{directory}: no *_gt_segmentation.png files found")
     maps = []
-    for gt_path in gts:
-        name = gt_path.name[: -len(_GT_SUFFIX)]
-        if not name or (wanted is not None and name not in wanted):
-            continue
+    for name in select_names(found, names, directory):
+        gt_path = found[name]
         suffix = ".png" if variant == "unfurnished" else _FURN_SUFFIX
         map_path = directory / (name + suffix)
         if not map_path.is_file():
@@ -242,12 +317,130 @@ def load_benchmark(directory, *, variant: str = "unfurnished",
                                f"{map_path.name} shape {map_gray.shape}")
         maps.append(BenchmarkMap(name, variant, map_path, gt_path, map_gray, gt_gray,
                                  unfurnished_gray=base))
-    if not maps:
-        what = "no *_gt_segmentation.png files" if wanted is None else \
-            f"none of the maps {sorted(wanted)}"
-        raise BenchmarkNotFoundError(f"{directory}: {what} found")
     maps.sort(key=lambda m: m.name)
     return maps
+
+
+def select_names(available, patterns, directory="<directory>") -> list:
+    """The names of ``available`` that match ``patterns``, sorted.
+
+    Parameters
+    ----------
+    available : iterable of str
+    patterns : iterable of str, str or None
+        Map names or shell-style patterns (``fnmatch``: ``*``, ``?``,
+        ``[...]``); a string may hold several, comma-separated. None selects
+        every name.
+    directory : str or Path
+        Named in the error message.
+
+    Raises
+    ------
+    BenchmarkNotFoundError
+        A pattern matches no name (a typo should not silently shrink a run).
+    """
+    available = sorted(available)
+    if patterns is None:
+        return available
+    if isinstance(patterns, str):
+        patterns = patterns.split(",")
+    patterns = [str(p).strip() for p in patterns if str(p).strip()]
+    chosen = set()
+    for pat in patterns:
+        hit = fnmatch.filter(available, pat)
+        if not hit:
+            raise BenchmarkNotFoundError(
+                f"{directory}: no map matches {pat!r} (maps: {', '.join(available)})"[:300])
+        chosen.update(hit)
+    if not chosen:
+        raise BenchmarkNotFoundError(f"{directory}: no map selected")
+    return sorted(chosen)
+
+
+def _labelled_names(directory: Path) -> dict:
+    """``{NAME: (png, yaml, gt)}`` of the complete labelled triples in ``directory``."""
+    out = {}
+    for gt in directory.glob("*" + _LABEL_SUFFIX):
+        name = gt.name[: -len(_LABEL_SUFFIX)]
+        png, yml = directory / (name + ".png"), directory / (name + ".yaml")
+        if name and png.is_file() and yml.is_file():
+            out[name] = (png, yml, gt)
+    return out
+
+
+def detect_layout(directory) -> str:
+    """Which data-set layout ``directory`` holds: ``"ipa"`` or ``"labelled"``.
+
+    ``"ipa"`` if it holds a ``*_gt_segmentation.png``, else ``"labelled"`` if
+    it holds a ``NAME.png`` + ``NAME.yaml`` + ``NAME_gt.png`` triple.
+
+    Raises
+    ------
+    BenchmarkNotFoundError
+        The directory does not exist or holds neither.
+    """
+    directory = Path(directory)
+    if not directory.is_dir():
+        raise BenchmarkNotFoundError(f"{directory}: benchmark directory does not exist")
+    if any(p.name != _GT_SUFFIX for p in directory.glob("*" + _GT_SUFFIX)):
+        return "ipa"
+    if _labelled_names(directory):
+        return "labelled"
+    raise BenchmarkNotFoundError(
+        f"{directory}: no benchmark maps found (neither NAME_gt_segmentation.png files nor "
+        "NAME.png + NAME.yaml + NAME_gt.png triples)")
+
+
+def load_labelled(directory, *, names=None) -> list:
+    """Load the maps of a labelled data set (``NAME.png`` + ``NAME.yaml`` + ``NAME_gt.png``).
+
+    Parameters
+    ----------
+    directory : str or Path
+    names : iterable of str or str, optional
+        Only these maps (names or shell patterns, see :func:`select_names`).
+
+    Returns
+    -------
+    list of BenchmarkMap
+        Sorted by name; variant :data:`LABELLED_VARIANT`, ``gt_gray`` None,
+        ``gt_rooms`` the label image, ``load_path`` the YAML (the map is
+        scored on the free cells of the map as read through its YAML).
+
+    Raises
+    ------
+    BenchmarkNotFoundError
+        No such triple in ``directory``, or a pattern matches no map.
+    MapError
+        A label image differs in size from its map.
+    """
+    directory = Path(directory)
+    found = _labelled_names(directory) if directory.is_dir() else {}
+    if not found:
+        detect_layout(directory)  # raises the right message
+        raise BenchmarkNotFoundError(f"{directory}: no NAME.png + NAME.yaml + NAME_gt.png maps")
+    maps = []
+    for name in select_names(found, names, directory):
+        png, yml, gt = found[name]
+        map_gray = read_gray(png)
+        labels = read_label_image(gt)
+        if labels.shape != map_gray.shape:
+            raise MapError(f"{gt}: label image shape {labels.shape} differs from map "
+                           f"{png.name} shape {map_gray.shape}")
+        maps.append(BenchmarkMap(name, LABELLED_VARIANT, png, gt, map_gray, None,
+                                 load_path=yml, load_kwargs={}, gt_rooms=labels))
+    return maps
+
+
+def load_dataset(directory, *, variant: str = "unfurnished", names=None) -> list:
+    """Load the maps of either layout (:func:`detect_layout`).
+
+    ``variant`` selects the map image of the ipa layout and is ignored for
+    the labelled layout (one variant). ``names``: names or shell patterns.
+    """
+    if detect_layout(directory) == "ipa":
+        return load_benchmark(directory, variant=variant, names=names)
+    return load_labelled(directory, names=names)
 
 
 def load_pairs(pairs) -> list:
@@ -289,8 +482,14 @@ def load_pairs(pairs) -> list:
     return out
 
 
+def _shared_dataset(name: str) -> Optional[Path]:
+    repo = Path(__file__).resolve().parent.parent
+    cand = repo.parent / "shared" / "datasets" / name
+    return cand if cand.is_dir() else None
+
+
 def benchmark_dir() -> Optional[Path]:
-    """Where the benchmark maps are, if anywhere.
+    """Where the ipa_room_segmentation benchmark maps are, if anywhere.
 
     Returns
     -------
@@ -302,8 +501,20 @@ def benchmark_dir() -> Optional[Path]:
     env = os.environ.get("TOPOMAP_BENCHMARK_DIR")
     if env and Path(env).is_dir():
         return Path(env)
-    repo = Path(__file__).resolve().parent.parent
-    cand = repo.parent / "shared" / "datasets" / "ipa_room_segmentation"
-    if cand.is_dir():
-        return cand
-    return None
+    return _shared_dataset("ipa_room_segmentation")
+
+
+def real_maps_dir() -> Optional[Path]:
+    """Where the labelled real maps (ROSE² data) are, if anywhere.
+
+    Returns
+    -------
+    Path or None
+        ``$TOPOMAP_REAL_MAPS_DIR`` if that variable names an existing
+        directory; else ``<repo>/../shared/datasets/rose2_real`` if it
+        exists; else None (tests skip then).
+    """
+    env = os.environ.get("TOPOMAP_REAL_MAPS_DIR")
+    if env and Path(env).is_dir():
+        return Path(env)
+    return _shared_dataset("rose2_real")

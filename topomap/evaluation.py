@@ -1,24 +1,31 @@
 """Scoring room segmentations, doors and room graphs against ground truth.
 
 The room metric is the one of Bormann et al., "Room segmentation: survey,
-implementation, and analysis" (ICRA 2016), as the benchmark README in
-``shared/datasets`` defines it:
+implementation, and analysis" (ICRA 2016), in two protocols
+(:data:`PROTOCOLS`), both given the *scored* cells (the cells the method was
+given: the free cells of the grid as loaded):
 
-* only the *scored* cells count (for the benchmark: map gray >= 250, the free
-  cells the methods were given);
-* a predicted segment ``S`` is the set of scored cells carrying one label
-  ``k > 0``; a ground-truth room ``G`` is the set of scored cells of one
-  ground-truth component. Sizes ``|S|`` and ``|G|`` are counted *within the
-  scored cells*, and segments and rooms of ``min_size`` (100) cells or fewer
-  are ignored after that restriction;
-* a scored segment cell that lies in no (kept) room still counts in ``|S|``
-  but in no intersection, and a scored room cell that lies in no (kept)
-  segment still counts in ``|G|``;
-* precision = mean over segments ``S`` of ``max_G |S ∩ G| / |S|``
-  (low on under-segmentation), recall = mean over rooms ``G`` of
-  ``max_S |S ∩ G| / |G|`` (low on over-segmentation). These plain means are
-  the *micro* figures, the benchmark's headline; the *macro* figures weight
-  each segment (room) by its size, i.e. ``sum_S max_G |S∩G| / sum_S |S|``.
+* ``"original"`` -- the protocol of the original evaluation code
+  (ipa_room_segmentation's ``EvaluationSegmentation::computePrecisionRecall``)
+  and of every published figure on the ipa_room_segmentation maps. A
+  predicted segment ``S`` is the set of *scored* cells carrying one label
+  ``k > 0``; a ground-truth room ``G`` is kept **whole**, furniture and other
+  unscored cells included. No method can label those cells, so even the
+  ground truth itself scores below 100 % recall on furnished maps (the
+  *ceiling*, :func:`ceiling`).
+* ``"free-cells"`` -- both ``S`` and ``G`` are restricted to the scored
+  cells, so the ground truth scores 100 %. ROSE²'s evaluation of real SLAM
+  maps (Luperto et al. 2022) is of this kind.
+
+In both, sizes ``|S|`` and ``|G|`` are counted after that restriction and
+segments and rooms of ``min_size`` (100) cells or fewer are ignored; a
+segment cell in no (kept) room still counts in ``|S|`` but in no
+intersection, and a room cell in no (kept) segment still counts in ``|G|``;
+precision = mean over segments ``S`` of ``max_G |S ∩ G| / |S|`` (low on
+under-segmentation), recall = mean over rooms ``G`` of ``max_S |S ∩ G| / |G|``
+(low on over-segmentation). These plain means are the *micro* figures, the
+headline; the *macro* figures weight each segment (room) by its size, i.e.
+``sum_S max_G |S∩G| / sum_S |S|``.
 
 Doors are scored by greedy one-to-one matching of detected door segments to
 true door cell groups (:func:`score_doors`), the room graph by comparing
@@ -47,11 +54,14 @@ from scipy import sparse
 
 from ._fast import label as _label
 from .errors import ParameterError
+from .io import FREE_GRAY  # noqa: F401  (re-exported: the benchmark's white level)
 
 __all__ = [
     "FREE_GRAY",
     "MIN_SIZE",
+    "PROTOCOLS",
     "score_segmentation",
+    "ceiling",
     "gt_rooms_from_image",
     "gt_doors_from_images",
     "true_adjacency",
@@ -64,10 +74,10 @@ __all__ = [
     "summarize",
 ]
 
-#: Gray level from which a benchmark pixel counts as free / white.
-FREE_GRAY = 250
 #: Segments and rooms of this many cells or fewer are ignored.
 MIN_SIZE = 100
+#: The two scoring protocols of :func:`score_segmentation`, headline first.
+PROTOCOLS = ("original", "free-cells")
 
 
 # --------------------------------------------------------------------------
@@ -115,7 +125,27 @@ def _contingency(labels, gt_rooms, scored):
     return seg_ids, room_ids, table
 
 
-def score_segmentation(labels, gt_rooms, *, scored=None, min_size: int = MIN_SIZE) -> dict:
+def _check_protocol(protocol) -> str:
+    if protocol not in PROTOCOLS:
+        raise ParameterError(
+            f"<array>: protocol must be one of {', '.join(PROTOCOLS)}, got {protocol!r}")
+    return protocol
+
+
+def _table_inputs(labels, gt_rooms, scored, protocol):
+    """Labels, rooms and the cells to tabulate for ``protocol``.
+
+    ``original``: labels are zeroed outside the scored cells and every cell
+    of a true room is tabulated as well, so rooms stay whole.
+    """
+    if protocol == "free-cells":
+        return labels, gt_rooms, scored
+    labels = np.where(scored, labels, 0)
+    return labels, gt_rooms, scored | (gt_rooms > 0)
+
+
+def score_segmentation(labels, gt_rooms, *, scored=None, min_size: int = MIN_SIZE,
+                       protocol: str = "original") -> dict:
     """Score a room segmentation with the Bormann et al. (2016) metric.
 
     Parameters
@@ -124,28 +154,31 @@ def score_segmentation(labels, gt_rooms, *, scored=None, min_size: int = MIN_SIZ
         Predicted room label per cell; values <= 0 mean "no room".
     gt_rooms : (M, N) array_like of int
         Ground-truth room label per cell (e.g. from :func:`gt_rooms_from_image`);
-        values <= 0 mean "no room".
+        values <= 0 mean "no room". A room may be several pieces.
     scored : (M, N) array_like of bool, optional
-        Cells that count (benchmark: map gray >= 250). Default: every cell.
+        The cells the method was given (the free cells of the grid as
+        loaded). Default: every cell.
     min_size : int, optional
-        Segments and rooms with ``min_size`` scored cells or fewer are ignored
-        (default 100).
+        Segments and rooms with ``min_size`` cells or fewer (counted as the
+        protocol counts them) are ignored (default 100).
+    protocol : {"original", "free-cells"}, optional
+        ``"original"`` (default): segments restricted to the scored cells,
+        true rooms whole -- the original evaluation code's protocol.
+        ``"free-cells"``: true rooms restricted to the scored cells too.
+        See the module docstring.
 
     Returns
     -------
     dict
         ``precision``, ``recall`` (micro: plain means over segments / rooms),
         ``precision_macro``, ``recall_macro`` (each segment / room weighted by
-        its size in cells), ``n_segments``, ``n_rooms`` (after the restriction
-        to scored cells and the size filter) and ``room_count_error`` =
-        ``n_segments - n_rooms``.
+        its size in cells), ``n_segments``, ``n_rooms`` (kept after the size
+        filter) and ``room_count_error`` = ``n_segments - n_rooms``.
 
     Notes
     -----
-    ``S`` = predicted label region ∩ scored cells and ``G`` = ground-truth room
-    ∩ scored cells; both are size-filtered *after* that restriction. A segment
-    cell in no kept room counts in ``|S|`` but in no intersection (and
-    symmetrically for recall), so scored cells a method leaves unlabelled
+    A segment cell in no kept room counts in ``|S|`` but in no intersection
+    (and symmetrically for recall), so cells a method leaves unlabelled
     lower recall, and labels spilling over unlabelled ground truth lower
     precision.
 
@@ -153,14 +186,15 @@ def score_segmentation(labels, gt_rooms, *, scored=None, min_size: int = MIN_SIZ
     no segments (but rooms) both are 0.0; with no rooms (but segments)
     precision is 0.0 (no segment overlaps a room) and recall is 0.0.
 
-    The computation is a sparse contingency table of the scored cells, so it
-    is linear in the number of cells.
+    The computation is a sparse contingency table of the cells, so it is
+    linear in the number of cells.
     """
     labels, gt_rooms, scored = _as_inputs(labels, gt_rooms, scored)
     if int(min_size) < 0:
         raise ParameterError(f"<array>: min_size must be >= 0, got {min_size!r}")
+    labels, gt_rooms, cells = _table_inputs(labels, gt_rooms, scored, _check_protocol(protocol))
 
-    seg_ids, room_ids, table = _contingency(labels, gt_rooms, scored)
+    seg_ids, room_ids, table = _contingency(labels, gt_rooms, cells)
     if seg_ids.size == 0:  # nothing scored
         seg_ids = np.zeros(0, np.int64)
         room_ids = np.zeros(0, np.int64)
@@ -190,6 +224,26 @@ def score_segmentation(labels, gt_rooms, *, scored=None, min_size: int = MIN_SIZ
         recall_macro=float(best_per_room.sum() / r_size.sum()),
     )
     return out
+
+
+def ceiling(gt_rooms, *, scored=None, min_size: int = MIN_SIZE) -> dict:
+    """The ground truth itself, scored under each protocol: the best any method can do.
+
+    The ground truth is given as the labels (restricted to the scored
+    cells, as any method's labels are) and scored against itself.
+
+    Returns
+    -------
+    dict
+        ``{protocol: score_segmentation(...)}`` for every protocol of
+        :data:`PROTOCOLS`. Under ``"original"`` the recall is below 1 where
+        true rooms have cells the method is not given (furniture); under
+        ``"free-cells"`` both are 1 unless the restriction leaves a room with
+        ``min_size`` cells or fewer.
+    """
+    gt_rooms = np.asarray(gt_rooms)
+    return {p: score_segmentation(gt_rooms, gt_rooms, scored=scored, min_size=min_size,
+                                  protocol=p) for p in PROTOCOLS}
 
 
 def _filter_small(lab: np.ndarray, min_size: int) -> np.ndarray:
@@ -592,19 +646,47 @@ def score_adjacency(labels, gt_rooms, pred_edges, true_edges, *, scored=None,
 # whole map and summaries
 # --------------------------------------------------------------------------
 
+def _room_scores(labels, gt, scored, min_size) -> dict:
+    """Room scores under both protocols and their ceilings, flat keys.
+
+    Headline keys (original protocol) have no suffix; the free-cells ones end
+    in ``_free``; the ground truth's own scores start with ``ceiling_``.
+    """
+    out = {}
+    ceil = ceiling(gt, scored=scored, min_size=min_size)
+    for prot, suffix in zip(PROTOCOLS, ("", "_free")):
+        sc = score_segmentation(labels, gt, scored=scored, min_size=min_size, protocol=prot)
+        p, r = sc["precision"], sc["recall"]
+        for k in ("precision", "recall", "precision_macro", "recall_macro"):
+            out[k + suffix] = sc[k]
+        out["f1" + suffix] = 2 * p * r / (p + r) if p + r > 0 else 0.0
+        out["ceiling_precision" + suffix] = ceil[prot]["precision"]
+        out["ceiling_recall" + suffix] = ceil[prot]["recall"]
+        if prot == "original":
+            out.update(n_segments=sc["n_segments"], n_true_rooms=sc["n_rooms"],
+                       room_count_error=sc["room_count_error"])
+    return out
+
+
 def evaluate(labels, map_gray, gt_gray, *, pred_doors=None, resolution: float = 0.05,
-             tol_m: float = 0.5, min_size: int = MIN_SIZE, door_map_gray=None) -> dict:
+             tol_m: float = 0.5, min_size: int = MIN_SIZE, door_map_gray=None,
+             scored=None, gt_rooms=None) -> dict:
     """All scores of one benchmark map.
 
     Parameters
     ----------
     labels : (M, N) array_like of int
         Predicted room labels (<= 0: no room).
-    map_gray, gt_gray : (M, N) array_like of uint8
-        The benchmark map and its ground-truth drawing as 8-bit gray.
+    map_gray : (M, N) array_like of uint8
+        The benchmark map as 8-bit gray.
+    gt_gray : (M, N) array_like of uint8 or None
+        The ground-truth drawing (ipa_room_segmentation layout: rooms white,
+        door lines black). None when the ground truth is a label image
+        (``gt_rooms``); doors are then not scored.
     pred_doors : sequence of ((r1, c1), (r2, c2)), optional
-        Detected door segments in pixels; if given, door and adjacency
-        scores are added under ``door_*`` and ``adjacency_*`` keys.
+        Detected door segments in pixels; if given (and ``gt_gray`` is),
+        door and adjacency scores are added under ``door_*`` and
+        ``adjacency_*`` keys.
     resolution : float, optional
         Metres per pixel (benchmark: 0.05).
     tol_m : float, optional
@@ -615,22 +697,40 @@ def evaluate(labels, map_gray, gt_gray, *, pred_doors=None, resolution: float = 
         Map the true doors are extracted from (default ``map_gray``). For the
         furnished variant pass the unfurnished map
         (:attr:`topomap.datasets.BenchmarkMap.unfurnished_gray`).
+    scored : (M, N) array_like of bool, optional
+        The cells the method was given: the free cells of the grid as loaded
+        (:attr:`topomap.io.OccupancyGrid.free`). Default ``map_gray >= 250``.
+    gt_rooms : (M, N) array_like of int, optional
+        Ground-truth room labels; default :func:`gt_rooms_from_image` of
+        ``gt_gray``.
 
     Returns
     -------
     dict
-        The keys of :func:`score_segmentation`, plus ``f1`` (harmonic mean of
-        micro precision and recall), and if doors were given ``door_precision``,
-        ``door_recall``, ``door_f1``, ``door_tp``, ``door_fp``, ``door_fn``,
-        ``adjacency_precision``, ``adjacency_recall``, ``adjacency_f1``.
+        Original protocol (the headline): ``precision``, ``recall``,
+        ``precision_macro``, ``recall_macro``, ``f1`` (harmonic mean of micro
+        precision and recall), ``n_segments``, ``n_true_rooms`` (true rooms
+        of more than ``min_size`` cells) and ``room_count_error``
+        (``n_segments - n_true_rooms``); the same scores under the
+        free-cells protocol with the suffix ``_free``; the ground truth's own
+        scores (:func:`ceiling`) as ``ceiling_precision``,
+        ``ceiling_recall``, ``ceiling_precision_free``,
+        ``ceiling_recall_free``. With doors: ``door_precision``,
+        ``door_recall``, ``door_f1``, ``door_tp``, ``door_fp``,
+        ``door_fn``, ``adjacency_precision``, ``adjacency_recall``,
+        ``adjacency_f1`` (adjacency overlaps on the scored cells).
     """
     map_gray = np.asarray(map_gray)
-    scored = map_gray >= FREE_GRAY
-    gt = gt_rooms_from_image(gt_gray, min_size=min_size)
-    out = score_segmentation(labels, gt, scored=scored, min_size=min_size)
-    p, r = out["precision"], out["recall"]
-    out["f1"] = 2 * p * r / (p + r) if p + r > 0 else 0.0
-    if pred_doors is not None:
+    scored = map_gray >= FREE_GRAY if scored is None else np.asarray(scored, bool)
+    if gt_rooms is None:
+        if gt_gray is None:
+            raise ParameterError("<array>: give gt_gray or gt_rooms")
+        gt = gt_rooms_from_image(gt_gray, min_size=min_size)
+    else:
+        gt = np.asarray(gt_rooms)
+    labels, gt, scored = _as_inputs(labels, gt, scored)
+    out = _room_scores(labels, gt, scored, min_size)
+    if pred_doors is not None and gt_gray is not None:
         dmap = map_gray if door_map_gray is None else np.asarray(door_map_gray)
         true_doors = gt_doors_from_images(dmap, gt_gray, room_min_size=min_size)
         d = score_doors(pred_doors, true_doors, resolution=resolution, tol_m=tol_m)

@@ -38,11 +38,13 @@ __all__ = [
     "DEFAULT_RESOLUTION",
     "OCCUPIED_THRESH",
     "FREE_THRESH",
+    "FREE_GRAY",
     "GRAY_FREE",
     "GRAY_OCCUPIED",
     "GRAY_UNKNOWN",
     "OccupancyGrid",
     "classify_gray",
+    "classify_plan",
     "from_array",
     "load_map",
     "save_map",
@@ -63,6 +65,12 @@ DEFAULT_RESOLUTION = 0.05
 #: map_server default thresholds on the occupancy probability ``p``.
 OCCUPIED_THRESH = 0.65
 FREE_THRESH = 0.196
+
+#: A bare image (no YAML) is read as a floor plan: a pixel is free from this
+#: gray level up (map_saver writes free cells as 254), unknown where it is
+#: map_saver's unknown gray 205, occupied everywhere else (:func:`classify_plan`). The same level defines the free cells of the
+#: ipa_room_segmentation benchmark and the white of its ground-truth drawings.
+FREE_GRAY = 250
 
 #: Gray values map_saver writes (and :func:`save_map` writes) per state.
 GRAY_FREE = 254
@@ -301,6 +309,40 @@ def classify_gray(gray, *, negate: bool = False, occupied_thresh: float = OCCUPI
         lut[p > occ] = OCCUPIED
         lut[p < free] = FREE
     cells = lut[np.asarray(gray, dtype=np.uint8)]
+    if transparent is not None:
+        cells[np.asarray(transparent, bool)] = UNKNOWN
+    return cells
+
+
+def classify_plan(gray, *, negate: bool = False, transparent=None) -> np.ndarray:
+    """Classify an 8-bit gray floor plan or map_saver image (the bare-image rule).
+
+    ``FREE`` where gray >= :data:`FREE_GRAY` (250), ``UNKNOWN`` where gray is
+    exactly :data:`GRAY_UNKNOWN` (205, map_saver's unknown), ``OCCUPIED``
+    everywhere else. This is the rule :func:`load_map` applies to a bare
+    image (no YAML): a drawn floor plan's walls, anti-aliased fringes and
+    gray areas are obstacles, and an image map_saver wrote (0 / 205 / 254)
+    reads exactly as map_server reads it with its default thresholds.
+
+    Parameters
+    ----------
+    gray : (M, N) ndarray of uint8
+        Gray image, 0 = black.
+    negate : bool
+        Invert the gray values first (white = occupied).
+    transparent : (M, N) ndarray of bool, optional
+        Pixels to mark ``UNKNOWN`` (fully transparent).
+
+    Returns
+    -------
+    (M, N) ndarray of int8
+        ``FREE`` (0), ``OCCUPIED`` (100) or ``UNKNOWN`` (-1).
+    """
+    v = np.asarray(gray, dtype=np.uint8)
+    if negate:
+        v = 255 - v
+    cells = np.where(v >= FREE_GRAY, FREE, OCCUPIED).astype(np.int8)
+    cells[v == GRAY_UNKNOWN] = UNKNOWN
     if transparent is not None:
         cells[np.asarray(transparent, bool)] = UNKNOWN
     return cells
@@ -557,10 +599,13 @@ def load_map(path, *, resolution=None, origin=None, negate=None, occupied_thresh
     negate : bool, optional
         White means occupied. Default ``False``.
     occupied_thresh, free_thresh : float, optional
-        Thresholds on ``p = (255 - v) / 255``; defaults 0.65 and 0.196.
+        Thresholds on ``p = (255 - v) / 255`` (override the YAML); defaults
+        0.65 and 0.196 (map_server's). Giving either for a bare image reads
+        it with map_server's rule instead of the floor-plan rule (Notes).
     mode : {'trinary', 'scale', 'raw'}, optional
         map_server mode. ``scale`` is classified like ``trinary``; ``raw``
-        takes pixel values ``0..100`` as ROS values (others unknown).
+        takes pixel values ``0..100`` as ROS values (others unknown). Giving
+        it for a bare image reads it with map_server's rule.
 
     Returns
     -------
@@ -582,6 +627,24 @@ def load_map(path, *, resolution=None, origin=None, negate=None, occupied_thresh
     ParameterError
         Invalid resolution, origin, thresholds, negate or mode (from the
         YAML or the arguments).
+
+    Notes
+    -----
+    **A YAML** is read with map_server's exact semantics: its own
+    ``occupied_thresh``, ``free_thresh``, ``negate`` and ``mode``.
+
+    **A bare image** (no YAML, no threshold or mode argument) is read as a
+    floor plan or an image map_saver wrote (:func:`classify_plan`): a pixel
+    is free where its gray value is at least :data:`FREE_GRAY` (250; map_saver
+    writes free space as 254), unknown where it is exactly 205 (map_saver's
+    unknown) and occupied everywhere else. A map_saver image thus reads as
+    map_server reads it with its default thresholds. A drawn floor plan,
+    though, would not: map_server's defaults call every gray from 206 up
+    free (the anti-aliased fringe of a wall) and every gray from 90 to 204
+    unknown, and many floor plans draw walls and the outside in such grays;
+    a method that builds on occupied space then loses the walls. To read an
+    image with map_server's rule, write a YAML for it or pass
+    ``free_thresh`` / ``occupied_thresh`` / ``mode``.
     """
     try:
         p = Path(os.fspath(path))
@@ -594,7 +657,8 @@ def load_map(path, *, resolution=None, origin=None, negate=None, occupied_thresh
     meta = {}
     image_path = p
     image_name = name
-    if p.suffix.lower() in _YAML_SUFFIXES:
+    is_yaml = p.suffix.lower() in _YAML_SUFFIXES
+    if is_yaml:
         meta = _read_yaml(p, name)
         for key in ("image",) + (("resolution",) if resolution is None else ()) + \
                    (("origin",) if origin is None else ()):
@@ -637,8 +701,11 @@ def load_map(path, *, resolution=None, origin=None, negate=None, occupied_thresh
             raise
         # name both files: the YAML and its image
         raise type(exc)(_msg(name, f"image {exc}")) from None
-    cells = classify_gray(gray, negate=neg, occupied_thresh=occ, free_thresh=free,
-                          mode=mod, transparent=transparent)
+    if is_yaml or any(v is not None for v in (occupied_thresh, free_thresh, mode)):
+        cells = classify_gray(gray, negate=neg, occupied_thresh=occ, free_thresh=free,
+                              mode=mod, transparent=transparent)
+    else:
+        cells = classify_plan(gray, negate=neg, transparent=transparent)
     return OccupancyGrid(cells, res, org, name, gray=gray)
 
 
