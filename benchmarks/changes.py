@@ -1,11 +1,11 @@
-"""The default method, commit by commit: one row per change (issue 6).
+"""The default method, commit by commit: one row per change.
 
 Every listed commit is checked out in its own git worktree (the working copy
 of this repository is never touched) and run *as it was*: a subprocess with
 ``PYTHONPATH=<worktree>`` imports that commit's ``topomap``, builds each
-benchmark grid the way ``topomap benchmark`` does (free where the gray value
-of ``NAME.png`` / ``NAME_furnitures.png`` is >= 250, occupied everywhere
-else), calls ``segment(grid, method=<that commit's DEFAULT_METHOD>)`` after
+benchmark grid the way the floor-plan benchmark always read its maps (free
+where the gray value of ``NAME.png`` / ``NAME_furnitures.png`` is >= 250,
+occupied everywhere else -- old commits have no other common loader), calls ``segment(grid, method=<that commit's DEFAULT_METHOD>)`` after
 one untimed warm-up call, and saves labels, door segments and the wall time
 of the ``segment`` call to ``OUT/<commit>/<variant>__<map>.npz``.
 
@@ -13,7 +13,8 @@ All saved results are then scored by *this* checkout's
 ``topomap.evaluation.evaluate`` exactly as ``topomap.benchmark.run_map``
 does (true doors from the unfurnished map in both variants), so every row
 uses the same metric. Printed: a Markdown table, per variant the mean over
-maps of the Bormann et al. precision and recall (micro) and of the door F1,
+maps of the Bormann et al. precision and recall (micro, the original
+protocol: true rooms whole, segments on the free cells) and of the door F1,
 each with its change from the row above, and the median seconds per map.
 
 Usage (from the repository root)::
@@ -209,7 +210,9 @@ def _cell(v, prev):
 
 
 def table(results: list) -> str:
-    lines = ["| commit | what changed | method | unfurnished P (%) | R (%) | door F1 (%) "
+    lines = ["P / R: Bormann et al., original protocol (true rooms whole; segments on the free "
+             "cells; segments and rooms of <= 100 cells ignored).", "",
+             "| commit | what changed | method | unfurnished P (%) | R (%) | door F1 (%) "
              "| furnished P (%) | R (%) | door F1 (%) | median s/map (unf. / furn.) |",
              "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
     prev = None

@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Speed of topomap's default method against a plain watershed baseline (issue 7).
+"""Speed of topomap's default method against a plain watershed baseline.
 
 Run (not a test)::
 

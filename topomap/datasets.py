@@ -36,7 +36,7 @@ from typing import Iterable, Optional
 
 import numpy as np
 
-from .errors import MapError, MapFileError, ParameterError
+from .errors import BenchmarkNotFoundError, MapError, MapFileError, ParameterError
 from .io import FREE_GRAY  # noqa: F401  (re-exported: the benchmark's white level)
 
 __all__ = [
@@ -70,10 +70,6 @@ LABELLED_VARIANT = "map"
 _GT_SUFFIX = "_gt_segmentation.png"
 _FURN_SUFFIX = "_furnitures.png"
 _LABEL_SUFFIX = "_gt.png"
-
-
-class BenchmarkNotFoundError(MapFileError, FileNotFoundError):
-    """No benchmark maps in a directory (or the directory does not exist)."""
 
 
 @dataclass(frozen=True, eq=False)

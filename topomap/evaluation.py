@@ -54,6 +54,7 @@ from scipy import sparse
 
 from ._fast import label as _label
 from .errors import ParameterError
+from .geometry import point_segment_distances
 from .io import FREE_GRAY  # noqa: F401  (re-exported: the benchmark's white level)
 
 __all__ = [
@@ -493,16 +494,8 @@ def door_distance_matrix(pred_doors, true_doors, *, resolution: float) -> np.nda
         p = np.asarray(door, float).reshape(-1, 2)
         if p.size == 0:
             continue
-        # (P, K) distances of this door's cells to every segment at once
-        a = segs[:, 0, :][:, None, :]
-        ab = (segs[:, 1, :] - segs[:, 0, :])[:, None, :]
-        den = np.sum(ab * ab, axis=2)
-        num = np.sum((p[None, :, :] - a) * ab, axis=2)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            t = np.where(den > 0, num / np.where(den > 0, den, 1.0), 0.0)
-        t = np.clip(t, 0.0, 1.0)
-        diff = p[None, :, :] - (a + t[:, :, None] * ab)
-        d = np.hypot(diff[..., 0], diff[..., 1])
+        # (n_pred, K) distances of this door's K cells to every segment at once
+        d = point_segment_distances(p[None, :, :], segs[:, None, 0, :], segs[:, None, 1, :])
         D[:, j] = np.median(d, axis=1) * res
     return D
 
