@@ -142,12 +142,12 @@ def test_failed_overlay_leaves_no_partial_file_and_keeps_earlier_outputs(tmp_pat
     assert invoke("segment", first, "-o", out).exit_code == 0
     before = _snapshot(out)
 
-    def broken_overlay(seg, path, **kw):
+    def broken_overlay(data, path):
         with open(path, "wb") as fh:  # half a picture, then a crash
-            fh.write(b"\x89PNG\r\n")
+            fh.write(data[:6])
         raise OSError("disk full")
 
-    monkeypatch.setattr("topomap.plot.save_overlay", broken_overlay)
+    monkeypatch.setattr("topomap.export.save_bytes", broken_overlay)
     second = png(tmp_path, "second.png", T.gray(T.corridor_with_rooms().array))
     r = invoke("segment", second, "-o", out)
     assert r.exit_code == 1
@@ -155,6 +155,20 @@ def test_failed_overlay_leaves_no_partial_file_and_keeps_earlier_outputs(tmp_pat
     assert len(lines) == 1 and "disk full" in lines[0], r.stderr
     assert _snapshot(out) == before  # nothing clobbered, no temporary file left
     assert [p.name for p in out.iterdir() if p.name.startswith(".")] == []
+
+
+def test_failed_overlay_drawing_writes_nothing(tmp_path, monkeypatch):
+    out = tmp_path / "out"
+    assert invoke("segment", png(tmp_path, "first.png", T.gray(T.two_rooms().array)), "-o", out).exit_code == 0
+    before = _snapshot(out)
+
+    def broken(seg, **kw):
+        raise OSError("no display")
+
+    monkeypatch.setattr("topomap.plot.overlay_png", broken)
+    r = invoke("segment", png(tmp_path, "second.png", T.gray(T.one_room().array)), "-o", out)
+    assert r.exit_code == 1 and "no display" in r.stderr
+    assert _snapshot(out) == before
 
 
 @pytest.mark.parametrize("victim", ["save_labels", "save_graphml", "save_json"])

@@ -220,8 +220,20 @@ def test_failed_write_keeps_the_old_file(graph, tmp_path, monkeypatch, ext):
     assert [p.name for p in tmp_path.iterdir()] == [path.name]
 
 
+def test_write_outputs_only_writes(hand, tmp_path):
+    """export.write_outputs saves the graph and picture it is given, as they are."""
+    G = P.travel_graph(hand)
+    G.graph["marker"] = "given"
+    out = E.write_outputs(hand, tmp_path / "o", G, overlay_png=b"\x89PNG fake")
+    assert out["overlay"].read_bytes() == b"\x89PNG fake"
+    assert E.load_graph(out["json"]).graph["marker"] == "given"
+    assert "overlay" not in E.write_outputs(hand, tmp_path / "p", G)
+
+
 def test_write_outputs(hand, tmp_path):
-    out = E.write_outputs(hand, tmp_path / "out", overlay=False)
+    from topomap.cli import write_segmentation
+
+    out = write_segmentation(hand, tmp_path / "out", overlay=False)
     assert set(out) >= {"labels", "graphml", "json", "geojson"}
     assert out["geojson"].name == "rooms.geojson"
     for p in out.values():
@@ -289,7 +301,7 @@ def saved(tmp_path_factory):
 
     seg = corridor_of_rooms()
     d = tmp_path_factory.mktemp("saved")
-    E.write_outputs(seg, d, overlay=False)
+    E.write_outputs(seg, d, P.travel_graph(seg))
     return d, room_centre(seg, 1), room_centre(seg, 5)
 
 

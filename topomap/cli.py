@@ -56,11 +56,37 @@ def main(debug, verbose):
     logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
 
 
+def write_segmentation(seg, outdir, *, overlay: bool = True, skeletons: bool = False) -> dict:
+    """The files ``topomap segment`` writes for ``seg`` into ``outdir``.
+
+    Computes what is saved — the travel graph
+    (:func:`topomap.planning.travel_graph`: the room–door graph with
+    in-room door-to-door distances, so ``topomap plan`` works from
+    ``rooms.graphml`` or ``rooms.json`` alone) and the overlay picture
+    (:func:`topomap.plot.overlay_png`) — then writes everything with
+    :func:`topomap.export.write_outputs` (all files or none).
+
+    Returns
+    -------
+    dict
+        ``{name: path}`` of the files written.
+    """
+    from .export import write_outputs
+    from .planning import travel_graph
+
+    G = travel_graph(seg)
+    png = None
+    if overlay:
+        from .plot import overlay_png
+
+        png = overlay_png(seg, skeletons=skeletons)
+    return write_outputs(seg, outdir, G, overlay_png=png)
+
+
 def _segment_one(path, outdir, resolution, method, skeletons):
     import time
 
     from . import io
-    from .export import write_outputs
     from .segmentation import segment
 
     t0 = time.perf_counter()
@@ -69,7 +95,7 @@ def _segment_one(path, outdir, resolution, method, skeletons):
     seg = segment(grid, method=method)
     t2 = time.perf_counter()
     seg.room_graph  # built here so its time is its own stage (timings["room_graph"])
-    write_outputs(seg, outdir, skeletons=skeletons)
+    write_segmentation(seg, outdir, skeletons=skeletons)
     seg.timings["load"] = t1 - t0
     seg.timings["write"] = time.perf_counter() - t2 - seg.timings.get("room_graph", 0.0)
     return seg

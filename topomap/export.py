@@ -42,7 +42,7 @@ from .errors import GraphFormatError
 from .io import atomic_write  # noqa: F401  (re-exported: topomap.export.atomic_write)
 
 __all__ = ["atomic_write", "save_labels", "save_graphml", "save_json", "to_graphml_graph",
-           "node_link", "write_outputs", "geometry_wkt", "restore_types", "load_graphml", "load_json",
+           "node_link", "write_outputs", "save_bytes", "geometry_wkt", "restore_types", "load_graphml", "load_json",
            "to_geojson", "from_geojson", "save_geojson", "load_geojson", "save_label_map", "load_label_map",
            "save_graph", "load_graph", "GRAPH_TYPES", "NODE_TYPES", "EDGE_TYPES", "FORMATS"]
 
@@ -554,7 +554,7 @@ def save_label_map(seg, stem, *, resolution=None, origin=None) -> Path:
     from contextlib import ExitStack
 
     from .errors import ParameterError
-    from .io import FREE_THRESH, OCCUPIED_THRESH, yaml_text
+    from .io import FREE_THRESH, OCCUPIED_THRESH, pgm_bytes, yaml_text
 
     if hasattr(seg, "labels") and hasattr(seg, "grid"):
         labels = np.asarray(seg.labels)
@@ -576,7 +576,7 @@ def save_label_map(seg, stem, *, resolution=None, origin=None) -> Path:
     pgm, yml = stem.parent / (stem.name + ".pgm"), stem.parent / (stem.name + ".yaml")
     H, W = labels.shape
     if labels.max(initial=0) <= 255:
-        data = b"P5\n%d %d\n255\n" % (W, H) + labels.astype(np.uint8).tobytes()
+        data = pgm_bytes(labels.astype(np.uint8))
     else:
         data = b"P5\n%d %d\n65535\n" % (W, H) + labels.astype(">u2").tobytes()
     meta = {"image": pgm.name, "mode": "raw", "resolution": res, "origin": org, "negate": 0,
@@ -658,38 +658,55 @@ def load_label_map(path):
 # All outputs of a segmentation
 # --------------------------------------------------------------------------
 
-def write_outputs(seg, outdir, *, overlay: bool = True, skeletons: bool = False) -> dict:
+def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None) -> dict:
     """Write ``labels.png``, ``rooms.graphml``, ``rooms.json``, ``rooms.geojson`` and ``overlay.png``.
 
-    The saved graph is :func:`topomap.planning.travel_graph` of ``seg``: the
-    room–door graph with the in-room door-to-door travel distances on every
-    room (``door_distances``), so ``topomap plan`` works from
-    ``rooms.graphml`` or ``rooms.json`` alone.
+    Writes only: the graph and the picture are computed by the caller
+    (:func:`topomap.cli.write_segmentation` does both, as ``topomap
+    segment``).
 
-    Returns ``{name: path}``. All files are first written to temporary names
-    and renamed into place only once every one of them has been written, so
-    a failure in any writer leaves no partial file and keeps every earlier
-    output of ``outdir`` as it was.
+    Parameters
+    ----------
+    seg : Segmentation
+        Its ``labels`` are saved as ``labels.png``.
+    outdir : str or os.PathLike
+        Created if missing.
+    graph : networkx.Graph
+        The graph saved as GraphML, JSON and GeoJSON (``topomap segment``
+        saves :func:`topomap.planning.travel_graph`).
+    overlay_png : bytes, optional
+        PNG content of ``overlay.png`` (:func:`topomap.plot.overlay_png`);
+        None writes no overlay.
+
+    Returns
+    -------
+    dict
+        ``{name: path}``. All files are first written to temporary names
+        and renamed into place only once every one of them has been
+        written, so a failure in any writer leaves no partial file and
+        keeps every earlier output of ``outdir`` as it was.
     """
     from contextlib import ExitStack
 
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
-    from .planning import travel_graph
-
-    G = travel_graph(seg)
     names = {"labels": "labels.png", "graphml": "rooms.graphml", "json": "rooms.json",
              "geojson": "rooms.geojson"}
-    if overlay:
+    if overlay_png is not None:
         names["overlay"] = "overlay.png"
     with ExitStack() as stack:  # on success renames every temporary file; on error removes them all
         tmp = {k: stack.enter_context(atomic_write(outdir / f, None)) for k, f in names.items()}
         save_labels(seg.labels, tmp["labels"])
-        save_graphml(G, tmp["graphml"])
-        save_json(G, tmp["json"])
-        save_geojson(G, tmp["geojson"])
-        if overlay:
-            from .plot import save_overlay
-
-            save_overlay(seg, tmp["overlay"], skeletons=skeletons)
+        save_graphml(graph, tmp["graphml"])
+        save_json(graph, tmp["json"])
+        save_geojson(graph, tmp["geojson"])
+        if overlay_png is not None:
+            save_bytes(overlay_png, tmp["overlay"])
     return {k: outdir / f for k, f in names.items()}
+
+
+def save_bytes(data: bytes, path) -> Path:
+    """Write ``data`` to ``path`` as it is."""
+    path = Path(path)
+    path.write_bytes(data)
+    return path

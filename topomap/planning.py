@@ -349,7 +349,7 @@ def travel_graph(seg_or_G) -> nx.MultiGraph:
     Every room node gets ``door_distances``: a tuple of
     ``(door_i, door_j, metres)`` triples (``door_i < door_j``), the geodesic
     travel distance inside that room between the two doors' midpoints (see
-    the module notes). :func:`topomap.export.write_outputs` saves this graph,
+    the module notes). :func:`topomap.cli.write_segmentation` saves this graph,
     so ``topomap plan`` works from the saved graph file alone, and
     :func:`door_graph` / :func:`plan_path` reuse the stored distances instead
     of recomputing them.

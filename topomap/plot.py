@@ -164,3 +164,12 @@ def save_overlay(seg, path, *, skeletons: bool = False, graph: bool = False, dpi
     finally:
         plt.close(fig)
     return path
+
+
+def overlay_png(seg, *, skeletons: bool = False, graph: bool = False, dpi: int = 150) -> bytes:
+    """:func:`save_overlay` as PNG bytes (the ``overlay.png`` of ``topomap segment``)."""
+    import io
+
+    buf = io.BytesIO()
+    save_overlay(seg, buf, skeletons=skeletons, graph=graph, dpi=dpi)
+    return buf.getvalue()
