@@ -28,6 +28,8 @@ import numpy as np
 
 from topomap._fast import edt, label
 from topomap.errors import MapError, ParameterError
+from topomap.geometry import line_pixels, true_bbox
+from topomap.options import check_length
 from topomap.rooms import fill_unlabeled, relabel_sequential
 
 __all__ = ["watershed", "morphological", "distance", "voronoi"]
@@ -44,8 +46,7 @@ def _check(free, resolution, **positive):
     if not np.isfinite(resolution) or resolution <= 0:
         raise ParameterError(f"resolution must be a positive number of metres per pixel, got {resolution!r}")
     for name, value in positive.items():
-        if not np.isfinite(value) or value < 0:
-            raise ParameterError(f"{name} must be a non-negative number, got {value!r}")
+        check_length(name, value)
     return free
 
 
@@ -64,10 +65,7 @@ def _components_with_area(mask, connectivity=8):
 
 def _crop(free, pad=2):
     """Bounding box (slices) of the free cells, padded; lets big maps run on less."""
-    rows = np.flatnonzero(free.any(axis=1))
-    cols = np.flatnonzero(free.any(axis=0))
-    r0, r1 = max(rows[0] - pad, 0), min(rows[-1] + pad + 1, free.shape[0])
-    c0, c1 = max(cols[0] - pad, 0), min(cols[-1] + pad + 1, free.shape[1])
+    r0, r1, c0, c1 = true_bbox(free, pad)
     return (slice(r0, r1), slice(c0, c1))
 
 
@@ -490,8 +488,6 @@ def voronoi(free, *, resolution=0.05, neighborhood=1.0, max_door_width=2.5, prun
     ``abstract_voronoi_segmentation.cpp``.
     """
     import cv2
-    from scipy.spatial import cKDTree
-    from skimage.draw import line
     from skimage.morphology import medial_axis
 
     free = _check(free, resolution, neighborhood=neighborhood, max_door_width=max_door_width,
@@ -508,14 +504,73 @@ def voronoi(free, *, resolution=0.05, neighborhood=1.0, max_door_width=2.5, prun
     skel = medial_axis(opened, rng=0) & f  # rng: deterministic tie-breaking
     skel = _prune(skel, max(int(round(prune_length / resolution)), 1))
 
-    # 2. critical points
-    r = max(int(round(neighborhood / resolution)), 1)
+    # 2. critical points and their critical lines
+    lines = _critical_lines(f, skel, dist, max(int(round(neighborhood / resolution)), 1),
+                            max_door_width / 2.0 / resolution)
+
+    # 3. cut along the critical lines, label the pieces
+    lab = _cut_along(f, lines, room_area_min / resolution**2)
+
+    # 4. merge as ipa does
+    lab = relabel_sequential(_merge_rooms(lab, resolution, max_area_for_merging, min_room_area))
+    labels = fill_unlabeled(_uncrop(lab, box, free.shape), free)
+
+    # doors: critical lines between two different final rooms
+    doors = _critical_line_doors(lines, labels, np.array([box[0].start, box[1].start], float))
+    return labels, doors
+
+
+def _cut_along(f, lines, min_area_px):
+    """Rooms of ``f`` cut along the critical lines (critical point to both
+    basis points): the 4-connected pieces of at least ``min_area_px`` cells
+    are seeds, every other free cell goes to the nearest seed."""
+    cut = f.copy()
+    for cp, p1, p2 in lines:
+        for p in (p1, p2):
+            cut[line_pixels(cp, p, cut.shape)] = False
+    pieces, n, area = _components_with_area(cut, 4)
+    keep = area >= min_area_px
+    keep[0] = False
+    seeds = np.where(keep[pieces], pieces, 0).astype(np.int32)
+    return fill_unlabeled(seeds, f)
+
+
+def _critical_line_doors(lines, labels, off):
+    """The critical lines (in the crop, shifted by ``off`` onto ``labels``)
+    with two different rooms 2 px on either side: door segments."""
+    doors = []
+    for cp, p1, p2 in lines:
+        t = p2 - p1
+        nrm = np.array([-t[1], t[0]])
+        ln = np.hypot(*nrm)
+        if ln == 0:
+            continue
+        nrm /= ln
+        sides = []
+        for sgn in (1, -1):
+            q = np.rint(cp + off + sgn * 2.0 * nrm).astype(int)
+            if 0 <= q[0] < labels.shape[0] and 0 <= q[1] < labels.shape[1]:
+                sides.append(int(labels[q[0], q[1]]))
+        if len(sides) == 2 and sides[0] and sides[1] and sides[0] != sides[1]:
+            a, b = p1 + off, p2 + off
+            doors.append(((float(a[0]), float(a[1])), (float(b[0]), float(b[1]))))
+    return doors
+
+
+def _critical_lines(f, skel, dist, r, max_clearance_px):
+    """Critical points of the Voronoi graph ``skel`` (degree-2 pixels whose
+    clearance ``dist`` is the minimum within ``r`` px and at most
+    ``max_clearance_px``, one per plateau) with their two basis points:
+    ``[(critical point, basis 1, basis 2), ...]`` in pixels of ``f``."""
+    import cv2
+    from scipy.spatial import cKDTree
+
     big = np.float32(1e9)
     on = np.where(skel, dist, big).astype(np.float32)
     disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
     local_min = cv2.erode(on, disk, borderType=cv2.BORDER_CONSTANT, borderValue=float(big))
     deg = _neighbour_count(skel)
-    cand = skel & (deg == 2) & (on <= local_min) & (dist <= max_door_width / 2.0 / resolution)
+    cand = skel & (deg == 2) & (on <= local_min) & (dist <= max_clearance_px)
     clab, nc = label(cand, 8)
     lines = []
     if nc:
@@ -539,39 +594,4 @@ def voronoi(free, *, resolution=0.05, neighborhood=1.0, max_door_width=2.5, prun
             bp = _basis_points(cp, float(dist[int(cp[0]), int(cp[1])]), occ_rc, tree)
             if bp is not None:
                 lines.append((cp, bp[0], bp[1]))
-
-    # 3. cut along the critical lines, label the pieces
-    cut = f.copy()
-    for cp, p1, p2 in lines:
-        for p in (p1, p2):
-            rr, cc = line(int(cp[0]), int(cp[1]), int(p[0]), int(p[1]))
-            cut[rr, cc] = False
-    pieces, n, area = _components_with_area(cut, 4)
-    keep = area >= room_area_min / resolution**2
-    keep[0] = False
-    seeds = np.where(keep[pieces], pieces, 0).astype(np.int32)
-    lab = fill_unlabeled(seeds, f)
-
-    # 4. merge as ipa does
-    lab = relabel_sequential(_merge_rooms(lab, resolution, max_area_for_merging, min_room_area))
-    labels = fill_unlabeled(_uncrop(lab, box, free.shape), free)
-
-    # doors: critical lines between two different final rooms
-    doors = []
-    off = np.array([box[0].start, box[1].start], float)
-    for cp, p1, p2 in lines:
-        t = p2 - p1
-        nrm = np.array([-t[1], t[0]])
-        ln = np.hypot(*nrm)
-        if ln == 0:
-            continue
-        nrm /= ln
-        sides = []
-        for sgn in (1, -1):
-            q = np.rint(cp + off + sgn * 2.0 * nrm).astype(int)
-            if 0 <= q[0] < labels.shape[0] and 0 <= q[1] < labels.shape[1]:
-                sides.append(int(labels[q[0], q[1]]))
-        if len(sides) == 2 and sides[0] and sides[1] and sides[0] != sides[1]:
-            a, b = p1 + off, p2 + off
-            doors.append(((float(a[0]), float(a[1])), (float(b[0]), float(b[1]))))
-    return labels, doors
+    return lines
