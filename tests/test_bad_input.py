@@ -173,11 +173,16 @@ def check_valid(seg, grid):
     assert lab.shape == grid.shape and lab.dtype == np.int32
     assert ((lab > 0) == grid.free).all()
     n = seg.n_rooms
-    if n:
-        assert set(np.unique(lab[lab > 0])) == set(range(1, n + 1))
+    top = int(lab.max())
+    # every free cell in exactly one room (1..n) or one reported fragment (n+1..top)
+    assert set(np.unique(lab[lab > 0])) == set(range(1, top + 1))
+    assert 0 <= n <= top and seg.n_fragments == top - n
     G = seg.room_graph
     assert sorted(G.nodes) == list(range(1, n + 1))
     assert G.number_of_edges() == len(seg.doors)
+    assert G.graph["n_fragments"] == top - n
+    assert G.graph["fragment_area"] == pytest.approx((lab > n).sum() * grid.resolution ** 2)
+    assert all(max(d.rooms) <= n for d in seg.doors)
 
 
 def assert_one_line(exc, fname):
@@ -216,7 +221,12 @@ def test_odd_but_valid_file_segments(tmp_path, name, method):
         assert seg.n_rooms == n_rooms
         assert len(seg.doors) == n_doors
     elif n_doors == 0:  # no walls between the rooms: every method sees the components
-        assert seg.n_rooms == n_rooms
+        # (the default method: as rooms, or as fragments when under min_room_area)
+        assert seg.n_rooms + seg.n_fragments == n_rooms
+        if method == "topomap":
+            area = np.bincount(seg.labels.ravel())[1:] * grid.resolution ** 2
+            small = area < seg.options.min_room_area
+            assert seg.n_rooms == int((~small).sum()) and not small[:seg.n_rooms].any()
 
 
 def test_huge_refused_up_front_without_decoding(tmp_path, monkeypatch):

@@ -58,18 +58,26 @@ def test_debug_prints_traceback(tmp_path, name):
     assert stderr_lines(r)[-1].startswith("error: ")
 
 
+#: Free regions under the default method's smallest room (1 m²) are
+#: fragments, not rooms: (rooms, fragments) where that changes the count.
+DEFAULT_METHOD_COUNTS = {"one_free_pixel.png": (0, 1)}
+
+
 @pytest.mark.parametrize("name", OK_CASES)
 def test_odd_but_valid_map_exit_0(tmp_path, name):
     path, (_, n_rooms, n_doors) = build(tmp_path, name)
+    n_rooms, n_frag = DEFAULT_METHOD_COUNTS.get(name, (n_rooms, 0))
     out = tmp_path / "out"
     r = invoke("segment", path, "-o", out)
     assert r.exit_code == 0, r.stderr
     assert f"{n_rooms} rooms, {n_doors} doors" in r.stdout
+    assert ("fragment" in r.stdout) == (n_frag > 0)
     assert {"labels.png", "overlay.png", "rooms.graphml", "rooms.json"} <= {p.name for p in out.iterdir()}
     labels = np.asarray(Image.open(out / "labels.png"))
-    assert labels.max() == n_rooms
+    assert labels.max() == n_rooms + n_frag
     data = json.loads((out / "rooms.json").read_text())
     assert len(data["nodes"]) == n_rooms and len(data["edges"]) == n_doors
+    assert data["graph"]["n_fragments"] == n_frag
 
 
 @pytest.mark.parametrize("res", ["0", "-0.05", "nan"])
@@ -288,9 +296,9 @@ def test_package_functions_are_not_shadowed_by_submodules():
     assert callable(topomap.segment) and topomap.segment.__name__ == "segment"
 
 
-def test_segment_summary_counts_rooms_of_at_least_one_square_metre(tmp_path):
-    """Specks of free space are rooms of their own; the summary line says how
-    many rooms are at least 1 m²."""
+def test_segment_summary_reports_fragments(tmp_path):
+    """A speck of free space is a fragment, not a room; the summary line
+    counts it (and its area) apart from the rooms."""
     from click.testing import CliRunner
 
     from topomap.cli import main
@@ -302,4 +310,4 @@ def test_segment_summary_counts_rooms_of_at_least_one_square_metre(tmp_path):
     Image.fromarray(np.where(free, 254, 0).astype(np.uint8)).save(p)
     r = CliRunner().invoke(main, ["segment", str(p), "-o", str(tmp_path / "o")])
     assert r.exit_code == 0, r.output
-    assert "2 rooms (1 of at least 1 m²), 0 doors" in r.output
+    assert "1 rooms, 0 doors, 1 fragment (0.0025 m²)" in r.output

@@ -26,7 +26,7 @@ def hand_map():
     cells[27:30, 10:20] = FREE    # door hall - SW (0.5 m)
     cells[27:30, 50:70] = FREE    # door hall - SE (1.0 m)
     grid = OccupancyGrid(cells, RES, (-1.5, 2.25, 0.3))
-    labels, doors = cut_rooms(grid, [((28.0, 9.0), (28.0, 20.0)), ((28.0, 49.0), (28.0, 70.0))])
+    labels, doors, _ = cut_rooms(grid, [((28.0, 9.0), (28.0, 20.0)), ((28.0, 49.0), (28.0, 70.0))])
     return Segmentation(grid=grid, labels=labels, doors=doors, method="manual")
 
 

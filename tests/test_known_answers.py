@@ -28,15 +28,6 @@ PILLARS_REASON = (
     "default method gives 4 rooms / 3 doors: besides the office door it cuts the corridor "
     "twice, at the pairs of pillars against the walls at x = 7.2 m and x = 13.2 m "
     "(1.3 m between the pillars), pillars taken for door posts")
-NICHES_REASON = (
-    "default method gives 4 rooms / 3 doors: besides the two office doors it cuts the corridor "
-    "across (2.1 m, midpoint x = 8.85 m) from the corridor's north wall below office B's west "
-    "wall (x = 8.6 m) to the east end of the 2 m south niche (x = 9.0 m), the niche's end "
-    "taken for a door post")
-SPECKS_REASON = (
-    "default method gives 8 rooms / 1 door: every free component is a room, so the six "
-    "unreachable free specks outside the building (four single cells, a 2-cell speck, "
-    "a 0.30 m2 patch) are rooms of their own")
 NOISY_REASON = (
     "default method gives 4 rooms / 3 doors: as on the clean corridor_with_pillars, it cuts "
     "the corridor at the pairs of pillars against the walls at x = 7.2 m and x = 13.1 m")
@@ -48,11 +39,9 @@ CASES = [
                  marks=pytest.mark.xfail(strict=True, reason=BESIDE_REASON)),
     pytest.param(T.corridor_with_pillars, 2, 1, id="corridor_with_pillars",
                  marks=pytest.mark.xfail(strict=True, reason=PILLARS_REASON)),
-    pytest.param(T.corridor_with_niches, 3, 2, id="corridor_with_niches",
-                 marks=pytest.mark.xfail(strict=True, reason=NICHES_REASON)),
+    pytest.param(T.corridor_with_niches, 3, 2, id="corridor_with_niches"),
     pytest.param(T.room_with_desks, 2, 1, id="room_with_desks"),
-    pytest.param(T.specks_outside_building, 2, 1, id="specks_outside_building",
-                 marks=pytest.mark.xfail(strict=True, reason=SPECKS_REASON)),
+    pytest.param(T.specks_outside_building, 2, 1, id="specks_outside_building"),
     pytest.param(T.noisy_corridor_with_pillars, 2, 1, id="noisy_corridor_with_pillars",
                  marks=pytest.mark.xfail(strict=True, reason=NOISY_REASON)),
 ]

@@ -39,7 +39,7 @@ def corridor_of_rooms(widths_px=(16, 20, 12, 20), room=30, wall=3, offsets=None)
         mid = cw + wall // 2
         segs.append(((g0 - 1.0, float(mid)), (g0 + w - 1.0, float(mid))))
     grid = OccupancyGrid(cells, RES, (1.0, -2.0, 0.0))
-    labels, doors = cut_rooms(grid, segs)
+    labels, doors, _ = cut_rooms(grid, segs)
     return Segmentation(grid=grid, labels=labels, doors=doors, method="manual")
 
 
@@ -173,7 +173,7 @@ def test_doors_between_several_doors():
     cells[6:14, 33:36] = FREE
     cells[26:34, 33:36] = FREE
     grid = OccupancyGrid(cells, RES)
-    labels, doors = cut_rooms(grid, [((5.0, 34.0), (13.0, 34.0)), ((25.0, 34.0), (33.0, 34.0))])
+    labels, doors, _ = cut_rooms(grid, [((5.0, 34.0), (13.0, 34.0)), ((25.0, 34.0), (33.0, 34.0))])
     seg = Segmentation(grid=grid, labels=labels, doors=doors, method="manual")
     assert P.doors_between(seg.room_graph, 1, 2) == [0, 1]
     D = P.door_graph(seg)
@@ -301,7 +301,7 @@ def test_robot_width_takes_the_wider_detour():
     cells[26:34, 33:36] = FREE   # narrow door (0.4 m) in the middle
     cells[4:24, 33:36] = FREE    # wide door (1.0 m) at the top
     grid = OccupancyGrid(cells, RES)
-    labels, doors = cut_rooms(grid, [((25.0, 34.0), (33.0, 34.0)), ((3.0, 34.0), (23.0, 34.0))])
+    labels, doors, _ = cut_rooms(grid, [((25.0, 34.0), (33.0, 34.0)), ((3.0, 34.0), (23.0, 34.0))])
     seg = Segmentation(grid=grid, labels=labels, doors=doors, method="manual")
     s = tuple(float(v) for v in grid.pixel_to_world(45, 10))
     g = tuple(float(v) for v in grid.pixel_to_world(45, 60))
@@ -316,7 +316,7 @@ def test_no_path_across_a_wall():
     cells[3:37, 3:33] = FREE
     cells[3:37, 36:67] = FREE  # a solid wall between, no door
     grid = OccupancyGrid(cells, RES)
-    labels, doors = cut_rooms(grid, [])
+    labels, doors, _ = cut_rooms(grid, [])
     seg = Segmentation(grid=grid, labels=labels, doors=doors, method="manual")
     assert seg.n_rooms == 2 and doors == []
     s = tuple(float(v) for v in grid.pixel_to_world(20, 10))
@@ -350,7 +350,7 @@ def test_room_id_with_centroid_outside_the_room():
     cells[3:47, 3:13] = FREE
     cells[37:47, 3:47] = FREE
     grid = OccupancyGrid(cells, RES)
-    labels, doors = cut_rooms(grid, [])
+    labels, doors, _ = cut_rooms(grid, [])
     seg = Segmentation(grid=grid, labels=labels, doors=doors, method="manual")
     n = seg.room_graph.nodes[1]
     assert P.room_at(seg, n["x"], n["y"]) == 0

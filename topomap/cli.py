@@ -101,12 +101,14 @@ def _segment_one(path, outdir, resolution, method, skeletons):
     return seg
 
 
-def _rooms_text(seg) -> str:
-    """"12 rooms", or "91 rooms (13 of at least 1 m²)" when specks of free
-    space (scan noise) are rooms of their own."""
-    G = seg.room_graph
-    big = sum(1 for n in G.nodes if G.nodes[n]["area"] >= 1.0)
-    return f"{seg.n_rooms} rooms" + (f" ({big} of at least 1 m²)" if 0 < big < seg.n_rooms else "")
+def _summary(seg) -> str:
+    """"12 rooms, 11 doors", and ", 40 fragments (1.3 m²)" when free regions
+    too small to be a room (scan specks) were set apart."""
+    text = f"{seg.n_rooms} rooms, {len(seg.doors)} doors"
+    nf = seg.n_fragments
+    if nf:
+        text += f", {nf} fragment{'s' if nf > 1 else ''} ({seg.fragment_area:.4g} m²)"
+    return text
 
 
 def _print_profile(path, seg):
@@ -153,7 +155,7 @@ def segment_cmd(maps, outdir, resolution, method, skeletons, profile):
                 if profile:
                     _print_profile(path, seg)
                 if not many:
-                    click.echo(f"{path}: {_rooms_text(seg)}, {len(seg.doors)} doors -> {target}")
+                    click.echo(f"{path}: {_summary(seg)} -> {target}")
             except Exception as exc:  # noqa: BLE001 - reported, batch goes on
                 failed += 1
                 code = max(code, _fail(exc))

@@ -55,11 +55,13 @@ MOUTH = "mouth"
 MOUTH_WITHOUT_PROTRUDING_WALLS = "mouth without protruding walls"
 #: topomap: a narrower accepted door lies across it.
 DUPLICATE = "duplicate"
+#: topomap: wider than ``wide_opening`` and walls do not end at both posts.
+WIDE_WITHOUT_WALL_ENDS = "wide opening without wall ends"
 
 #: Every status a candidate can end with or pass through.
 STATUSES = (CANDIDATE, DOOR, NO_WALL_BOTH_SIDES, NO_ENDPOINTS, NO_PROTRUDING_WALL_NEAR, CENTRES_APART,
             CROSSES_WALL_SKELETON, WIDTH_OUT_OF_RANGE, POSTS_NOT_FACING, NO_PROTRUDING_WALL, MOUTH,
-            MOUTH_WITHOUT_PROTRUDING_WALLS, DUPLICATE)
+            MOUTH_WITHOUT_PROTRUDING_WALLS, DUPLICATE, WIDE_WITHOUT_WALL_ENDS)
 
 
 @dataclass
@@ -675,21 +677,31 @@ def judge_doors(cands, free: np.ndarray, endpoints: np.ndarray, threshold_px: fl
     accepted = []
     for n, (width, c) in enumerate(judged):
         f1, f2 = pvals[2 * n], pvals[2 * n + 1]
+        e_ok = _wall_ends_at_posts(tree, c, threshold_px)
+        if width > opts.wide_opening and not e_ok:
+            # wider than any door leaf: only where walls end on both sides
+            c.status = WIDE_WITHOUT_WALL_ENDS
+            continue
         if c.status == MOUTH:
             # a corridor opening into a room: walls must end on both sides
             ok = f1 >= opts.protrusion_min and f2 >= opts.protrusion_min
             c.status = DOOR if ok else MOUTH_WITHOUT_PROTRUDING_WALLS
         else:
-            e_ok = False
-            if tree is not None:
-                d1, _ = tree.query(c.ip1)
-                d2, _ = tree.query(c.ip2)
-                e_ok = d1 <= threshold_px and d2 <= threshold_px
             ok = _rule_accepts(opts.rule, e_ok, f1, f2, opts.protrusion_min, opts.flat_min)
             c.status = DOOR if ok else NO_PROTRUDING_WALL
         if ok:
             accepted.append((width, c))
     return accepted
+
+
+def _wall_ends_at_posts(tree, c, threshold_px: float) -> bool:
+    """The paper's endpoint evidence: an occupied-skeleton endpoint (the end
+    of a wall) within ``threshold_px`` of both posts of ``c``."""
+    if tree is None:
+        return False
+    d1, _ = tree.query(c.ip1)
+    d2, _ = tree.query(c.ip2)
+    return bool(d1 <= threshold_px and d2 <= threshold_px)
 
 
 def suppress_duplicates(accepted, resolution: float) -> list:

@@ -67,6 +67,15 @@ def _check_ratio(name: str, value) -> float:
     return v
 
 
+def _check_area(name: str, value) -> float:
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise ParameterError(f"{name} must be an area in m², got {value!r}")
+    v = float(value)
+    if not np.isfinite(v) or v < 0:
+        raise ParameterError(f"{name} must be an area >= 0 m², got {value!r}")
+    return v
+
+
 def _check_bool(name: str, value) -> bool:
     if not isinstance(value, (bool, np.bool_)):
         raise ParameterError(f"{name} must be True or False, got {value!r}")
@@ -79,7 +88,7 @@ def _check_rule(name: str, value) -> str:
     return value
 
 
-_CHECKS = {"length": check_length, "fraction": _check_fraction, "ratio": _check_ratio,
+_CHECKS = {"length": check_length, "fraction": _check_fraction, "ratio": _check_ratio, "area": _check_area,
            "bool": _check_bool, "rule": _check_rule,
            "optional length": lambda n, v: check_length(n, v, optional=True)}
 
@@ -189,6 +198,33 @@ class TopomapOptions(_Options):
         must be at least ``facing`` times the bottleneck's diameter (0.9:
         about 130° apart seen from the narrowest point). Posts at a right
         angle to each other are a room's corner, not a doorway.
+    wall_gap : float
+        Gaps between obstacles narrower than this (m) are closed before
+        doors are searched and rooms are cut: 0.5 m, the narrowest door
+        (``min_door_width``). A laser SLAM map leaves gaps in its walls
+        (glass, dark or shiny surfaces, missed beams, a wall seen at a
+        grazing angle) and between furniture and the wall behind it; a gap
+        narrower than any door is not a doorway, so it neither makes a door
+        nor joins two rooms. The cells of a closed gap still belong to the
+        room beside them. Free-standing clutter (``min_wall_length``) is
+        taken out first, so a pillar near a wall is not joined to it. 0
+        turns this off.
+    wide_opening : float
+        Openings wider than this (m) are doors only where the paper's own
+        evidence holds at both posts (an endpoint of the occupied-space
+        skeleton, i.e. the end of a wall, within the map's threshold): 1.5 m,
+        the widest double door. Wider openings are more often the gap
+        between furniture and a wall, or a corridor that widens, than a
+        doorway; a doorway that wide is still found when walls end on both
+        sides of it.
+    min_room_area : float
+        Smallest room (m²): 1.0 m², smaller than a WC or a storage closet
+        (about 1.5 m²). A region of free space smaller than this — a free
+        speck, a scan ray through a wall, the space behind a cupboard — is a
+        *fragment*, not a room: it keeps a label (after the rooms) but is
+        not in the room graph. A piece smaller than this cut off by a door
+        is not a room of its own either: it joins the room it was cut from.
+        0 makes every region a room.
     """
 
     erosion_radius: float = _opt(0.05, "length")
@@ -209,6 +245,9 @@ class TopomapOptions(_Options):
     corridor_length: float = _opt(1.0, "length")
     min_wall_length: float = _opt(1.0, "length")
     facing: float = _opt(0.9, "ratio")
+    wall_gap: float = _opt(0.5, "length")
+    wide_opening: float = _opt(1.5, "length")
+    min_room_area: float = _opt(1.0, "area")
 
     def resolved(self, resolution: float) -> "TopomapOptions":
         """These options with the map-dependent default ``rise`` filled in

@@ -57,11 +57,17 @@ def plot_map(grid, ax=None):
     return ax
 
 
+#: RGBA colour of fragments (free regions too small to be a room) in pictures.
+FRAGMENT_COLOR = (0.45, 0.25, 0.45, 1.0)
+
+
 def plot_rooms(seg, ax=None, *, alpha: float = 0.75, ids: bool = True):
-    """Colour every room of ``seg`` over its map; label rooms with their ID."""
+    """Colour every room of ``seg`` over its map (fragments all in
+    :data:`FRAGMENT_COLOR`); label rooms with their ID."""
     ax = plot_map(seg.grid, ax)
     n = seg.n_rooms
-    rgba = room_colors(n)[seg.labels]
+    colors = np.vstack([room_colors(n), np.tile(FRAGMENT_COLOR, (seg.n_fragments, 1))])
+    rgba = colors[seg.labels]
     rgba[..., 3] *= alpha
     ax.imshow(rgba, extent=_extent(seg.grid), interpolation="nearest")
     if ids and n:

@@ -108,10 +108,11 @@ def room_graph(seg) -> nx.MultiGraph:
     networkx.MultiGraph
     """
     grid = seg.grid
-    labels = seg.labels
-    n = int(labels.max()) if labels.size else 0
+    labels = seg.room_labels
+    n = seg.n_rooms
     G = nx.MultiGraph(resolution=grid.resolution, origin=tuple(grid.origin), method=seg.method,
-                      threshold=seg.threshold, map=grid.name, shape=tuple(labels.shape))
+                      threshold=seg.threshold, map=grid.name, shape=tuple(labels.shape),
+                      n_fragments=int(seg.n_fragments), fragment_area=float(seg.fragment_area))
     if n == 0:
         return G
     flat = labels.ravel()

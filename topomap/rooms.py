@@ -1,8 +1,9 @@
 """Rooms: turning cuts (doors) or seeds into a complete label image.
 
 Every function here guarantees the library's invariant: every free cell ends
-up in exactly one room (label ``1..N``) and only free cells are labelled
-(``0`` elsewhere).
+up with exactly one label and only free cells are labelled (``0``
+elsewhere). Labels are rooms, except where :func:`cut_rooms` has put fragments (free
+cells no room reaches) after the rooms.
 """
 
 from __future__ import annotations
@@ -133,31 +134,50 @@ def _grow(seeds: np.ndarray, todo: np.ndarray, max_steps: int = 8) -> np.ndarray
     return out.astype(np.int32)
 
 
-def cut_rooms(grid: OccupancyGrid, segments):
-    """Cut free space along door segments and label the pieces.
+def cut_rooms(grid: OccupancyGrid, segments, *, space=None, min_room_cells: int = 0):
+    """Cut free space along door segments and label the rooms (and fragments).
 
     Parameters
     ----------
     grid : OccupancyGrid
     segments : list of ((r1, c1), (r2, c2))
         Door segments in pixels.
+    space : (M, N) ndarray of bool, optional
+        The free cells rooms are cut from (default ``grid.free``); the
+        default method passes the free space with narrow wall gaps closed
+        (:func:`topomap.segmentation.close_wall_gaps`).
+    min_room_cells : int
+        Smallest room, in cells. A piece smaller than this is no room of its
+        own: its cells join the room they are connected to through free
+        space (a sliver cut off by a door joins the room beside it). A free
+        region smaller than this that no room reaches is a *fragment* (a
+        free speck, a patch of scan rays). 0 (default): every region is a
+        room.
 
     Returns
     -------
     labels : (M, N) ndarray of int32
-        4-connected pieces of free space between the cuts, each a room
-        (``1..N``, deterministic order); the cut cells themselves and any free
-        cell the pieces miss are given to the nearest room.
+        Every free cell labelled, 0 elsewhere: rooms ``1..n_rooms`` (the
+        4-connected pieces of ``space`` between the cuts; cut cells and the
+        other free cells go to the nearest room through free space; a free
+        region no piece reaches is a label of its own), then the fragments
+        ``n_rooms + 1 ..``; each group in order of first appearance
+        (row-major).
     doors : list of Door
-        See :func:`doors_between_rooms`.
+        See :func:`doors_between_rooms`; only doors between two rooms.
+    n_rooms : int
+        Number of rooms.
     """
     from ._fast import label as cc_label
 
     free = grid.free
+    space = free if space is None else (space & free)
     cut = np.zeros_like(free)  # stage "cutting rooms" of the Voronoi methods
     for p, q in segments:
         cut[line_pixels(p, q, free.shape)] = True
-    pieces, n = cc_label(free & ~cut, 4)
+    pieces, n = cc_label(space & ~cut, 4)
+    if n and min_room_cells > 0:
+        pieces = _drop_small(pieces, n, min_room_cells)
     if n > 1:
         # number pieces by area (largest = highest id): cut cells then go to
         # the larger neighbour, whatever the map's orientation
@@ -166,8 +186,41 @@ def cut_rooms(grid: OccupancyGrid, segments):
         rank = np.empty(n + 1, np.int32)
         rank[np.argsort(area, kind="stable")] = np.arange(n + 1, dtype=np.int32)
         pieces = rank[pieces]
-    labels = fill_unlabeled(pieces, free)
-    return labels, doors_between_rooms(grid, labels, segments)
+    labels, n_rooms = _rooms_first(fill_unlabeled(pieces, free), min_room_cells)
+    doors = [d for d in doors_between_rooms(grid, labels, segments) if max(d.rooms) <= n_rooms]
+    for k, d in enumerate(doors):
+        d.id = k
+    return labels, doors, n_rooms
+
+
+def _drop_small(pieces: np.ndarray, n: int, min_cells: int) -> np.ndarray:
+    """``pieces`` without the pieces smaller than ``min_cells``: such a piece
+    is never a room of its own (a sliver cut off by a door, a speck, a scan
+    ray); its cells join the room they are connected to through free space,
+    or, connected to none, become a fragment."""
+    area = np.bincount(pieces.ravel(), minlength=n + 1)
+    small = area < min_cells
+    small[0] = False
+    return np.where(small[pieces], 0, pieces)
+
+
+def _rooms_first(labels: np.ndarray, min_cells: int):
+    """``(labels, n_rooms)``: labels of at least ``min_cells`` cells (rooms)
+    renumbered ``1..n_rooms`` and the smaller ones (fragments) after them,
+    each group keeping its order (of first appearance)."""
+    top = int(labels.max()) if labels.size else 0
+    if min_cells <= 0 or top == 0:
+        return labels, top
+    is_room = np.bincount(labels.ravel(), minlength=top + 1) >= min_cells
+    is_room[0] = False
+    n_rooms = int(is_room.sum())
+    if n_rooms < top:
+        ids = np.arange(1, top + 1)
+        lut = np.zeros(top + 1, np.int32)
+        lut[ids[is_room[1:]]] = np.arange(1, n_rooms + 1, dtype=np.int32)
+        lut[ids[~is_room[1:]]] = np.arange(n_rooms + 1, top + 1, dtype=np.int32)
+        labels = lut[labels]
+    return labels, n_rooms
 
 
 _NR = np.array([-1, -1, -1, 0, 0, 1, 1, 1])

@@ -32,7 +32,7 @@ import numpy as np
 
 from .errors import ParameterError
 from .geometry import disk, metres_to_px, true_bbox
-from .io import FREE, OccupancyGrid
+from .io import FREE, OCCUPIED, OccupancyGrid
 from .options import PaperOptions, TopomapOptions, check_keywords, options_from_kwargs
 from .rooms import cut_rooms, doors_between_rooms
 
@@ -72,6 +72,9 @@ class Intermediates:
     skeleton_factor : int
         Map cells per side of one cell of the grid the skeletons were taken
         on (1 = the map's own grid).
+    closed_gaps : (M, N) ndarray of bool or None
+        ``"topomap"``: the free cells of the gaps narrower than ``wall_gap``
+        that were closed before doors were searched and rooms cut.
 
     Notes
     -----
@@ -85,6 +88,7 @@ class Intermediates:
     occupied_clearance: np.ndarray
     clutter: Optional[np.ndarray] = None
     skeleton_factor: int = 1
+    closed_gaps: Optional[np.ndarray] = None
 
 
 @dataclass
@@ -96,7 +100,10 @@ class Segmentation:
     grid : OccupancyGrid
         The input map.
     labels : (M, N) ndarray of int32
-        Room label per cell: ``1..N`` on every free cell, ``0`` elsewhere.
+        Label per cell, on every free cell, ``0`` elsewhere: rooms are
+        ``1..n_rooms``; the labels after them (``n_rooms + 1 ..``) are
+        fragments, free regions too small to be a room (scan specks, rays
+        through walls), which are not in the room graph.
     doors : list of Door
         Doors between two different rooms (see :class:`topomap.doors.Door`).
     method : str
@@ -120,6 +127,9 @@ class Segmentation:
     intermediates : Intermediates or None
         Masks and clearance images the Voronoi methods computed (see
         :class:`Intermediates`).
+    room_count : int or None
+        Number of rooms when fragments follow them in ``labels`` (see
+        :attr:`n_rooms`); None: every label is a room.
     """
 
     grid: OccupancyGrid
@@ -134,12 +144,34 @@ class Segmentation:
     timings: dict = field(default_factory=dict)
     options: object = None
     intermediates: Optional[Intermediates] = field(default=None, repr=False)
+    room_count: Optional[int] = None
     _room_graph: object = field(default=None, repr=False)
 
     @property
     def n_rooms(self) -> int:
-        """Number of rooms (labels ``1..n_rooms``)."""
+        """Number of rooms: the labels ``1..n_rooms`` (the room graph's nodes)."""
+        if self.room_count is not None:
+            return int(self.room_count)
         return int(self.labels.max()) if self.labels.size else 0
+
+    @property
+    def n_fragments(self) -> int:
+        """Number of fragments: the labels after ``n_rooms`` (free regions too
+        small to be a room, see ``TopomapOptions.min_room_area``)."""
+        top = int(self.labels.max()) if self.labels.size else 0
+        return top - self.n_rooms
+
+    @property
+    def room_labels(self) -> np.ndarray:
+        """``labels`` with the fragments set to 0: rooms only."""
+        if self.n_fragments == 0:
+            return self.labels
+        return np.where(self.labels <= self.n_rooms, self.labels, 0)
+
+    @property
+    def fragment_area(self) -> float:
+        """Total area of the fragments, m²."""
+        return float((self.labels > self.n_rooms).sum()) * self.grid.resolution ** 2
 
     @property
     def room_graph(self):
@@ -226,6 +258,34 @@ def preprocess_masks(grid: OccupancyGrid, opts, *, occupied=None):
     if dil > 1:
         occ = cv2.dilate(occ.astype(np.uint8), np.ones((dil, dil), np.uint8)) > 0
     return f, d_free, occ
+
+
+def close_wall_gaps(grid: OccupancyGrid, wall_gap: float):
+    """Stage "masks": the map with gaps between obstacles narrower than
+    ``wall_gap`` (m) closed (a morphological closing of the non-free cells
+    with a disk of that diameter): scan gaps in walls, and the gap between a
+    cupboard and the wall behind it, neither make a door nor join two rooms.
+
+    Returns
+    -------
+    grid : OccupancyGrid
+        ``grid`` itself when nothing was closed (or ``wall_gap`` is 0).
+    closed : (M, N) ndarray of bool or None
+        The free cells that were closed (None when ``wall_gap`` is 0).
+    """
+    import cv2
+
+    r = metres_to_px(wall_gap / 2, grid.resolution)
+    if r <= 0:
+        return grid, None
+    free = grid.free
+    shut = cv2.morphologyEx((~free).astype(np.uint8), cv2.MORPH_CLOSE, disk(r),
+                            borderType=cv2.BORDER_CONSTANT, borderValue=0) > 0
+    closed = shut & free
+    if closed.any():
+        grid = OccupancyGrid(np.where(closed, OCCUPIED, grid.cells).astype(np.int8), grid.resolution,
+                             grid.origin, grid.source)
+    return grid, closed
 
 
 def clutter_mask(free: np.ndarray, max_extent_px: float) -> np.ndarray:
@@ -395,7 +455,7 @@ def uncrop(seg: Segmentation, full: OccupancyGrid, box) -> Segmentation:
                 setattr(c, name, np.asarray(val, float) + off)
     if seg.intermediates is not None:
         im = seg.intermediates
-        for name in ("free_mask", "occupied_mask", "clearance", "occupied_clearance", "clutter"):
+        for name in ("free_mask", "occupied_mask", "clearance", "occupied_clearance", "clutter", "closed_gaps"):
             setattr(im, name, _paste(getattr(im, name), full.shape, box))
     seg.grid = full
     seg.labels = labels
@@ -463,7 +523,7 @@ def segment_paper(grid: OccupancyGrid, options: PaperOptions | None = None, **kw
         kept = D.select_doors(cands, S.graph_endpoints(Go), thr_px, D.occupied_skeleton_lines(Go))
         segs = [(c.ip1, c.ip2) for c in kept]
     with T("rooms"):
-        labels, door_objs = cut_rooms(grid, segs)
+        labels, door_objs, _ = cut_rooms(grid, segs)
     im = Intermediates(free_mask=f, occupied_mask=occ, clearance=d_free, occupied_clearance=d_occ)
     seg = Segmentation(grid=grid, labels=labels, doors=door_objs, method="paper", params=opts.as_params(),
                        threshold=thr_px * res, free_graph=Gf, occupied_graph=Go, candidates=cands,
@@ -527,7 +587,9 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
     box = crop_box(grid, metres_to_px(opts.wall_band + opts.dilation_size + opts.max_door_width, res))
     rooms_grid = crop_grid(grid, box) if box is not None else grid
     with T("preprocess"):
-        search, clutter = without_clutter(rooms_grid, opts.min_wall_length)
+        looked, clutter = without_clutter(rooms_grid, opts.min_wall_length)
+        search, closed = close_wall_gaps(looked, opts.wall_gap)
+        space = search.free if clutter is None else search.free & ~clutter
         f, d_free, occ = preprocess_masks(search, opts)
     factor = skeleton_factor(opts.skeleton_cell, res)
     with T("skeletons"):
@@ -540,16 +602,17 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
         accepted = D.judge_doors(cands, search.free, S.graph_endpoints(Go), thr_px, opts, res)
         segs = D.suppress_duplicates(accepted, res)
     with T("rooms"):
-        labels, door_objs = cut_rooms(rooms_grid, segs)
+        min_cells = int(np.ceil(opts.min_room_area / res ** 2 - 1e-9))
+        labels, door_objs, n_rooms = cut_rooms(rooms_grid, segs, space=space, min_room_cells=min_cells)
     im = Intermediates(free_mask=f, occupied_mask=occ, clearance=d_free, occupied_clearance=d_occ,
-                       clutter=clutter, skeleton_factor=factor)
+                       clutter=clutter, skeleton_factor=factor, closed_gaps=closed)
     seg = Segmentation(grid=rooms_grid, labels=labels, doors=door_objs, method="topomap",
                        params=opts.as_params(), threshold=thr_px * res, free_graph=Gf, occupied_graph=Go,
-                       candidates=cands, timings=T.t, options=opts, intermediates=im)
+                       candidates=cands, timings=T.t, options=opts, intermediates=im, room_count=n_rooms)
     if box is not None:
         seg = uncrop(seg, full, box)
-    log.info("%s: %d rooms, %d doors, threshold %.3f m (%d candidates)", full.name, seg.n_rooms,
-             len(door_objs), thr_px * res, len(cands))
+    log.info("%s: %d rooms, %d fragments, %d doors, threshold %.3f m (%d candidates)", full.name, seg.n_rooms,
+             seg.n_fragments, len(door_objs), thr_px * res, len(cands))
     return seg
 
 
