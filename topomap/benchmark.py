@@ -20,8 +20,11 @@ Conventions:
   those cells too) and the *ceiling* (the ground truth itself scored under
   each protocol); segments and rooms of <= 100 cells are ignored. See
   :mod:`topomap.evaluation`;
-* **rooms**: ``n_rooms`` is every room the method reports (all labels, as
-  the user sees them), ``n_true_rooms`` the ground truth's rooms;
+* **rooms**: ``n_rooms`` is every room the method reports (the room
+  graph's nodes, as the user sees them, however small), ``n_fragments``
+  the free regions it set apart as too small to be a room (scored as no
+  room: they are not in the room graph), ``n_true_rooms`` the ground
+  truth's rooms;
 * true doors (ipa layout) are extracted from the *unfurnished* map in both
   variants;
 * ``runtime_s`` is the wall time of the user's job up to the segmentation:
@@ -71,7 +74,7 @@ ROW_COLUMNS = (
     "precision_macro", "recall_macro", "precision_macro_free", "recall_macro_free",
     "door_precision", "door_recall", "door_f1", "door_tp", "door_fp", "door_fn",
     "adjacency_precision", "adjacency_recall", "adjacency_f1",
-    "n_rooms", "n_true_rooms", "n_segments", "room_count_error", "n_doors",
+    "n_rooms", "n_fragments", "n_true_rooms", "n_segments", "room_count_error", "n_doors",
     "runtime_s", "t_load", "jobs", "error",
 )
 
@@ -180,7 +183,7 @@ def _warm_up(method: str) -> None:
 def _error_row(row, exc, runtime, jobs):
     msg = " ".join(str(exc).split()) or type(exc).__name__
     row.update({k: math.nan for k in _SCORE_KEYS})
-    row.update(n_rooms=math.nan, n_doors=math.nan, runtime_s=runtime, t_load=math.nan,
+    row.update(n_rooms=math.nan, n_fragments=math.nan, n_doors=math.nan, runtime_s=runtime, t_load=math.nan,
                jobs=jobs, error=f"{type(exc).__name__}: {msg}"[:300])
     return row
 
@@ -218,13 +221,15 @@ def run_map(bm, method: str, *, jobs: int = 1, warm_up: bool = True) -> dict:
     except Exception as exc:  # noqa: BLE001 - one failing map does not stop the benchmark
         return _error_row(row, exc, time.perf_counter() - t0, jobs)
     doors = [d.segment for d in seg.doors]
-    ev = evaluate(seg.labels, bm.map_gray, bm.gt_gray, pred_doors=doors,
+    # the rooms a user gets: fragments (not in the room graph) are no room
+    ev = evaluate(seg.room_labels, bm.map_gray, bm.gt_gray, pred_doors=doors,
                   resolution=grid.resolution, door_map_gray=bm.unfurnished_gray,
                   scored=grid.free, gt_rooms=bm.gt_rooms)
     for k in _SCORE_KEYS:
         v = ev.get(k, math.nan)
         row[k] = int(v) if isinstance(v, (int, np.integer)) and not isinstance(v, bool) else float(v)
     row["n_rooms"] = int(seg.n_rooms)
+    row["n_fragments"] = int(seg.n_fragments)
     row["n_doors"] = len(seg.doors)
     row["runtime_s"] = runtime
     row["jobs"] = int(jobs)

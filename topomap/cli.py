@@ -204,12 +204,17 @@ def demo_cmd(outdir, method):
               help="Parallel worker processes (timings are only fully comparable with 1).")
 @click.option("--out", "out", type=click.Path(path_type=Path), default=None,
               help="Write per-map rows to this .csv or .json file.")
-def benchmark_cmd(dataset_dir, methods, variant, jobs, out):
+@click.option("--maps", "maps", default=None,
+              help="Comma-separated map names or shell patterns (e.g. 'office_*,lab_a_scan'); "
+                   "default every map.")
+def benchmark_cmd(dataset_dir, methods, variant, jobs, out, maps):
     """Run every method on the maps of DATASET_DIR and print the score table.
 
-    DATASET_DIR holds NAME.png, NAME_furnitures.png and
-    NAME_gt_segmentation.png per map (the layout of Bormann et al. 2016).
-    Runtimes are of the segmentation call only.
+    DATASET_DIR holds either NAME.png, NAME_furnitures.png and
+    NAME_gt_segmentation.png per map (the layout of Bormann et al. 2016), or
+    NAME.png, NAME.yaml and NAME_gt.png (a map_server map and its label
+    image; --variant is then ignored). Each map is loaded as `topomap
+    segment` loads it; runtimes are of loading plus segmentation.
     """
     from .benchmark import _check_methods, format_table, run_benchmark, write_rows
 
@@ -236,7 +241,8 @@ def benchmark_cmd(dataset_dir, methods, variant, jobs, out):
             log.warning("%s %s %s: %s", row["method"], row["variant"], row["map"], row["error"])
 
     try:
-        rows = run_benchmark(dataset_dir, methods=names, variants=variants, jobs=jobs, progress=progress)
+        rows = run_benchmark(dataset_dir, methods=names, variants=variants, jobs=jobs, progress=progress,
+                             maps=maps)
     except Exception as exc:  # noqa: BLE001
         if state.get("bar") is not None:
             state["bar"].__exit__(None, None, None)
