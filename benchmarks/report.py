@@ -225,8 +225,8 @@ In both, segments and rooms of 100 cells or fewer are ignored. The
 **ceiling** is the ground truth itself scored under each protocol: the best
 any method can reach (under the original protocol no method can label the
 furniture, so even a perfect segmentation loses recall on furnished maps).
-**Rooms found / true** counts every room a method reports (every label, the
-rooms a user sees, specks included) against the true rooms of more than 100
+**Rooms found / true** counts every room a method reports (the room graph's nodes; fragments are not counted; the
+rooms a user sees) against the true rooms of more than 100
 cells.
 """
 
@@ -280,7 +280,7 @@ def _ipa_section(rows) -> str:
            _ipa_reference(rows)]
     for v in VARIANTS:
         out += [f"\n### Per map, {v} (original protocol)\n",
-                "P / R in %, rooms = rooms the method reports (every label). Segments and rooms "
+                "P / R in %, rooms = rooms the method reports (room-graph nodes). Segments and rooms "
                 "of <= 100 cells are ignored in P and R, not in the room count.\n",
                 _per_map(rows, v)]
     return "\n".join(out)

@@ -395,8 +395,8 @@ TABLE_CAPTION = (
     "(ground-truth rooms whole, furniture included; segments restricted to the cells the method "
     "was given, the free cells of the map as loaded). free P / R: the free-cells protocol (rooms "
     "restricted to those cells too). ceiling: the ground truth itself scored under each protocol. "
-    "Segments and rooms of <= 100 cells are ignored in every score. rooms: rooms reported (every "
-    "label) / true rooms, summed over the maps. door F1: detected doors vs the ground truth's door "
+    "Segments and rooms of <= 100 cells are ignored in every score. rooms: rooms reported (room-graph "
+    "nodes; fragments not counted) / true rooms, summed over the maps. door F1: detected doors vs the ground truth's door "
     "lines (0.5 m). runtime: load_map + segment per map (s).")
 
 
