@@ -58,22 +58,22 @@ def _check_fraction(name: str, value) -> float:
     return v
 
 
-def _check_ratio(name: str, value) -> float:
+def _check_nonnegative(name: str, value, what: str, unit: str = "") -> float:
+    """``value`` as a finite float >= 0 (``what`` and ``unit`` word the error)."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
-        raise ParameterError(f"{name} must be a number >= 0, got {value!r}")
+        raise ParameterError(f"{name} must be {what}, got {value!r}")
     v = float(value)
     if not np.isfinite(v) or v < 0:
-        raise ParameterError(f"{name} must be a finite number >= 0, got {value!r}")
+        raise ParameterError(f"{name} must be finite and >= 0{unit}, got {value!r}")
     return v
+
+
+def _check_ratio(name: str, value) -> float:
+    return _check_nonnegative(name, value, "a number")
 
 
 def _check_area(name: str, value) -> float:
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
-        raise ParameterError(f"{name} must be an area in m², got {value!r}")
-    v = float(value)
-    if not np.isfinite(v) or v < 0:
-        raise ParameterError(f"{name} must be an area >= 0 m², got {value!r}")
-    return v
+    return _check_nonnegative(name, value, "an area in m²", " m²")
 
 
 def _check_bool(name: str, value) -> bool:
