@@ -176,12 +176,18 @@ def cut_rooms(grid: OccupancyGrid, segments, *, space=None, min_room_cells: int 
     for p, q in segments:
         cut[line_pixels(p, q, free.shape)] = True
     pieces, n = cc_label(space & ~cut, 4)
-    if n and min_room_cells > 0:
-        pieces = _drop_small(pieces, n, min_room_cells)
+    if n:
+        area = np.bincount(pieces.ravel(), minlength=n + 1)
+        if min_room_cells > 0:
+            # a piece smaller than a room is never a room of its own: its
+            # cells join the room they are connected to, or become a fragment
+            small = area < min_room_cells
+            small[0] = False
+            pieces = np.where(small[pieces], 0, pieces)
+            area[small] = 0
     if n > 1:
         # number pieces by area (largest = highest id): cut cells then go to
         # the larger neighbour, whatever the map's orientation
-        area = np.bincount(pieces.ravel(), minlength=n + 1)
         area[0] = -1
         rank = np.empty(n + 1, np.int32)
         rank[np.argsort(area, kind="stable")] = np.arange(n + 1, dtype=np.int32)
@@ -191,17 +197,6 @@ def cut_rooms(grid: OccupancyGrid, segments, *, space=None, min_room_cells: int 
     for k, d in enumerate(doors):
         d.id = k
     return labels, doors, n_rooms
-
-
-def _drop_small(pieces: np.ndarray, n: int, min_cells: int) -> np.ndarray:
-    """``pieces`` without the pieces smaller than ``min_cells``: such a piece
-    is never a room of its own (a sliver cut off by a door, a speck, a scan
-    ray); its cells join the room they are connected to through free space,
-    or, connected to none, become a fragment."""
-    area = np.bincount(pieces.ravel(), minlength=n + 1)
-    small = area < min_cells
-    small[0] = False
-    return np.where(small[pieces], 0, pieces)
 
 
 def _rooms_first(labels: np.ndarray, min_cells: int):
