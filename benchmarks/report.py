@@ -332,12 +332,22 @@ def render(meta, ipa_rows, real_rows) -> str:
         parts.append(_ipa_section(ipa_rows))
     if real_rows:
         parts.append(_real_section(real_rows))
-    parts.append("\n## Speed\n\n`python benchmarks/speed.py [DIR]` times the default method "
-                 "against a plain scikit-image watershed map by map, and `--scaling` measures time "
-                 "and memory against map area; see `benchmarks/README.md`. Their figures are not "
-                 "on this page: they depend on the machine and its load, so run them where you "
-                 "need the numbers.\n")
+    parts.extend(_sections())
     return "\n".join(parts)
+
+
+#: Sections written by the other benchmark scripts (speed of the whole job,
+#: batches, room identities, ...): each script writes its own Markdown file
+#: here, with its command and commit, and the page includes them in name order.
+SECTIONS_DIR = Path(__file__).resolve().parent / "sections"
+
+
+def _sections() -> list:
+    """The other scripts' saved sections, in file-name order."""
+    if not SECTIONS_DIR.is_dir():
+        return []
+    return ["\n" + p.read_text(encoding="utf-8").strip() + "\n"
+            for p in sorted(SECTIONS_DIR.glob("*.md"))]
 
 
 def readme_table(rows) -> str:
