@@ -22,7 +22,7 @@ from .geometry import disk, point_segment_distances
 __all__ = ["Candidate", "Door", "passage_candidates", "intersection_points",
            "wall_threshold", "select_doors", "segment_crosses", "passage_minima",
            "nearest_wall_points", "protrusion", "protrusion_at", "occupied_skeleton_lines",
-           "find_bottlenecks", "judge_doors", "suppress_duplicates", "STATUSES"]
+           "find_bottlenecks", "judge_doors", "suppress_duplicates", "opening_candidates", "STATUSES"]
 
 # --------------------------------------------------------------------------
 # Candidate statuses: why a candidate was kept or refused (see the "How it
@@ -57,11 +57,13 @@ MOUTH_WITHOUT_PROTRUDING_WALLS = "mouth without protruding walls"
 DUPLICATE = "duplicate"
 #: topomap: wider than ``wide_opening`` and walls do not end at both posts.
 WIDE_WITHOUT_WALL_ENDS = "wide opening without wall ends"
+#: topomap: an opening between collinear pieces of a straight wall, cut as a door.
+WALL_OPENING = "opening in a wall"
 
 #: Every status a candidate can end with or pass through.
 STATUSES = (CANDIDATE, DOOR, NO_WALL_BOTH_SIDES, NO_ENDPOINTS, NO_PROTRUDING_WALL_NEAR, CENTRES_APART,
             CROSSES_WALL_SKELETON, WIDTH_OUT_OF_RANGE, POSTS_NOT_FACING, NO_PROTRUDING_WALL, MOUTH,
-            MOUTH_WITHOUT_PROTRUDING_WALLS, DUPLICATE, WIDE_WITHOUT_WALL_ENDS)
+            MOUTH_WITHOUT_PROTRUDING_WALLS, DUPLICATE, WIDE_WITHOUT_WALL_ENDS, WALL_OPENING)
 
 
 @dataclass
@@ -704,18 +706,35 @@ def _wall_ends_at_posts(tree, c, threshold_px: float) -> bool:
     return bool(d1 <= threshold_px and d2 <= threshold_px)
 
 
-def suppress_duplicates(accepted, resolution: float) -> list:
+def opening_candidates(openings, resolution: float) -> list:
+    """``(width m, Candidate)`` of wall openings (:func:`topomap.walls.wall_openings`),
+    status :data:`WALL_OPENING`, for :func:`suppress_duplicates`."""
+    out = []
+    for p, q in openings:
+        v = q - p
+        n = float(np.hypot(*v))
+        out.append((n * resolution, Candidate(edge=None, centroid=(p + q) / 2, direction=v / max(n, 1e-9),
+                                              radius=n / 2, ip1=p, ip2=q, status=WALL_OPENING)))
+    return out
+
+
+def suppress_duplicates(accepted, resolution: float, *, kept=()) -> list:
     """Stage "duplicate suppression": keep the narrowest of doors lying across each other.
 
     Doors are taken from the narrowest up; one whose midpoint lies within
-    half its width of a door kept before is a :data:`DUPLICATE`.
+    half its width of a door kept before (or of a segment in ``kept``) is a
+    :data:`DUPLICATE`.
 
     Parameters
     ----------
     accepted : list of (float, Candidate)
-        From :func:`judge_doors` (width in metres).
+        From :func:`judge_doors` (width in metres), or wall openings
+        (:func:`opening_candidates`).
     resolution : float
         m/px.
+    kept : list of ((r1, c1), (r2, c2)), optional
+        Segments kept before (doors, when openings are suppressed), which
+        are not returned again.
 
     Returns
     -------
@@ -724,11 +743,14 @@ def suppress_duplicates(accepted, resolution: float) -> list:
     """
     accepted = sorted(accepted, key=lambda t: t[0])
     segs = []
-    A = np.zeros((len(accepted), 2))
-    B = np.zeros((len(accepted), 2))
+    A = np.zeros((len(accepted) + len(kept), 2))
+    B = np.zeros((len(accepted) + len(kept), 2))
+    for k, (p, q) in enumerate(kept):
+        A[k], B[k] = p, q
+    n0 = len(kept)
     for width, c in accepted:
         mid = (c.ip1 + c.ip2) / 2
-        k = len(segs)
+        k = n0 + len(segs)
         if k and (point_segment_distances(mid, A[:k], B[:k]) < 0.5 * width / resolution).any():
             c.status = DUPLICATE
             continue

@@ -225,6 +225,20 @@ class TopomapOptions(_Options):
         not in the room graph. A piece smaller than this cut off by a door
         is not a room of its own either: it joins the room it was cut from.
         0 makes every region a room.
+    openings : bool
+        Also cut at openings in straight walls (:func:`topomap.walls.wall_openings`):
+        a gap between ``min_door_width`` and ``max_door_width`` between two
+        collinear pieces of a wall face, the piece it is seen from at least
+        ``min_wall_length`` long and the wall going on for at least
+        ``min_door_width`` past the gap. On a robot's map a room often opens
+        onto a corridor through a doorway as wide as the corridor, where
+        the clearance does not narrow; the wall's line shows the doorway.
+    alcove_depth : float
+        An opening in a wall is cut only where the space reaches at least
+        this far (m) from it on both sides: 1.2 m, the depth of the smallest
+        room (a WC). A shallower space behind a gap in a wall — a niche, an
+        alcove, a recess for a radiator or a cupboard — belongs to the room
+        or corridor it opens onto.
     """
 
     erosion_radius: float = _opt(0.05, "length")
@@ -248,6 +262,8 @@ class TopomapOptions(_Options):
     wall_gap: float = _opt(0.5, "length")
     wide_opening: float = _opt(1.5, "length")
     min_room_area: float = _opt(1.0, "area")
+    openings: bool = _opt(True, "bool")
+    alcove_depth: float = _opt(1.2, "length")
 
     def resolved(self, resolution: float) -> "TopomapOptions":
         """These options with the map-dependent default ``rise`` filled in

@@ -577,6 +577,7 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
     """
     from . import doors as D
     from . import skeleton as S
+    from . import walls as W
 
     opts = options_from_kwargs(TopomapOptions, "topomap", options, kwargs).resolved(grid.resolution)
     res = grid.resolution
@@ -601,6 +602,14 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
         cands = D.find_bottlenecks(Gf, ~search.free, opts, res, thr_px)
         accepted = D.judge_doors(cands, search.free, S.graph_endpoints(Go), thr_px, opts, res)
         segs = D.suppress_duplicates(accepted, res)
+    if opts.openings:
+        with T("openings"):
+            ops = D.opening_candidates(W.wall_openings(
+                search.occupied, search.free, min_wall_px=opts.min_wall_length / res,
+                min_gap_px=opts.min_door_width / res, max_gap_px=opts.max_door_width / res,
+                side_px=opts.min_door_width / res, depth_px=opts.alcove_depth / res), res)
+            segs = segs + D.suppress_duplicates(ops, res, kept=segs)
+            cands = cands + [c for _, c in ops]
     with T("rooms"):
         min_cells = int(np.ceil(opts.min_room_area / res ** 2 - 1e-9))
         labels, door_objs, n_rooms = cut_rooms(rooms_grid, segs, space=space, min_room_cells=min_cells)

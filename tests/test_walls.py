@@ -1,0 +1,61 @@
+"""Openings in straight walls (topomap.walls), on small hand-drawn maps."""
+
+import numpy as np
+
+from topomap import walls as W
+from topomap.io import from_array
+from topomap.segmentation import segment
+
+RES = 0.05
+
+
+def _corridor_with_room(opening_m):
+    """A corridor (rows 40..69) under a room (rows 5..34): the wall between them
+    (rows 35..39) has a gap of ``opening_m`` metres in the middle, as wide as
+    the corridor or wider, so the clearance does not narrow there."""
+    free = np.zeros((75, 200), bool)
+    free[5:35, 60:140] = True      # room above
+    free[40:70, 5:195] = True      # corridor
+    gap = int(round(opening_m / RES))
+    c0 = 100 - gap // 2
+    free[35:40, c0:c0 + gap] = True
+    return free
+
+
+def _occupied(free):
+    return ~free
+
+
+def test_gap_between_collinear_wall_pieces_is_an_opening():
+    free = _corridor_with_room(2.0)
+    ops = W.wall_openings(_occupied(free), free, min_wall_px=20, min_gap_px=10, max_gap_px=60, side_px=10)
+    # the corridor's upper face (row 40, occupied row 39) has a 2 m gap: found
+    # once from each side at most, and lying along the wall's line
+    assert ops, "no opening found"
+    for p, q in ops:
+        assert abs(p[0] - q[0]) <= 1.5 and 34 <= min(p[0], q[0]) <= 40
+        assert abs(abs(p[1] - q[1]) - 40) <= 3
+
+
+def test_wall_corner_and_wall_end_on_are_no_openings():
+    free = np.zeros((80, 80), bool)
+    free[5:75, 5:75] = True  # one room, closed walls
+    assert W.wall_openings(~free, free, min_wall_px=20, min_gap_px=10, max_gap_px=60, side_px=10) == []
+
+
+def test_gap_wider_than_max_is_no_opening():
+    free = _corridor_with_room(2.0)
+    assert W.wall_openings(~free, free, min_wall_px=20, min_gap_px=10, max_gap_px=30, side_px=10) == []
+
+
+def test_wide_doorway_onto_corridor_separates_the_room():
+    # a 2.5 m doorway onto a 1.5 m corridor: wider than the corridor, so no
+    # bottleneck of clearance, but an opening in the wall's line
+    free = _corridor_with_room(2.5)
+    seg = segment(from_array(free, resolution=RES))
+    assert seg.n_rooms == 2
+    assert len(seg.doors) >= 1
+    top = seg.labels[20, 100]
+    assert top != seg.labels[55, 30] and top == seg.labels[10, 65]
+    off = segment(from_array(free, resolution=RES), openings=False)
+    assert off.n_rooms == 1  # what the clearance alone gives

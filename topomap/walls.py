@@ -1,0 +1,179 @@
+"""Walls: straight wall faces and the openings between collinear pieces of them.
+
+A doorway in a real building is a gap in a straight wall: the wall's face
+runs on, on the same line, past the gap. On a laser SLAM map the clearance
+along the free-space skeleton often does not narrow at such a gap (a room
+opening onto a corridor through a wide door, a door beside a corridor's
+end), but the wall lines show it. This module finds straight faces of
+walls (the obstacle cells that border free space) with a probabilistic
+Hough transform and, from the end of each face, looks along the face's
+line for the wall to go on: a gap between two collinear wall pieces, as
+wide as a door, is an *opening* and is cut like a door.
+
+All coordinates are pixel ``(row, col)`` floats; lengths in metres are
+converted with the map's resolution by the caller's options.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["wall_faces", "wall_lines", "wall_openings"]
+
+
+def wall_faces(obstacle: np.ndarray, free: np.ndarray) -> np.ndarray:
+    """Obstacle cells with a free 4-neighbour: the faces of walls.
+
+    Parameters
+    ----------
+    obstacle, free : (M, N) ndarray of bool
+
+    Returns
+    -------
+    (M, N) ndarray of bool
+    """
+    f = np.pad(free, 1, constant_values=False)
+    touch = f[:-2, 1:-1] | f[2:, 1:-1] | f[1:-1, :-2] | f[1:-1, 2:]
+    return obstacle & touch
+
+
+def wall_lines(faces: np.ndarray, *, min_length_px: float, max_gap_px: float = 2.0) -> np.ndarray:
+    """Straight runs of wall faces: ``(K, 4)`` segments ``(r1, c1, r2, c2)``.
+
+    A probabilistic Hough transform (:func:`cv2.HoughLinesP`, 1 px and 1°
+    bins) over the face cells; a segment is at least ``min_length_px`` long
+    and bridges gaps of at most ``max_gap_px`` (scan noise), so that a
+    doorway is never bridged.
+    """
+    import cv2
+
+    if not faces.any():
+        return np.zeros((0, 4))
+    thr = max(int(round(0.5 * min_length_px)), 2)
+    lines = cv2.HoughLinesP(faces.astype(np.uint8), 1, np.pi / 180, thr,
+                            minLineLength=float(min_length_px), maxLineGap=float(max_gap_px))
+    if lines is None:
+        return np.zeros((0, 4))
+    x1, y1, x2, y2 = lines.reshape(-1, 4).T.astype(float)
+    return np.stack([y1, x1, y2, x2], 1)
+
+
+def _samples(shape, start, d, n, offsets):
+    """Cells ``start + t d + o n_perp`` for ``t = 1..n``, each offset: ``(len(offsets), n)`` rows and cols
+    (clipped), plus a mask of samples inside the map."""
+    H, W = shape
+    t = np.arange(1, n + 1, dtype=float)
+    perp = np.array([-d[1], d[0]])
+    pts = start[None, None, :] + t[None, :, None] * d[None, None, :] + \
+        np.asarray(offsets, float)[:, None, None] * perp[None, None, :]
+    r = np.rint(pts[..., 0]).astype(int)
+    c = np.rint(pts[..., 1]).astype(int)
+    inside = (r >= 0) & (r < H) & (c >= 0) & (c < W)
+    return np.clip(r, 0, H - 1), np.clip(c, 0, W - 1), inside
+
+
+def _depth_ok(obstacle, p, q, depth_px) -> bool:
+    """Whether the space on both sides of the segment ``p``-``q`` reaches at
+    least ``depth_px`` from it, perpendicular to it, along one of three
+    probes (at a quarter, half and three quarters of its length)."""
+    d = (q - p) / max(np.hypot(*(q - p)), 1e-9)
+    n = np.array([-d[1], d[0]])
+    k = max(int(np.ceil(depth_px)), 1)
+    for side in (n, -n):
+        reached = False
+        for f in (0.25, 0.5, 0.75):
+            rr, cc, inside = _samples(obstacle.shape, p + f * (q - p), side, k, [0])
+            if inside[0].all() and not obstacle[rr[0], cc[0]].any():
+                reached = True
+                break
+        if not reached:
+            return False
+    return True
+
+
+def wall_openings(obstacle: np.ndarray, free: np.ndarray, *, min_wall_px: float, min_gap_px: float,
+                  max_gap_px: float, side_px: float, depth_px: float = 0.0, band_px: int = 1) -> list:
+    """Openings between collinear pieces of straight walls.
+
+    From each end of every straight wall face (:func:`wall_lines`, at least
+    ``min_wall_px`` long) the line is followed outwards. The first obstacle
+    cell on it (within ``band_px`` of the line) ends the gap; it is an
+    opening when
+
+    - the gap is between ``min_gap_px`` and ``max_gap_px`` long,
+    - at least half the cells on the line across the gap are free (the
+      rest may be unknown, never obstacles: a gap seen through, not a wall
+      seen at a grazing angle), and
+    - the wall goes on past the gap: a wall *face* (an obstacle cell next to
+      free space, within ``band_px`` of the line) at least 70 % of the way
+      along the next ``side_px``, so that a wall met end-on (a corner, the
+      thickness of a perpendicular wall) is no opening, and
+    - the space behind it is deep: free of obstacles for at least
+      ``depth_px`` on both sides of the gap, perpendicular to the wall, so
+      that the mouth of a niche or an alcove is no opening.
+
+    Parameters
+    ----------
+    obstacle, free : (M, N) ndarray of bool
+        The cells walls are made of, and free space.
+    min_wall_px, min_gap_px, max_gap_px, side_px, depth_px : float
+        Lengths in pixels.
+    band_px : int
+        Half-width of the band around the line that cells are looked for in
+        (scan noise on a straight wall).
+
+    Returns
+    -------
+    list of ((r1, c1), (r2, c2))
+        Opening segments, from the end of one wall piece to the start of the
+        next, each once.
+    """
+    faces = wall_faces(obstacle, free)
+    segs = wall_lines(faces, min_length_px=min_wall_px)
+    back = 3  # samples start this far inside the wall piece: Hough's end may be off by a cell or two
+    n_gap = int(np.ceil(max_gap_px)) + back + 1
+    n_side = max(int(np.ceil(side_px)), 1)
+    offsets = np.arange(-band_px, band_px + 1)
+    centre = offsets.size // 2
+    out, seen = [], set()
+    for r1, c1, r2, c2 in segs:
+        a, b = np.array([r1, c1]), np.array([r2, c2])
+        L = np.hypot(*(b - a))
+        if L == 0:
+            continue
+        u = (b - a) / L
+        for end, d in ((b, u), (a, -u)):
+            start = end - (back + 1) * d
+            rr, cc, inside = _samples(obstacle.shape, start, d, n_gap, offsets)
+            hit = (obstacle[rr, cc] & inside).any(axis=0)
+            # the gap: the first run of samples without an obstacle, which
+            # must start within the wall piece's last cells (sample index
+            # ``back`` is Hough's end)
+            clear = np.flatnonzero(~hit)
+            if clear.size == 0 or clear[0] == 0 or clear[0] > back + 2:
+                continue
+            s0 = int(clear[0])
+            rest = np.flatnonzero(hit[s0:])
+            if rest.size == 0:
+                continue
+            e0 = s0 + int(rest[0])  # first obstacle sample after the gap
+            gap = e0 - s0 + 1
+            if not (min_gap_px <= gap <= max_gap_px):
+                continue
+            line_free = free[rr[centre, s0:e0], cc[centre, s0:e0]] & inside[centre, s0:e0]
+            if line_free.mean() < 0.5:
+                continue
+            p = start + s0 * d            # last wall sample before the gap
+            far = start + (e0 + 1) * d    # first wall sample after it
+            fr, fc, fin = _samples(obstacle.shape, far - d, d, n_side, offsets)
+            on_face = (faces[fr, fc] & fin).any(axis=0)
+            if on_face.mean() < 0.7:
+                continue
+            if depth_px > 0 and not _depth_ok(obstacle, p, far, depth_px):
+                continue
+            key = tuple(np.rint(np.concatenate([np.minimum(p, far), np.maximum(p, far)])).astype(int))
+            if key in seen:
+                continue
+            seen.add(key)
+            out.append((p, far))
+    return out
