@@ -239,6 +239,21 @@ class TopomapOptions(_Options):
         room (a WC). A shallower space behind a gap in a wall — a niche, an
         alcove, a recess for a radiator or a cupboard — belongs to the room
         or corridor it opens onto.
+    furniture_size : float
+        Free-standing obstacles less than this (m) across that are thicker
+        than ``wall_thickness`` are furniture — desks, cupboards, a table
+        with its chairs, a robot's scan of a sofa — and are looked through
+        like smaller clutter. Default 0 (off): on floor plans, solid blocks
+        of that size (shafts, stair cores) are walls. On a furnished
+        office's laser SLAM map, 3.0 m (longer than a desk or a cupboard,
+        1.6-2.4 m, shorter than a room) keeps rooms whole where furniture
+        stands free: on the full Freiburg 079 map of the benchmark, recall
+        83 -> 92 %, precision 96 -> 94 %.
+    wall_thickness : float
+        Thickest free-standing piece of wall (m): 0.5 m. Inner walls are
+        0.1-0.3 m thick and drawn thinner still by a laser scan; a
+        free-standing obstacle thicker than this and smaller than
+        ``furniture_size`` is furniture.
     """
 
     erosion_radius: float = _opt(0.05, "length")
@@ -264,6 +279,8 @@ class TopomapOptions(_Options):
     min_room_area: float = _opt(1.0, "area")
     openings: bool = _opt(True, "bool")
     alcove_depth: float = _opt(1.2, "length")
+    furniture_size: float = _opt(0.0, "length")
+    wall_thickness: float = _opt(0.5, "length")
 
     def resolved(self, resolution: float) -> "TopomapOptions":
         """These options with the map-dependent default ``rise`` filled in

@@ -288,21 +288,37 @@ def close_wall_gaps(grid: OccupancyGrid, wall_gap: float):
     return grid, closed
 
 
-def clutter_mask(free: np.ndarray, max_extent_px: float) -> np.ndarray:
-    """Obstacle cells of free-standing components less than ``max_extent_px``
-    across (bounding box, 8-connected): chairs, plants, small tables."""
+def clutter_mask(free: np.ndarray, max_extent_px: float, *, furniture_px: float = 0.0,
+                 wall_thickness_px: float = np.inf) -> np.ndarray:
+    """Obstacle cells of free-standing clutter (8-connected components of the
+    non-free cells): components less than ``max_extent_px`` across (bounding
+    box) — chairs, plants, small tables, pillars — and components less than
+    ``furniture_px`` across that are thicker than ``wall_thickness_px``
+    (twice their largest inscribed radius) — desks, cupboards, tables with
+    their chairs: no free-standing piece of wall is that thick."""
     import cv2
 
     n, comp, stats, _ = cv2.connectedComponentsWithStats((~free).astype(np.uint8), connectivity=8)
     extent = np.maximum(stats[:, cv2.CC_STAT_WIDTH], stats[:, cv2.CC_STAT_HEIGHT])
     small = extent < max_extent_px
+    bulky = (extent < furniture_px) & ~small
+    bulky[0] = False
+    if bulky.any():
+        from scipy import ndimage
+
+        inside = cv2.distanceTransform((~free).astype(np.uint8), cv2.DIST_L2, 3)
+        radius = np.asarray(ndimage.maximum(inside, comp, index=np.arange(n)))
+        small |= bulky & (2 * radius >= wall_thickness_px)
     small[0] = False  # label 0: the free cells themselves
     return small[comp]
 
 
-def without_clutter(grid: OccupancyGrid, min_wall_length: float):
+def without_clutter(grid: OccupancyGrid, min_wall_length: float, *, furniture_size: float = 0.0,
+                    wall_thickness: float = np.inf):
     """The map doors are searched in: free-standing clutter smaller than a
-    wall piece (``min_wall_length`` m across, 0 = none) made free.
+    wall piece (``min_wall_length`` m across, 0 = none), and bulky furniture
+    (less than ``furniture_size`` m across, thicker than ``wall_thickness``
+    m; see :func:`clutter_mask`), made free.
 
     Returns
     -------
@@ -315,7 +331,9 @@ def without_clutter(grid: OccupancyGrid, min_wall_length: float):
         return grid, None
     # doors are in walls: free-standing clutter smaller than a wall piece
     # is looked through while doors are searched (rooms still use the map)
-    clutter = clutter_mask(grid.free, min_wall_length / grid.resolution)
+    res = grid.resolution
+    clutter = clutter_mask(grid.free, min_wall_length / res, furniture_px=furniture_size / res,
+                           wall_thickness_px=wall_thickness / res)
     if clutter.any():
         grid = OccupancyGrid(np.where(clutter, FREE, grid.cells).astype(np.int8), grid.resolution,
                              grid.origin, grid.source)
@@ -588,7 +606,8 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
     box = crop_box(grid, metres_to_px(opts.wall_band + opts.dilation_size + opts.max_door_width, res))
     rooms_grid = crop_grid(grid, box) if box is not None else grid
     with T("preprocess"):
-        looked, clutter = without_clutter(rooms_grid, opts.min_wall_length)
+        looked, clutter = without_clutter(rooms_grid, opts.min_wall_length, furniture_size=opts.furniture_size,
+                                          wall_thickness=opts.wall_thickness)
         search, closed = close_wall_gaps(looked, opts.wall_gap)
         space = search.free if clutter is None else search.free & ~clutter
         f, d_free, occ = preprocess_masks(search, opts)
