@@ -37,21 +37,23 @@ def wall_faces(obstacle: np.ndarray, free: np.ndarray) -> np.ndarray:
     return obstacle & touch
 
 
-def wall_lines(faces: np.ndarray, *, min_length_px: float, max_gap_px: float = 2.0) -> np.ndarray:
+def wall_lines(faces: np.ndarray, *, min_length_px: float, max_gap_px: float = 3.0) -> np.ndarray:
     """Straight runs of wall faces: ``(K, 4)`` segments ``(r1, c1, r2, c2)``.
 
-    A probabilistic Hough transform (:func:`cv2.HoughLinesP`, 1 px and 1°
-    bins) over the face cells; a segment is at least ``min_length_px`` long
-    and bridges gaps of at most ``max_gap_px`` (scan noise), so that a
-    doorway is never bridged.
+    A probabilistic Hough transform (:func:`cv2.HoughLinesP`) over the face
+    cells, each grown by one cell (a laser scan draws a straight wall a cell
+    or two off its line), in 2-cell and 2° bins; a segment is at least
+    ``min_length_px`` long and bridges gaps of at most ``max_gap_px`` (scan
+    noise), so that a doorway is never bridged.
     """
     import cv2
 
     if not faces.any():
         return np.zeros((0, 4))
+    grown = cv2.dilate(faces.astype(np.uint8), np.ones((3, 3), np.uint8))
     thr = max(int(round(0.5 * min_length_px)), 2)
-    lines = cv2.HoughLinesP(faces.astype(np.uint8), 1, np.pi / 180, thr,
-                            minLineLength=float(min_length_px), maxLineGap=float(max_gap_px))
+    lines = cv2.HoughLinesP(grown, 2, np.pi / 90, thr, minLineLength=float(min_length_px),
+                            maxLineGap=float(max_gap_px))
     if lines is None:
         return np.zeros((0, 4))
     x1, y1, x2, y2 = lines.reshape(-1, 4).T.astype(float)
@@ -91,6 +93,13 @@ def _depth_ok(obstacle, p, q, depth_px) -> bool:
     return True
 
 
+def _face_runs(faces, start, d, n, offsets) -> bool:
+    """Whether a wall face runs on past ``start`` along ``d`` for ``n``
+    samples (within the band of ``offsets``), at 70 % of them at least."""
+    rr, cc, inside = _samples(faces.shape, start, d, n, offsets)
+    return bool((faces[rr, cc] & inside).any(axis=0).mean() >= 0.7)
+
+
 def wall_openings(obstacle: np.ndarray, free: np.ndarray, *, min_wall_px: float, min_gap_px: float,
                   max_gap_px: float, side_px: float, depth_px: float = 0.0, band_px: int = 1) -> list:
     """Openings between collinear pieces of straight walls.
@@ -107,7 +116,11 @@ def wall_openings(obstacle: np.ndarray, free: np.ndarray, *, min_wall_px: float,
     - the wall goes on past the gap: a wall *face* (an obstacle cell next to
       free space, within ``band_px`` of the line) at least 70 % of the way
       along the next ``side_px``, so that a wall met end-on (a corner, the
-      thickness of a perpendicular wall) is no opening, and
+      thickness of a perpendicular wall) is no opening,
+    - neither end lies on a wall face that crosses the line (runs on for
+      ``side_px`` on both sides of it): a gap that ends there spans a
+      passage, such as a corridor between the side walls of two rooms
+      that happen to be collinear, and
     - the space behind it is deep: free of obstacles for at least
       ``depth_px`` on both sides of the gap, perpendicular to the wall, so
       that the mouth of a niche or an alcove is no opening.
@@ -165,9 +178,13 @@ def wall_openings(obstacle: np.ndarray, free: np.ndarray, *, min_wall_px: float,
                 continue
             p = start + s0 * d            # last wall sample before the gap
             far = start + (e0 + 1) * d    # first wall sample after it
-            fr, fc, fin = _samples(obstacle.shape, far - d, d, n_side, offsets)
-            on_face = (faces[fr, fc] & fin).any(axis=0)
-            if on_face.mean() < 0.7:
+            if not _face_runs(faces, far - d, d, n_side, offsets):
+                continue
+            perp = np.array([-d[1], d[0]])
+            if any(_face_runs(faces, q - perp, perp, n_side, offsets)
+                   and _face_runs(faces, q + perp, -perp, n_side, offsets) for q in (p, far)):
+                # an end lies on a wall face that crosses the line: the gap is
+                # the width of a passage between two walls, not a doorway
                 continue
             if depth_px > 0 and not _depth_ok(obstacle, p, far, depth_px):
                 continue
