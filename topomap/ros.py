@@ -61,6 +61,7 @@ __all__ = [
     "marker_array",
     "label_image",
     "to_cdr",
+    "check_bag_path",
     "write_bag",
 ]
 
@@ -207,9 +208,13 @@ def occupancy_cells(data, width: int, height: int, *, free_thresh: float = SAVER
     ``threshold_free = 25``, ``threshold_occupied = 65``; Nav2
     ``nav2_map_server/src/map_io.cpp``, ``tryWriteMapToFile``, trinary mode,
     defaults ``free_thresh = 0.25``, ``occupied_thresh = 0.65``).
-    ``map_server`` in trinary mode with the thresholds map_saver writes in
-    the YAML (0.65 and 0.196 in ROS 1, 0.65 and 0.25 in Nav2) reads those
-    grays back as ``OCCUPIED``, ``FREE`` and ``UNKNOWN``. With the defaults:
+    ``map_server`` in trinary mode with the thresholds ROS 1's map_saver
+    writes in the YAML (``occupied_thresh: 0.65``, ``free_thresh: 0.196``)
+    reads those grays back as ``OCCUPIED``, ``FREE`` and ``UNKNOWN``: the
+    cells here are the cells that round trip gives. (Nav2's map_saver
+    writes ``free_thresh: 0.25`` instead, and with it map_server reads the
+    unknown gray 205, ``p = 50 / 255 = 0.196``, as free, a known pitfall;
+    topomap keeps unknown cells unknown.) With the defaults:
 
     ============  =========
     value         cell
@@ -720,16 +725,38 @@ def to_cdr(msg, *, typestore=None) -> bytes:
 # Writing a bag
 # --------------------------------------------------------------------------
 
-def _bag_kind(p: Path) -> str:
+def check_bag_path(path) -> str:
+    """Check that :func:`write_bag` can write ``path``; return the bag kind.
+
+    Returns ``"mcap"``, ``"ros1"`` or ``"sqlite3"`` (see :func:`write_bag`).
+    Run before a long computation whose results go into the bag.
+
+    Raises
+    ------
+    ParameterError
+        A ``.db3`` or ``.yaml`` name.
+    MapFileNotFoundError
+        The directory it goes into does not exist.
+    MapFileError
+        A bag directory of that name exists, or a directory where a bag
+        file should be.
+    MissingDependencyError
+        ``rosbags`` is not installed.
+    """
+    p = Path(os.fspath(path))
     suffix = p.suffix.lower()
-    if suffix == ".bag":
-        return "ros1"
-    if suffix == ".mcap":
-        return "mcap"
     if suffix in (".db3", ".yaml", ".yml"):
         raise ParameterError(f"{p}: name the bag OUT.mcap (ROS 2, MCAP), OUT.bag (ROS 1) or OUT "
                              f"(a ROS 2 sqlite3 bag directory), not {suffix}")
-    return "sqlite3"
+    kind = {".bag": "ros1", ".mcap": "mcap"}.get(suffix, "sqlite3")
+    if not p.parent.is_dir():
+        raise MapFileNotFoundError(f"{p}: output directory {str(p.parent)!r} does not exist")
+    if kind == "sqlite3" and p.exists():
+        raise MapFileError(f"{p}: exists already; a bag directory is not overwritten (remove it first)")
+    if kind != "sqlite3" and p.is_dir():
+        raise MapFileError(f"{p}: is a directory")
+    _rosbags(str(p))
+    return kind
 
 
 def write_bag(seg, path, *, frame_id: Optional[str] = None, stamp: Optional[int] = None,
@@ -780,8 +807,7 @@ def write_bag(seg, path, *, frame_id: Optional[str] = None, stamp: Optional[int]
     import time as _time
 
     p = Path(os.fspath(path))
-    kind = _bag_kind(p)
-    _rosbags(str(p))
+    kind = check_bag_path(p)
     from rosbags.rosbag1 import Writer as Writer1
     from rosbags.rosbag2 import StoragePlugin, Writer as Writer2
 
@@ -791,10 +817,6 @@ def write_bag(seg, path, *, frame_id: Optional[str] = None, stamp: Optional[int]
     msgs = [(MAP_TOPIC, MAP_TYPE, map_message(seg.grid, frame_id=frame_id, stamp=stamp, typestore=ts)),
             (MARKERS_TOPIC, MARKER_ARRAY_TYPE, marker_array(seg, frame_id=frame_id, stamp=stamp, typestore=ts)),
             (LABELS_TOPIC, IMAGE_TYPE, label_image(seg, frame_id=frame_id, stamp=stamp, typestore=ts))]
-    if not p.parent.is_dir():
-        raise MapFileNotFoundError(f"{p}: output directory {str(p.parent)!r} does not exist")
-    if kind == "sqlite3" and p.exists():
-        raise MapFileError(f"{p}: exists already; a bag directory is not overwritten (remove it first)")
     try:
         tmpdir = Path(tempfile.mkdtemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent))
     except OSError as exc:
