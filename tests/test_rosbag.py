@@ -67,20 +67,16 @@ def write(path, fmt, records):
     path = Path(path)
     if fmt == "ros1":
         path = path.with_suffix(".bag")
-        with Writer1(path) as w:
-            conns = {}
-            for topic, typ, build, t in records:
-                if topic not in conns:
-                    conns[topic] = w.add_connection(topic, typ, typestore=TS1)
-                w.write(conns[topic], t, TS1.serialize_ros1(build(TS1), typ))
-        return path
-    plugin = StoragePlugin.MCAP if fmt == "mcap" else StoragePlugin.SQLITE3
-    with Writer2(path, version=9, storage_plugin=plugin) as w:
+        writer, ts, serialize = Writer1(path), TS1, TS1.serialize_ros1
+    else:
+        plugin = StoragePlugin.MCAP if fmt == "mcap" else StoragePlugin.SQLITE3
+        writer, ts, serialize = Writer2(path, version=9, storage_plugin=plugin), TS2, TS2.serialize_cdr
+    with writer as w:
         conns = {}
         for topic, typ, build, t in records:
             if topic not in conns:
-                conns[topic] = w.add_connection(topic, typ, typestore=TS2)
-            w.write(conns[topic], t, TS2.serialize_cdr(build(TS2), typ))
+                conns[topic] = w.add_connection(topic, typ, typestore=ts)
+            w.write(conns[topic], t, serialize(build(ts), typ))
     return path
 
 

@@ -216,14 +216,9 @@ def occupancy_cells(data, width: int, height: int, *, free_thresh: float = SAVER
     unknown gray 205, ``p = 50 / 255 = 0.196``, as free, a known pitfall;
     topomap keeps unknown cells unknown.) With the defaults:
 
-    ============  =========
-    value         cell
-    ============  =========
-    0 .. 25       FREE
-    26 .. 64      UNKNOWN
-    65 .. 100     OCCUPIED
-    < 0, > 100    UNKNOWN
-    ============  =========
+    * ``0 .. 25``: ``FREE``;
+    * ``65 .. 100``: ``OCCUPIED``;
+    * ``26 .. 64``, ``-1``, any other negative value, ``101 .. 127``: ``UNKNOWN``.
 
     Parameters
     ----------
@@ -765,13 +760,11 @@ def write_bag(seg, path, *, frame_id: Optional[str] = None, stamp: Optional[int]
 
     Three topics, one message each, every one in the map frame:
 
-    ========================  ==================================  =====================
-    topic                     type                                content
-    ========================  ==================================  =====================
-    ``/map``                  ``nav_msgs/OccupancyGrid``          the map (:func:`map_message`)
-    ``/topomap/rooms``        ``visualization_msgs/MarkerArray``  :func:`marker_array`
-    ``/topomap/labels``       ``sensor_msgs/Image`` (mono16)      :func:`label_image`
-    ========================  ==================================  =====================
+    * ``/map``, ``nav_msgs/OccupancyGrid``: the map (:func:`map_message`);
+    * ``/topomap/rooms``, ``visualization_msgs/MarkerArray``: the rooms and
+      doors (:func:`marker_array`);
+    * ``/topomap/labels``, ``sensor_msgs/Image`` (``mono16``): the labels
+      (:func:`label_image`).
 
     The ROS 2 topics are recorded with a reliable, transient-local QoS
     (depth 1) and the ROS 1 ones as latched, so RViz's Map display (which
