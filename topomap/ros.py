@@ -829,7 +829,7 @@ def write_bag(seg, path, *, frame_id: Optional[str] = None, stamp: Optional[int]
                       QosLiveliness.AUTOMATIC, zero, False)
             bagdir = tmpdir / (p.stem if kind == "mcap" else p.name)
             plugin = StoragePlugin.MCAP if kind == "mcap" else StoragePlugin.SQLITE3
-            with Writer2(bagdir, version=9, storage_plugin=plugin) as w:
+            with Writer2(bagdir, version=8, storage_plugin=plugin) as w:  # 8: QoS as older distros read it
                 for topic, typ, msg in msgs:
                     conn = w.add_connection(topic, typ, typestore=ts, offered_qos_profiles=[qos])
                     w.write(conn, when, ts.serialize_cdr(msg, typ))
