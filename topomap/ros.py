@@ -290,7 +290,7 @@ def _yaw(q, name: str) -> float:
 
 def _f32(v) -> float:
     """The shortest decimal of a float32 value (0.05 stays 0.05, not 0.0500000007)."""
-    return float(repr(np.float32(v)).replace("np.float32(", "").rstrip(")"))
+    return float(str(np.float32(v)))
 
 
 def _ns(stamp) -> int:
