@@ -193,7 +193,7 @@ def test_several_messages_last_by_default_time_picks_another(tmp_path, fmt):
     assert load_map(bag, time=1000).shape == (3, 6)
     with pytest.raises(BagError, match=r"no message on /map at or before 0.4 s \(the first is at 0.5 s\)"):
         load_map(bag, time=0.4)
-    for bad in (-1, float("nan"), "3"):
+    for bad in (-1, float("nan"), "soon", True):
         with pytest.raises(ParameterError, match="time must be"):
             load_map(bag, time=bad)
 
@@ -339,8 +339,9 @@ def test_marker_array_and_label_image(seg):
     assert (img.height, img.width, img.encoding, img.is_bigendian, img.step) == (h, w, "mono16", 0, 2 * w)
     assert (img.header.stamp.sec, img.header.stamp.nanosec) == (5, 1)
     np.testing.assert_array_equal(np.frombuffer(img.data.tobytes(), "<u2").reshape(h, w), seg.labels)
-    with pytest.raises(ParameterError, match="line_width"):
-        ros.marker_array(seg, line_width=0)
+    for bad in (0, -1, float("inf"), "thin"):
+        with pytest.raises(ParameterError, match="line_width"):
+            ros.marker_array(seg, line_width=bad)
 
 
 def test_map_message_round_trip(seg):

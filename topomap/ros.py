@@ -183,18 +183,6 @@ def is_bag(path) -> bool:
         return False
 
 
-def _check_thresh(name, free_thresh, occupied_thresh):
-    vals = []
-    for key, v in (("free_thresh", free_thresh), ("occupied_thresh", occupied_thresh)):
-        if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.integer, np.floating)) \
-                or not math.isfinite(v) or not 0.0 <= v <= 1.0:
-            raise ParameterError(f"{name}: {key} must be a number in [0, 1], got {v!r}")
-        vals.append(float(v))
-    if vals[0] >= vals[1]:
-        raise ParameterError(f"{name}: free_thresh ({vals[0]!r}) must be < occupied_thresh ({vals[1]!r})")
-    return vals
-
-
 def occupancy_cells(data, width: int, height: int, *, free_thresh: float = SAVER_FREE_THRESH,
                     occupied_thresh: float = SAVER_OCCUPIED_THRESH, name: str = "<message>") -> np.ndarray:
     """Three-state cells of ``nav_msgs/OccupancyGrid`` data, as map_server gets them.
@@ -247,7 +235,7 @@ def occupancy_cells(data, width: int, height: int, *, free_thresh: float = SAVER
     """
     from . import io
 
-    free_t, occ_t = _check_thresh(name, free_thresh, occupied_thresh)
+    occ_t, free_t = io._check_thresholds(name, occupied_thresh, free_thresh)
     w, h = int(width), int(height)
     if w <= 0 or h <= 0:
         raise MapError(f"{name}: the map is empty ({w} x {h} cells)")
@@ -406,18 +394,17 @@ def read_map(path, *, topic: Optional[str] = None, time: Optional[float] = None,
     MissingDependencyError
         ``rosbags`` is not installed (``pip install topomap[ros]``).
     """
+    from .io import _as_float, _check_thresholds
+
     p = Path(os.fspath(path))
     name = str(p)
-    if time is not None:
-        if isinstance(time, (bool, np.bool_)) or not isinstance(time, (int, float, np.integer, np.floating)) \
-                or not math.isfinite(time) or time < 0:
-            raise ParameterError(f"{name}: time must be a number of seconds >= 0 after the start of the bag, "
-                                 f"got {time!r}")
+    if time is not None and _as_float(name, "time", time) < 0:
+        raise ParameterError(f"{name}: time must be seconds >= 0 after the start of the bag, got {time!r}")
     if topic is not None and (not isinstance(topic, str) or not topic.strip()):
         raise ParameterError(f"{name}: topic must be a topic name such as '/map', got {topic!r}")
     free_t = SAVER_FREE_THRESH if free_thresh is None else free_thresh
     occ_t = SAVER_OCCUPIED_THRESH if occupied_thresh is None else occupied_thresh
-    _check_thresh(name, free_t, occ_t)
+    _check_thresholds(name, occ_t, free_t)
     if not p.exists():
         raise MapFileNotFoundError(f"{name}: no such bag")
     _rosbags(name)
@@ -447,7 +434,7 @@ def read_map(path, *, topic: Optional[str] = None, time: Optional[float] = None,
                 raise BagError(f"{name}: topic {topic} is {topics[topic]}, not {MAP_TYPE}")
             conns = [c for c in reader.connections if c.topic == topic]
             start = reader.start_time
-            limit = None if time is None else start + int(round(float(time) * 1e9))
+            limit = None if time is None else start + int(round(_as_float(name, "time", time) * 1e9))
             chosen = first = None
             for conn, t, raw in reader.messages(connections=conns):
                 first = t if first is None else first
@@ -621,10 +608,11 @@ def marker_array(seg, *, frame_id: Optional[str] = None, stamp: Optional[int] = 
 
     ts = _ts(typestore)
     frame, ns = _frame_and_stamp(seg.grid, frame_id, stamp)
+    from .options import check_length
+
     for key, v in (("line_width", line_width), ("text_height", text_height)):
-        if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.integer, np.floating)) \
-                or not math.isfinite(v) or v <= 0:
-            raise ParameterError(f"{seg.grid.name}: {key} must be a length > 0 m, got {v!r}")
+        if check_length(key, v) == 0:
+            raise ParameterError(f"{key} must be a length > 0 m, got {v!r}")
     M = ts.types["visualization_msgs/msg/Marker"]
     G = seg.room_graph
     colors = room_colors(seg.n_rooms)
