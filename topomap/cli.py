@@ -83,19 +83,23 @@ def write_segmentation(seg, outdir, *, overlay: bool = True, skeletons: bool = F
     return write_outputs(seg, outdir, G, overlay_png=png)
 
 
-def _segment_one(path, outdir, resolution, method, skeletons):
+def _segment_one(path, outdir, resolution, method, skeletons, topic=None, at=None, bag=None):
     import time
 
     from . import io
     from .segmentation import segment
 
     t0 = time.perf_counter()
-    grid = io.load_map(path, resolution=resolution)
+    grid = io.load_map(path, resolution=resolution, topic=topic, time=at)
     t1 = time.perf_counter()
     seg = segment(grid, method=method)
     t2 = time.perf_counter()
     seg.room_graph  # built here so its time is its own stage (timings["room_graph"])
     write_segmentation(seg, outdir, skeletons=skeletons)
+    if bag is not None:
+        from .ros import write_bag
+
+        write_bag(seg, bag)
     seg.timings["load"] = t1 - t0
     seg.timings["write"] = time.perf_counter() - t2 - seg.timings.get("room_graph", 0.0)
     return seg
@@ -131,16 +135,34 @@ def _print_profile(path, seg):
 @click.option("--skeletons", is_flag=True, help="Draw both skeleton graphs in overlay.png.")
 @click.option("--profile", is_flag=True,
               help="Print the time of every stage (load, segmentation stages, room graph, write) on stderr.")
-def segment_cmd(maps, outdir, resolution, method, skeletons, profile):
-    """Segment MAP files (ROS YAML, PGM or PNG) into rooms and doors.
+@click.option("--topic", default=None, metavar="TOPIC",
+              help="Bag maps: the nav_msgs/OccupancyGrid topic (default: the bag's only one).")
+@click.option("--time", "at", type=float, default=None, metavar="SECONDS",
+              help="Bag maps: the last map message at or before SECONDS after the bag's start "
+                   "(default: the last one).")
+@click.option("--bag", type=click.Path(path_type=Path), default=None, metavar="OUT",
+              help="Also write the map, the rooms (MarkerArray) and the labels (mono16 Image) into a new bag: "
+                   "OUT.mcap (ROS 2), OUT.bag (ROS 1) or OUT (ROS 2 sqlite3 directory). One map only.")
+def segment_cmd(maps, outdir, resolution, method, skeletons, profile, topic, at, bag):
+    """Segment MAP files (ROS YAML, PGM, PNG or a ROS bag) into rooms and doors.
 
-    Writes labels.png (16-bit, 0 = not a room), rooms.graphml, rooms.json
+    Writes labels.png (16-bit, 0 = not a room), labels.pgm + labels.yaml
+    (the labels as a map_server raw-mode map), rooms.graphml, rooms.json
     (node-link), rooms.geojson and overlay.png per map.
     """
     from .errors import ParameterError
 
     if resolution is not None and not resolution > 0:
         sys.exit(_fail(ParameterError(f"--resolution must be > 0 m/px, got {resolution!r}")))
+    if bag is not None:
+        from .ros import check_bag_path
+
+        try:
+            if len(maps) > 1:
+                raise ParameterError(f"--bag {bag}: writes the results of one map; {len(maps)} maps given")
+            check_bag_path(bag)
+        except Exception as exc:  # noqa: BLE001
+            sys.exit(_fail(exc))
     many = len(maps) > 1
     failed = 0
     code = EXIT_OK
@@ -150,7 +172,7 @@ def segment_cmd(maps, outdir, resolution, method, skeletons, profile):
         for path in bar:
             target = outdir / path.stem if many else outdir
             try:
-                seg = _segment_one(path, target, resolution, method, skeletons)
+                seg = _segment_one(path, target, resolution, method, skeletons, topic, at, bag)
                 log.info("%s: %d rooms, %d doors -> %s", path, seg.n_rooms, len(seg.doors), target)
                 if profile:
                     _print_profile(path, seg)

@@ -22,6 +22,8 @@ __all__ = [
     "PlanningError",
     "NotInRoomError",
     "NoPathError",
+    "BagError",
+    "MissingDependencyError",
 ]
 
 
@@ -67,3 +69,11 @@ class NotInRoomError(PlanningError):
 
 class NoPathError(PlanningError):
     """No route joins the start and the goal (walls, or every door too narrow)."""
+
+
+class BagError(MapError):
+    """A ROS bag cannot be read or holds no usable map: corrupt, empty, no such topic, another type."""
+
+
+class MissingDependencyError(TopomapError, ImportError):
+    """An optional dependency is not installed (the message says which extra to install)."""

@@ -21,9 +21,12 @@ GeoJSON (:func:`to_geojson`, :func:`save_geojson`, :func:`load_geojson`)
     feature per room (``"kind": "room"``) and one LineString per door
     (``"kind": "door"``), every attribute in ``properties`` as plain JSON
     (tuples as arrays); the graph attributes are the collection's foreign
-    member ``"properties"``. :func:`load_geojson` rebuilds the graph.
+    member ``"properties"``, which also states the frame in plain words
+    (:data:`GEOJSON_COORDINATES`, key ``"coordinate_system"``).
+    :func:`load_geojson` rebuilds the graph.
 
-The label image is also written as a ROS map pair (:func:`save_label_map`).
+The label image is also written as a ROS map_server pair (:func:`save_label_map`,
+``labels.pgm`` + ``labels.yaml`` in :func:`write_outputs`).
 
 Every file is written to a temporary name in the target directory and renamed
 into place (:func:`atomic_write`), so a failed run never leaves a partial file
@@ -44,7 +47,14 @@ from .io import atomic_write  # noqa: F401  (re-exported: topomap.export.atomic_
 __all__ = ["atomic_write", "save_labels", "save_graphml", "save_json", "to_graphml_graph",
            "node_link", "write_outputs", "save_bytes", "geometry_wkt", "restore_types", "load_graphml", "load_json",
            "to_geojson", "from_geojson", "save_geojson", "load_geojson", "save_label_map", "load_label_map",
-           "save_graph", "load_graph", "GRAPH_TYPES", "NODE_TYPES", "EDGE_TYPES", "FORMATS"]
+           "save_graph", "load_graph", "label_map_bytes", "GRAPH_TYPES", "NODE_TYPES", "EDGE_TYPES", "FORMATS",
+           "GEOJSON_COORDINATES"]
+
+#: What the coordinates of topomap's GeoJSON are, written into every file's
+#: collection ``properties`` as ``"coordinate_system"``.
+GEOJSON_COORDINATES = ("x, y in metres in the map frame (the frame of the map's origin: the map YAML's "
+                       "origin, or the OccupancyGrid's info.origin and frame_id); not WGS 84 "
+                       "longitude/latitude")
 
 
 def save_labels(labels: np.ndarray, path) -> Path:
@@ -389,7 +399,9 @@ def to_geojson(G: nx.Graph) -> dict:
         ``properties`` ``{"kind": "room", "room": id, "area": m², ...}``; a
         door is a LineString from ``(x1, y1)`` to ``(x2, y2)`` with
         ``{"kind": "door", "door": id, "rooms": [a, b], "width": m, ...}``.
-        Coordinates are map-frame metres (not WGS84).
+        Coordinates are map-frame metres, not WGS 84: the collection's
+        ``properties`` say so in ``"coordinate_system"``
+        (:data:`GEOJSON_COORDINATES`).
     """
     from shapely.geometry import mapping
 
@@ -409,8 +421,9 @@ def to_geojson(G: nx.Graph) -> dict:
         line = [[float(d["x1"]), float(d["y1"])], [float(d["x2"]), float(d["y2"])]]
         feats.append({"type": "Feature", "id": f"door-{did}",
                       "geometry": {"type": "LineString", "coordinates": line}, "properties": props})
-    return {"type": "FeatureCollection", "properties": {k: _plain(v) for k, v in G.graph.items()},
-            "features": feats}
+    props = {"coordinate_system": GEOJSON_COORDINATES}
+    props.update({k: _plain(v) for k, v in G.graph.items()})
+    return {"type": "FeatureCollection", "properties": props, "features": feats}
 
 
 def _plain_geom(m):
@@ -433,7 +446,10 @@ def from_geojson(data: dict, name: str = "<geojson>") -> nx.MultiGraph:
             not isinstance(data.get("features"), list):
         raise GraphFormatError(f"{name}: not a GeoJSON FeatureCollection")
     G = nx.MultiGraph()
-    G.graph.update(_restore(data.get("properties") or {}, GRAPH_TYPES, f"{name}: collection"))
+    gprops = dict(data.get("properties") or {})
+    if gprops.get("coordinate_system") == GEOJSON_COORDINATES:
+        del gprops["coordinate_system"]  # the note to_geojson adds, not a graph attribute
+    G.graph.update(_restore(gprops, GRAPH_TYPES, f"{name}: collection"))
     doors = []
     for i, f in enumerate(data["features"]):
         props = dict((f or {}).get("properties") or {})
@@ -524,14 +540,24 @@ def save_label_map(seg, stem, *, resolution=None, origin=None) -> Path:
     """Write the label image as a map_server PGM + YAML pair aligned with the map.
 
     The pair has the input map's size, ``resolution`` and ``origin``, so it
-    overlays the map in RViz and other ROS tools. The PGM holds the room
-    labels as raw values (``0`` = not a room) and the YAML says
+    overlays the map in RViz and other ROS tools. The PGM holds the labels
+    as raw values (``0`` = not a room, ``1..n_rooms`` the rooms, higher
+    values fragments, as in ``labels.png``) and the YAML says
     ``mode: raw``, so no threshold changes them:
 
-    * an 8-bit PGM (maxval 255) when the map has at most 255 rooms; ROS
-      map_server in raw mode then gives every cell its room ID as value;
-    * a 16-bit PGM (maxval 65535, big-endian as Netpbm specifies) for more
-      rooms; :func:`load_label_map` reads both back exactly.
+    * an 8-bit PGM (maxval 255) when there are at most 255 labels;
+    * a 16-bit PGM (maxval 65535, big-endian as Netpbm specifies) for more;
+      :func:`load_label_map` reads both back exactly.
+
+    Loaded by ``nav2_map_server`` (``map_server`` node, ``yaml_filename``
+    the YAML), the ``nav_msgs/OccupancyGrid`` it publishes holds at each
+    cell its label for labels ``0..100`` and ``-1`` for higher ones: Nav2's
+    raw mode keeps pixel values ``0..100`` and makes everything else
+    unknown (``nav2_map_server/src/map_io.cpp``, ``loadMapFromFile``), as
+    :func:`topomap.io.load_map` does. ROS 1 ``map_server`` stores the pixel
+    value as it is (int8: labels up to 127). For more labels, or exact IDs
+    in every case, read the pair with :func:`load_label_map` or use the
+    ``mono16`` image of :func:`topomap.ros.label_image`.
 
     Parameters
     ----------
@@ -554,9 +580,29 @@ def save_label_map(seg, stem, *, resolution=None, origin=None) -> Path:
     """
     from contextlib import ExitStack
 
+    stem = Path(stem)
+    if stem.suffix.lower() in (".yaml", ".yml", ".pgm"):
+        stem = stem.with_suffix("")
+    pgm, yml = stem.parent / (stem.name + ".pgm"), stem.parent / (stem.name + ".yaml")
+    data, text = label_map_bytes(seg, pgm.name, resolution=resolution, origin=origin, name=str(stem))
+    with ExitStack() as stack:
+        fp = stack.enter_context(atomic_write(pgm))
+        fy = stack.enter_context(atomic_write(yml))
+        fp.write(data)
+        fy.write(text)
+    return yml
+
+
+def label_map_bytes(seg, image_name: str, *, resolution=None, origin=None, name=None) -> tuple:
+    """Contents of the :func:`save_label_map` pair: ``(pgm_bytes, yaml_bytes)``.
+
+    ``image_name`` is the PGM's file name as the YAML names it; the other
+    arguments are those of :func:`save_label_map` (``name`` for messages).
+    """
     from .errors import ParameterError
     from .io import FREE_THRESH, OCCUPIED_THRESH, pgm_bytes, yaml_text
 
+    name = image_name if name is None else name
     if hasattr(seg, "labels") and hasattr(seg, "grid"):
         labels = np.asarray(seg.labels)
         resolution = seg.grid.resolution if resolution is None else resolution
@@ -564,30 +610,21 @@ def save_label_map(seg, stem, *, resolution=None, origin=None) -> Path:
     else:
         labels = np.asarray(seg)
     if labels.ndim != 2 or labels.size == 0:
-        raise ParameterError(f"{stem}: a label image must be a non-empty 2-D array, got shape {labels.shape}")
+        raise ParameterError(f"{name}: a label image must be a non-empty 2-D array, got shape {labels.shape}")
     if labels.min(initial=0) < 0 or labels.max(initial=0) > 65535:
-        raise ParameterError(f"{stem}: labels must be in 0..65535 to fit a 16-bit PGM")
+        raise ParameterError(f"{name}: labels must be in 0..65535 to fit a 16-bit PGM")
     res = float(0.05 if resolution is None else resolution)
     org = [float(v) for v in ((0.0, 0.0, 0.0) if origin is None else origin)]
     if len(org) == 2:
         org.append(0.0)
-    stem = Path(stem)
-    if stem.suffix.lower() in (".yaml", ".yml", ".pgm"):
-        stem = stem.with_suffix("")
-    pgm, yml = stem.parent / (stem.name + ".pgm"), stem.parent / (stem.name + ".yaml")
     H, W = labels.shape
     if labels.max(initial=0) <= 255:
         data = pgm_bytes(labels.astype(np.uint8))
     else:
         data = b"P5\n%d %d\n65535\n" % (W, H) + labels.astype(">u2").tobytes()
-    meta = {"image": pgm.name, "mode": "raw", "resolution": res, "origin": org, "negate": 0,
+    meta = {"image": image_name, "mode": "raw", "resolution": res, "origin": org, "negate": 0,
             "occupied_thresh": OCCUPIED_THRESH, "free_thresh": FREE_THRESH}
-    with ExitStack() as stack:
-        fp = stack.enter_context(atomic_write(pgm))
-        fy = stack.enter_context(atomic_write(yml))
-        fp.write(data)
-        fy.write(yaml_text(meta).encode())
-    return yml
+    return data, yaml_text(meta).encode()
 
 
 def _pgm_tokens(buf: bytes, n: int, name):
@@ -660,7 +697,8 @@ def load_label_map(path):
 # --------------------------------------------------------------------------
 
 def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None) -> dict:
-    """Write ``labels.png``, ``rooms.graphml``, ``rooms.json``, ``rooms.geojson`` and ``overlay.png``.
+    """Write ``labels.png``, ``labels.pgm`` + ``labels.yaml``, ``rooms.graphml``, ``rooms.json``,
+    ``rooms.geojson`` and ``overlay.png``.
 
     Writes only: the graph and the picture are computed by the caller
     (:func:`topomap.cli.write_segmentation` does both, as ``topomap
@@ -669,7 +707,8 @@ def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None) -> di
     Parameters
     ----------
     seg : Segmentation
-        Its ``labels`` are saved as ``labels.png``.
+        Its ``labels`` are saved as ``labels.png`` and as the map_server
+        pair ``labels.pgm`` + ``labels.yaml`` (:func:`save_label_map`).
     outdir : str or os.PathLike
         Created if missing.
     graph : networkx.Graph
@@ -691,13 +730,16 @@ def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None) -> di
 
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
-    names = {"labels": "labels.png", "graphml": "rooms.graphml", "json": "rooms.json",
-             "geojson": "rooms.geojson"}
+    names = {"labels": "labels.png", "label_map_pgm": "labels.pgm", "label_map": "labels.yaml",
+             "graphml": "rooms.graphml", "json": "rooms.json", "geojson": "rooms.geojson"}
     if overlay_png is not None:
         names["overlay"] = "overlay.png"
     with ExitStack() as stack:  # on success renames every temporary file; on error removes them all
         tmp = {k: stack.enter_context(atomic_write(outdir / f, None)) for k, f in names.items()}
         save_labels(seg.labels, tmp["labels"])
+        pgm, yml = label_map_bytes(seg, names["label_map_pgm"], name=str(outdir / names["label_map"]))
+        save_bytes(pgm, tmp["label_map_pgm"])
+        save_bytes(yml, tmp["label_map"])
         save_graphml(graph, tmp["graphml"])
         save_json(graph, tmp["json"])
         save_geojson(graph, tmp["geojson"])

@@ -580,8 +580,8 @@ def _read_yaml(path: Path, name: str) -> dict:
 
 
 def load_map(path, *, resolution=None, origin=None, negate=None, occupied_thresh=None,
-             free_thresh=None, mode=None) -> OccupancyGrid:
-    """Load an occupancy grid from a ROS map_server YAML or an image file.
+             free_thresh=None, mode=None, topic=None, time=None) -> OccupancyGrid:
+    """Load an occupancy grid from a ROS map_server YAML, an image file or a ROS bag.
 
     Parameters
     ----------
@@ -589,7 +589,9 @@ def load_map(path, *, resolution=None, origin=None, negate=None, occupied_thresh
         A ``.yaml``/``.yml`` map_server description (keys ``image``,
         ``resolution``, ``origin`` required; ``negate``, ``occupied_thresh``,
         ``free_thresh``, ``mode`` optional; ``image`` relative to the YAML
-        file), or any image Pillow reads (PGM, PNG, ...).
+        file), any image Pillow reads (PGM, PNG, ...), or a ROS bag (``.bag``,
+        ``.mcap``, ``.db3`` or a ROS 2 bag directory), read by
+        :func:`topomap.ros.read_map` (needs ``pip install topomap[ros]``).
     resolution : float, optional
         Metres per pixel; overrides the YAML. Images default to
         :data:`DEFAULT_RESOLUTION` (0.05 m/px).
@@ -606,6 +608,12 @@ def load_map(path, *, resolution=None, origin=None, negate=None, occupied_thresh
         map_server mode. ``scale`` is classified like ``trinary``; ``raw``
         takes pixel values ``0..100`` as ROS values (others unknown). Giving
         it for a bare image reads it with map_server's rule.
+    topic : str, optional
+        Bag only: the ``nav_msgs/OccupancyGrid`` topic (default the bag's
+        only one).
+    time : float, optional
+        Bag only: seconds after the start of the bag; the last map message
+        at or before it is read (default the last message).
 
     Returns
     -------
@@ -645,6 +653,14 @@ def load_map(path, *, resolution=None, origin=None, negate=None, occupied_thresh
     a method that builds on occupied space then loses the walls. To read an
     image with map_server's rule, write a YAML for it or pass
     ``free_thresh`` / ``occupied_thresh`` / ``mode``.
+
+    **A bag** gives a :class:`topomap.ros.RosMap` (an ``OccupancyGrid``
+    that also keeps the message's ``frame_id`` and stamp): cell values as
+    map_saver + map_server turn them into three states (``0..25`` free,
+    ``65..100`` occupied, the rest unknown; ``free_thresh`` /
+    ``occupied_thresh`` change the 0.25 / 0.65 of map_saver), resolution
+    and origin (with yaw) from the message. See :func:`topomap.ros.read_map`
+    for its errors (:class:`~topomap.errors.BagError`).
     """
     try:
         p = Path(os.fspath(path))
@@ -653,6 +669,17 @@ def load_map(path, *, resolution=None, origin=None, negate=None, occupied_thresh
     name = str(p)
     if "\x00" in name:
         raise MapFileError(_msg(repr(name), "map path contains a NUL byte"))
+    from .ros import is_bag
+
+    if is_bag(p):
+        from .ros import read_map
+
+        if negate is not None or mode is not None:
+            raise ParameterError(_msg(name, "negate and mode apply to images; a bag holds ROS cell values"))
+        return read_map(p, topic=topic, time=time, free_thresh=free_thresh, occupied_thresh=occupied_thresh,
+                        resolution=resolution, origin=origin)
+    if topic is not None or time is not None:
+        raise ParameterError(_msg(name, "topic and time apply to ROS bags (.bag, .mcap, .db3, a bag directory)"))
 
     meta = {}
     image_path = p
