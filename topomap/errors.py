@@ -22,6 +22,8 @@ __all__ = [
     "PlanningError",
     "NotInRoomError",
     "NoPathError",
+    "OutputExistsError",
+    "MissingDependencyError",
 ]
 
 
@@ -67,3 +69,11 @@ class NotInRoomError(PlanningError):
 
 class NoPathError(PlanningError):
     """No route joins the start and the goal (walls, or every door too narrow)."""
+
+
+class OutputExistsError(TopomapError, FileExistsError):
+    """An output folder holds results this run did not write (another map's, or files of unknown origin)."""
+
+
+class MissingDependencyError(TopomapError, ImportError):
+    """An optional dependency a feature needs is not installed (the message says which extra to install)."""
