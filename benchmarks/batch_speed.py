@@ -76,6 +76,7 @@ def main(argv=None):
     if directory is None:
         sys.exit("error: no floor plans found; pass DATASET_DIR (or set TOPOMAP_BENCHMARK_DIR)")
     maps = _maps(Path(directory), args.maps)
+    commit = _commit()  # of the code the run imports (now, not after it)
     load_before = os.getloadavg()
     t0 = time.perf_counter()
     cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
@@ -108,7 +109,7 @@ def main(argv=None):
                                                        if a != str(directory))
     text = f"""## Batches: maps per second
 
-`{cmd.strip()}` at commit `{_commit()}`: a batch of the first {len(maps)} ipa floor plans
+`{cmd.strip()}` at commit `{commit}`: a batch of the first {len(maps)} ipa floor plans
 (`NAME.png --resolution 0.05`, every output written as `topomap segment` writes it), run
 with `jobs=1`, `jobs=2` and on a 2-worker Dask `LocalCluster` (one thread per worker process,
 started once beforehand in {t_cluster:.1f} s, then warmed up), alternating, {args.rounds} rounds; median wall time

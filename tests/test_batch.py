@@ -298,7 +298,7 @@ def cluster():
 def test_jobs_and_cluster_give_the_same_outputs(tmp_path, cluster):
     from distributed import Client
 
-    maps = four_maps(tmp_path)
+    maps = four_maps(tmp_path)[:3]
     bad = tmp_path / "ros" / "broken.png"
     bad.write_bytes(b"\x89PNG\r\n\x1a\n truncated")
     maps.insert(2, bad)
@@ -307,14 +307,14 @@ def test_jobs_and_cluster_give_the_same_outputs(tmp_path, cluster):
                         ("cluster", ["--scheduler", cluster.scheduler_address])):
         r = invoke("segment", *maps, "-o", tmp_path / name, *extra)
         assert r.exit_code == 1, r.output
-        assert "4 of 5 maps segmented" in r.stdout
+        assert "3 of 4 maps segmented" in r.stdout
         runs[name] = tmp_path / name
     with Client(cluster) as client:
         rows = segment_many(maps, tmp_path / "api", scheduler=client)
     runs["api"] = tmp_path / "api"
-    assert [r["status"] for r in rows] == ["ok", "ok", "failed", "ok", "ok"]
+    assert [r["status"] for r in rows] == ["ok", "ok", "failed", "ok"]
     ref = outputs(runs["jobs1"])
-    assert len(ref) == 4 * 5
+    assert len(ref) == 3 * 5
     ref_rows = summary_without_times(runs["jobs1"])
     for name, d in runs.items():
         assert outputs(d) == ref, name

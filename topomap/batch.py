@@ -16,7 +16,8 @@ Run record
     image it names), the options, the topomap version, size and
     modification time of every output file, and the map's summary row. It
     is written first as ``"status": "incomplete"`` and rewritten as
-    ``"complete"`` after the last output file, always atomically.
+    ``"complete"`` after the last output file, always atomically; a map that
+    fails puts the earlier record back (its earlier outputs are untouched).
 Refusal
     A folder that holds another map's results, or output files without a
     run record (results topomap did not write, or of unknown origin), is
@@ -66,7 +67,8 @@ from typing import Optional, Sequence
 from .errors import MissingDependencyError, OutputExistsError, ParameterError, TopomapError
 
 __all__ = ["segment_many", "output_dirs", "read_summary", "RECORD", "SUMMARY", "SUMMARY_COLUMNS",
-           "OUTPUT_NAMES", "STATUSES", "SUMMARY_EVERY"]
+           "OUTPUT_NAMES", "STATUSES", "OK", "SKIPPED", "FAILED", "ERROR", "PENDING", "INCOMPLETE", "COMPLETE",
+           "SUMMARY_EVERY"]
 
 log = logging.getLogger("topomap.batch")
 
@@ -82,7 +84,10 @@ SUMMARY_COLUMNS = ("map", "output", "status", "rooms", "doors", "fragments", "ro
 #: Values of the ``status`` column: segmented now; up to date from an earlier
 #: run; bad input or a failed write (exit code 1); an unexpected internal error
 #: (exit code 3); not run because the batch was interrupted.
-STATUSES = ("ok", "skipped", "failed", "error", "pending")
+OK, SKIPPED, FAILED, ERROR, PENDING = "ok", "skipped", "failed", "error", "pending"
+STATUSES = (OK, SKIPPED, FAILED, ERROR, PENDING)
+#: ``status`` of a run record: being written (the map must run again), or complete.
+INCOMPLETE, COMPLETE = "incomplete", "complete"
 #: Seconds between two rewrites of ``summary.csv`` while a batch runs.
 SUMMARY_EVERY = 10.0
 
@@ -191,7 +196,7 @@ def _version() -> str:
 
 
 def _up_to_date(rec: dict, settings: dict, folder: Path) -> bool:
-    if rec.get("status") != "complete" or rec.get("settings") != settings or rec.get("topomap") != _version():
+    if rec.get("status") != COMPLETE or rec.get("settings") != settings or rec.get("topomap") != _version():
         return False
     inputs, files = rec.get("inputs") or {}, rec.get("files") or {}
     if not files or any(_stat(f) != v for f, v in inputs.items()):
@@ -241,6 +246,21 @@ def _remove_temporaries(folder: Path):
                 pass
 
 
+def _restore_record(folder: Path, previous: Optional[str], existed: bool):
+    from .io import atomic_write
+
+    try:
+        if previous is None:
+            (folder / RECORD).unlink()
+            if not existed:
+                folder.rmdir()  # only if empty
+        else:
+            with atomic_write(folder / RECORD, "w") as fh:
+                fh.write(previous)
+    except OSError:
+        pass
+
+
 def _first_line(exc) -> str:
     text = str(exc).splitlines()[0] if str(exc) else ""
     return text or type(exc).__name__
@@ -251,17 +271,18 @@ def _run_one(task: dict) -> dict:
     t0 = time.perf_counter()
     s = task["settings"]
     folder = Path(task["folder"])
-    row = {"map": task["map"], "output": task["output"], "status": "ok"}
+    row = {"map": task["map"], "output": task["output"], "status": OK}
     existed = folder.exists()
-    claimed = False
+    previous = claimed = None
     try:
         _remove_temporaries(folder)
         inputs = _fingerprint(Path(task["path"]))
         record = {"topomap": _version(), "input": task["input"], "inputs": inputs, "settings": s}
-        if _read_record(folder) is None:
-            folder.mkdir(parents=True, exist_ok=True)
-            _write_record(folder, dict(record, status="incomplete"))
-            claimed = True
+        folder.mkdir(parents=True, exist_ok=True)
+        if (folder / RECORD).exists():
+            previous = (folder / RECORD).read_text()
+        _write_record(folder, dict(record, status=INCOMPLETE))  # a kill from here on: the map runs again
+        claimed = True
         from .cli import _segment_one
 
         seg = _segment_one(task["path"], folder, s["resolution"], s["method"], s["skeletons"],
@@ -273,22 +294,17 @@ def _run_one(task: dict) -> dict:
         row["seconds"] = time.perf_counter() - t0
         row.update({f"t_{k}": float(v) for k, v in seg.timings.items()})
         files = {n: _stat(folder / n) for n in OUTPUT_NAMES if (folder / n).exists()}
-        _write_record(folder, dict(record, status="complete", files=files, row=row))
+        _write_record(folder, dict(record, status=COMPLETE, files=files, row=row))
         row["error"] = ""
         row["traceback"] = ""
     except Exception as exc:  # noqa: BLE001 - reported in the row, the batch goes on
         bad_input = isinstance(exc, (TopomapError, OSError, ValueError))
-        row = {"map": task["map"], "output": task["output"], "status": "failed" if bad_input else "error",
+        row = {"map": task["map"], "output": task["output"], "status": FAILED if bad_input else ERROR,
                "seconds": time.perf_counter() - t0,
                "error": _first_line(exc) if bad_input else f"{type(exc).__name__}: {_first_line(exc)}",
                "traceback": "".join(traceback.format_exception(exc))}
-        if claimed:
-            try:
-                (folder / RECORD).unlink()
-                if not existed:
-                    folder.rmdir()  # only if empty
-            except OSError:
-                pass
+        if claimed:  # the outputs are as they were (all files or none are replaced): so is the record
+            _restore_record(folder, previous, existed)
     return row
 
 
@@ -304,7 +320,7 @@ def _pool_init():
 
 
 def _crashed(task, exc) -> dict:
-    return {"map": task["map"], "output": task["output"], "status": "error",
+    return {"map": task["map"], "output": task["output"], "status": ERROR,
             "error": f"worker lost: {type(exc).__name__}: {_first_line(exc)}",
             "traceback": "".join(traceback.format_exception(exc))}
 
@@ -415,7 +431,7 @@ def read_summary(path) -> list:
 
 def _line(done, total, row) -> str:
     st = row["status"]
-    if st == "ok":
+    if st == OK:
         what = f"{row['rooms']} rooms, {row['doors']} doors, {row['seconds']:.1f} s -> {row['output']}"
     else:
         what = row.get("error", "")
@@ -500,8 +516,8 @@ def segment_many(paths: Sequence, out, *, jobs: int = 1, scheduler=None, overwri
     dirs = output_dirs(paths, out)
     plan = _plan(paths, dirs, settings, overwrite)
     many = len(paths) > 1
-    rows = [dict(earlier, map=str(p), output=str(d), status="skipped") if what == "skip"
-            else {"map": str(p), "output": str(d), "status": "pending"}
+    rows = [dict(earlier, map=str(p), output=str(d), status=SKIPPED) if what == "skip"
+            else {"map": str(p), "output": str(d), "status": PENDING}
             for p, d, (what, earlier) in zip(paths, dirs, plan)]
     remote = scheduler is not None
     tasks, where = [], []

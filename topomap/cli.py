@@ -127,7 +127,9 @@ def _report_failure(row) -> int:
     msg = row["error"]
     if Path(row["map"]).name not in msg:
         msg = f"{row['map']}: {msg}"
-    if row["status"] == "error":
+    from .batch import ERROR
+
+    if row["status"] == ERROR:
         click.echo(f"internal error: {msg} (rerun with --debug for the traceback)", err=True)
         return EXIT_INTERNAL
     click.echo(f"error: {msg}", err=True)
@@ -160,7 +162,7 @@ def segment_cmd(maps, outdir, resolution, method, skeletons, profile, jobs, sche
     (node-link), rooms.geojson, overlay.png and topomap_run.json per map.
     Maps whose outputs are complete and newer than the map are skipped.
     """
-    from .batch import segment_many
+    from .batch import ERROR, FAILED, OK, SKIPPED, segment_many
     from .errors import ParameterError
 
     if resolution is not None and not resolution > 0:
@@ -176,18 +178,18 @@ def segment_cmd(maps, outdir, resolution, method, skeletons, profile, jobs, sche
         sys.exit(_fail(exc))
     code = EXIT_OK
     for row in rows:
-        if row["status"] in ("failed", "error"):
+        if row["status"] in (FAILED, ERROR):
             code = max(code, _report_failure(row))
             continue
         log.info("%s: %d rooms, %d doors -> %s", row["map"], row["rooms"], row["doors"], row["output"])
         if profile:
             _print_profile(row["map"], row)
         if not many:
-            done = " (up to date, skipped)" if row["status"] == "skipped" else ""
+            done = " (up to date, skipped)" if row["status"] == SKIPPED else ""
             click.echo(f"{row['map']}: {_summary(row)} -> {row['output']}{done}")
     if many:
-        good = sum(r["status"] in ("ok", "skipped") for r in rows)
-        skipped = sum(r["status"] == "skipped" for r in rows)
+        good = sum(r["status"] in (OK, SKIPPED) for r in rows)
+        skipped = sum(r["status"] == SKIPPED for r in rows)
         note = f", {skipped} of them up to date and skipped" if skipped else ""
         click.echo(f"{good} of {len(rows)} maps segmented{note} -> {outdir} (summary.csv)")
     sys.exit(code)
