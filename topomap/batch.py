@@ -352,13 +352,7 @@ def _execute(tasks, jobs, scheduler):
             futures = client.map(_run_one, tasks, pure=False)
             index = {f.key: i for i, f in enumerate(futures)}
             try:
-                for fut in as_completed(futures):
-                    i = index[fut.key]
-                    try:
-                        row = fut.result()
-                    except Exception as exc:  # noqa: BLE001 - a worker died
-                        row = _crashed(tasks[i], exc)
-                    yield i, row
+                yield from _collect(as_completed(futures), lambda f: index[f.key], tasks)
             finally:
                 client.cancel(futures)
         finally:
@@ -374,16 +368,21 @@ def _execute(tasks, jobs, scheduler):
     with ProcessPoolExecutor(max_workers=jobs, initializer=_pool_init) as ex:
         futures = {ex.submit(_run_one, t): i for i, t in enumerate(tasks)}
         try:
-            for fut in as_completed(futures):
-                i = futures[fut]
-                try:
-                    row = fut.result()
-                except Exception as exc:  # noqa: BLE001 - a worker died
-                    row = _crashed(tasks[i], exc)
-                yield i, row
+            yield from _collect(as_completed(futures), futures.get, tasks)
         finally:
             for f in futures:
                 f.cancel()
+
+
+def _collect(finished, index_of, tasks):
+    """``(index, row)`` of every finished future (concurrent.futures or Dask)."""
+    for fut in finished:
+        i = index_of(fut)
+        try:
+            row = fut.result()
+        except Exception as exc:  # noqa: BLE001 - a worker died
+            row = _crashed(tasks[i], exc)
+        yield i, row
 
 
 # --------------------------------------------------------------------------
@@ -494,12 +493,11 @@ def segment_many(paths: Sequence, out, *, jobs: int = 1, scheduler=None, overwri
     paths = [Path(p) for p in paths]
     if not paths:
         raise ParameterError("no maps given")
-    try:
-        jobs = int(jobs)
-    except (TypeError, ValueError):
-        raise ParameterError(f"jobs must be an integer >= 1, got {jobs!r}") from None
-    if jobs < 1:
+    import numbers
+
+    if isinstance(jobs, bool) or not isinstance(jobs, numbers.Integral) or jobs < 1:
         raise ParameterError(f"jobs must be an integer >= 1, got {jobs!r}")
+    jobs = int(jobs)
     if scheduler is not None and jobs != 1:
         raise ParameterError(f"jobs={jobs} and a scheduler: the cluster decides how many maps run at once")
     if resolution is not None and not (isinstance(resolution, (int, float)) and resolution > 0):
