@@ -321,3 +321,28 @@ def test_jobs_and_cluster_give_the_same_outputs(tmp_path, cluster):
         got = summary_without_times(d)
         assert [dict(r, output=Path(r["output"]).relative_to(d)) for r in got] == \
                [dict(r, output=Path(r["output"]).relative_to(runs["jobs1"])) for r in ref_rows], name
+
+
+def test_interrupted_batch_writes_the_summary_with_pending_maps(tmp_path, monkeypatch):
+    maps = [png(tmp_path, f"{s}.png", T.gray(T.two_rooms().array)) for s in "abc"]
+    real, calls = batch._run_one, []
+
+    def ctrl_c_on_the_second(task):
+        calls.append(task)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return real(task)
+
+    monkeypatch.setattr(batch, "_run_one", ctrl_c_on_the_second)
+    with pytest.raises(KeyboardInterrupt):
+        segment_many(maps, tmp_path / "out")
+    assert [r["status"] for r in read_summary(tmp_path / "out" / "summary.csv")] == ["ok", "pending", "pending"]
+    monkeypatch.setattr(batch, "_run_one", real)
+    assert [r["status"] for r in segment_many(maps, tmp_path / "out")] == ["skipped", "ok", "ok"]
+
+
+def test_progress_bar_when_asked(tmp_path, capsys):
+    maps = [png(tmp_path, f"{s}.png", T.gray(T.two_rooms().array)) for s in "ab"]
+    segment_many(maps, tmp_path / "out", progress=True)
+    err = capsys.readouterr().err
+    assert "segmenting" in err and "2/2" in err

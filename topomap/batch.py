@@ -548,8 +548,8 @@ def segment_many(paths: Sequence, out, *, jobs: int = 1, scheduler=None, overwri
             for k, row in _execute(tasks, jobs, scheduler):
                 rows[where[k]] = row
                 done += 1
-                bar.update(1)
                 bar.set_postfix_str(Path(row["map"]).name, refresh=False)
+                bar.update(1)
                 log.log(level, "%s", _line(done, total, row))
                 if many and time.monotonic() - last > SUMMARY_EVERY:
                     _write_summary(rows, out / SUMMARY)
