@@ -8,6 +8,8 @@ holds; every room a method reports is counted.
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 from click.testing import CliRunner
@@ -47,7 +49,7 @@ def plan_dir(tmp_path_factory):
 
 
 def _cli_labels(path, tmp_path, method, *extra):
-    out = tmp_path / f"out_{method}"
+    out = tmp_path / f"out_{method}_{os.path.basename(path)}"  # one folder per map (no replacing of results)
     res = CliRunner().invoke(main, ["segment", str(path), "-o", str(out), "--method", method, *extra])
     assert res.exit_code == 0, res.output
     return np.asarray(Image.open(out / "labels.png")).astype(np.int64)

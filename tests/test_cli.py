@@ -127,7 +127,7 @@ def test_batch_skips_the_bad_map(tmp_path):
     assert len(errors) == 1 and "bad.png" in errors[0] and "not an image" in errors[0]
     assert "Traceback" not in r.stderr
     assert "2 of 3 maps segmented" in r.stdout
-    assert sorted(p.name for p in out.iterdir()) == ["a", "c"]
+    assert sorted(p.name for p in out.iterdir()) == ["a", "c", "summary.csv"]
     for stem, n in (("a", 2), ("c", 4)):
         assert np.asarray(Image.open(out / stem / "labels.png")).max() == n
         assert (out / stem / "overlay.png").stat().st_size > 0
@@ -157,7 +157,7 @@ def test_failed_overlay_leaves_no_partial_file_and_keeps_earlier_outputs(tmp_pat
 
     monkeypatch.setattr("topomap.export.save_bytes", broken_overlay)
     second = png(tmp_path, "second.png", T.gray(T.corridor_with_rooms().array))
-    r = invoke("segment", second, "-o", out)
+    r = invoke("segment", second, "-o", out, "--overwrite")
     assert r.exit_code == 1
     lines = stderr_lines(r)
     assert len(lines) == 1 and "disk full" in lines[0], r.stderr
@@ -174,7 +174,7 @@ def test_failed_overlay_drawing_writes_nothing(tmp_path, monkeypatch):
         raise OSError("no display")
 
     monkeypatch.setattr("topomap.plot.overlay_png", broken)
-    r = invoke("segment", png(tmp_path, "second.png", T.gray(T.one_room().array)), "-o", out)
+    r = invoke("segment", png(tmp_path, "second.png", T.gray(T.one_room().array)), "-o", out, "--overwrite")
     assert r.exit_code == 1 and "no display" in r.stderr
     assert _snapshot(out) == before
 
@@ -191,7 +191,7 @@ def test_any_failed_writer_keeps_earlier_outputs(tmp_path, monkeypatch, victim):
         raise OSError(f"{victim} failed")
 
     monkeypatch.setattr(export, victim, broken)
-    r = invoke("segment", png(tmp_path, "second.png", T.gray(T.one_room().array)), "-o", out)
+    r = invoke("segment", png(tmp_path, "second.png", T.gray(T.one_room().array)), "-o", out, "--overwrite")
     assert r.exit_code == 1
     assert _snapshot(out) == before
 

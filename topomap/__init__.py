@@ -28,6 +28,7 @@ _LAZY = {
     "room_graph": "roomgraph",
     "TopomapError": "errors", "MapError": "errors", "MapFileError": "errors", "ParameterError": "errors",
     "example_map_path": "_example",
+    "segment_many": "batch", "OutputExistsError": "errors",
 }
 
 __all__ = sorted(_LAZY) + ["__version__"]

@@ -105,29 +105,46 @@ def _segment_one(path, outdir, resolution, method, skeletons, topic=None, at=Non
     return seg
 
 
-def _summary(seg) -> str:
+def _summary(row) -> str:
     """"12 rooms, 11 doors", and ", 40 fragments (1.3 m²)" when free regions
-    too small to be a room (scan specks) were set apart."""
-    text = f"{seg.n_rooms} rooms, {len(seg.doors)} doors"
-    nf = seg.n_fragments
+    too small to be a room (scan specks) were set apart (``row``: a summary row of
+    :func:`topomap.segment_many`)."""
+    text = f"{row['rooms']} rooms, {row['doors']} doors"
+    nf = row.get("fragments") or 0
     if nf:
-        text += f", {nf} fragment{'s' if nf > 1 else ''} ({seg.fragment_area:.4g} m²)"
+        text += f", {nf} fragment{'s' if nf > 1 else ''} ({row['fragment_area_m2']:.4g} m²)"
     return text
 
 
-def _print_profile(path, seg):
+def _print_profile(path, row):
     """One line per stage on stderr: where the time of a map went."""
-    order = ["load", "preprocess", "skeletons", "graphs", "doors", "rooms", "segment", "total",
-             "room_graph", "write"]
-    t = seg.timings
-    stages = [k for k in order if k in t] + sorted(k for k in t if k not in order)
-    click.echo(f"{path}: " + ", ".join(f"{k} {t[k] * 1000:.0f} ms" for k in stages), err=True)
+    from .batch import _columns
+
+    stages = [k for k in _columns([row]) if k.startswith("t_") and row.get(k) is not None]
+    click.echo(f"{path}: " + ", ".join(f"{k[2:]} {row[k] * 1000:.0f} ms" for k in stages), err=True)
+
+
+def _report_failure(row) -> int:
+    """The one-line message of a failed map of a batch; its exit code."""
+    if _State.debug and row.get("traceback"):
+        click.echo(row["traceback"], err=True, nl=False)
+    msg = row["error"]
+    if Path(row["map"]).name not in msg:
+        msg = f"{row['map']}: {msg}"
+    from .batch import ERROR
+
+    if row["status"] == ERROR:
+        click.echo(f"internal error: {msg} (rerun with --debug for the traceback)", err=True)
+        return EXIT_INTERNAL
+    click.echo(f"error: {msg}", err=True)
+    return EXIT_INPUT
 
 
 @main.command("segment")
 @click.argument("maps", nargs=-1, required=True, type=click.Path(path_type=Path))
 @click.option("-o", "--out", "outdir", required=True, type=click.Path(path_type=Path),
-              help="Output directory (one subfolder per map stem when several maps are given).")
+              help="Output directory (several maps: a folder per map, from its path below the maps' "
+                   "common folder, and summary.csv).")
 @click.option("--resolution", type=float, default=None,
               help="Metres per pixel for image maps without YAML (default 0.05).")
 @click.option("--method", type=click.Choice(_method_names()), default=None,
@@ -143,13 +160,22 @@ def _print_profile(path, seg):
 @click.option("--bag", type=click.Path(path_type=Path), default=None, metavar="OUT",
               help="Also write the map, the rooms (MarkerArray) and the labels (mono16 Image) into a new bag: "
                    "OUT.mcap (ROS 2), OUT.bag (ROS 1) or OUT (ROS 2 sqlite3 directory). One map only.")
-def segment_cmd(maps, outdir, resolution, method, skeletons, profile, topic, at, bag):
+@click.option("-j", "--jobs", type=click.IntRange(min=1), default=1, show_default=True,
+              help="Run maps in this many local processes.")
+@click.option("--scheduler", metavar="ADDRESS", default=None,
+              help="Run maps on this Dask distributed cluster (e.g. tcp://host:8786); needs topomap[dask].")
+@click.option("--overwrite", is_flag=True,
+              help="Segment every map again (no skipping of up-to-date outputs) and replace results "
+                   "this run did not write.")
+def segment_cmd(maps, outdir, resolution, method, skeletons, profile, topic, at, bag, jobs, scheduler, overwrite):
     """Segment MAP files (ROS YAML, PGM, PNG or a ROS bag) into rooms and doors.
 
     Writes labels.png (16-bit, 0 = not a room), labels.pgm + labels.yaml
     (the labels as a map_server raw-mode map), rooms.graphml, rooms.json
-    (node-link), rooms.geojson and overlay.png per map.
+    (node-link), rooms.geojson, overlay.png and topomap_run.json per map.
+    Maps whose outputs are complete and newer than the map are skipped.
     """
+    from .batch import ERROR, FAILED, OK, SKIPPED, segment_many
     from .errors import ParameterError
 
     if resolution is not None and not resolution > 0:
@@ -164,37 +190,33 @@ def segment_cmd(maps, outdir, resolution, method, skeletons, profile, topic, at,
         except Exception as exc:  # noqa: BLE001
             sys.exit(_fail(exc))
     many = len(maps) > 1
-    failed = 0
+    batch_log = logging.getLogger("topomap.batch")
+    if many and not sys.stderr.isatty() and batch_log.getEffectiveLevel() > logging.INFO:
+        batch_log.setLevel(logging.INFO)  # no progress bar: a line per map
+    try:
+        extra = {k: v for k, v in (("topic", topic), ("at", at), ("bag", None if bag is None else str(bag)))
+                 if v is not None}
+        rows = segment_many(maps, outdir, jobs=jobs, scheduler=scheduler, overwrite=overwrite,
+                            resolution=resolution, method=method, skeletons=skeletons, write_options=extra)
+    except Exception as exc:  # noqa: BLE001 - nothing ran
+        sys.exit(_fail(exc))
     code = EXIT_OK
-    items = list(maps)
-    with click.progressbar(items, label="segmenting", file=sys.stderr,
-                           show_pos=True, item_show_func=lambda p: p and p.name) if many else _nullbar(items) as bar:
-        for path in bar:
-            target = outdir / path.stem if many else outdir
-            try:
-                seg = _segment_one(path, target, resolution, method, skeletons, topic, at, bag)
-                log.info("%s: %d rooms, %d doors -> %s", path, seg.n_rooms, len(seg.doors), target)
-                if profile:
-                    _print_profile(path, seg)
-                if not many:
-                    click.echo(f"{path}: {_summary(seg)} -> {target}")
-            except Exception as exc:  # noqa: BLE001 - reported, batch goes on
-                failed += 1
-                code = max(code, _fail(exc))
+    for row in rows:
+        if row["status"] in (FAILED, ERROR):
+            code = max(code, _report_failure(row))
+            continue
+        log.info("%s: %d rooms, %d doors -> %s", row["map"], row["rooms"], row["doors"], row["output"])
+        if profile:
+            _print_profile(row["map"], row)
+        if not many:
+            done = " (up to date, skipped)" if row["status"] == SKIPPED else ""
+            click.echo(f"{row['map']}: {_summary(row)} -> {row['output']}{done}")
     if many:
-        click.echo(f"{len(items) - failed} of {len(items)} maps segmented -> {outdir}")
+        good = sum(r["status"] in (OK, SKIPPED) for r in rows)
+        skipped = sum(r["status"] == SKIPPED for r in rows)
+        note = f", {skipped} of them up to date and skipped" if skipped else ""
+        click.echo(f"{good} of {len(rows)} maps segmented{note} -> {outdir} (summary.csv)")
     sys.exit(code)
-
-
-class _nullbar:
-    def __init__(self, items):
-        self.items = items
-
-    def __enter__(self):
-        return self.items
-
-    def __exit__(self, *a):
-        return False
 
 
 @main.command("demo")

@@ -23,6 +23,7 @@ __all__ = [
     "NotInRoomError",
     "NoPathError",
     "BagError",
+    "OutputExistsError",
     "MissingDependencyError",
 ]
 
@@ -75,5 +76,9 @@ class BagError(MapError):
     """A ROS bag cannot be read or holds no usable map: corrupt, empty, no such topic, another type."""
 
 
+class OutputExistsError(TopomapError, FileExistsError):
+    """An output folder holds results this run did not write (another map's, or files of unknown origin)."""
+
+
 class MissingDependencyError(TopomapError, ImportError):
-    """An optional dependency is not installed (the message says which extra to install)."""
+    """An optional dependency a feature needs is not installed (the message says which extra to install)."""

@@ -696,6 +696,12 @@ def load_label_map(path):
 # All outputs of a segmentation
 # --------------------------------------------------------------------------
 
+#: The files :func:`write_outputs` writes into a map's output folder, by kind.
+OUTPUT_FILES = {"labels": "labels.png", "label_map_pgm": "labels.pgm", "label_map": "labels.yaml",
+                "graphml": "rooms.graphml", "json": "rooms.json", "geojson": "rooms.geojson",
+                "overlay": "overlay.png"}
+
+
 def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None) -> dict:
     """Write ``labels.png``, ``labels.pgm`` + ``labels.yaml``, ``rooms.graphml``, ``rooms.json``,
     ``rooms.geojson`` and ``overlay.png``.
@@ -730,10 +736,9 @@ def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None) -> di
 
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
-    names = {"labels": "labels.png", "label_map_pgm": "labels.pgm", "label_map": "labels.yaml",
-             "graphml": "rooms.graphml", "json": "rooms.json", "geojson": "rooms.geojson"}
-    if overlay_png is not None:
-        names["overlay"] = "overlay.png"
+    names = dict(OUTPUT_FILES)
+    if overlay_png is None:
+        del names["overlay"]
     with ExitStack() as stack:  # on success renames every temporary file; on error removes them all
         tmp = {k: stack.enter_context(atomic_write(outdir / f, None)) for k, f in names.items()}
         save_labels(seg.labels, tmp["labels"])

@@ -1,0 +1,561 @@
+"""Batches of maps: :func:`segment_many` (what ``topomap segment MAP... -o OUT`` runs).
+
+Rules (also on the docs page *Batches*):
+
+Output folders
+    One map: its files go straight into ``out``. Several maps: each map gets
+    the folder of its path relative to the maps' common parent folder,
+    without the extension (:func:`output_dirs`): ``ros/floor1/map.yaml`` and
+    ``ros/floor2/map.yaml`` go to ``out/floor1/map/`` and ``out/floor2/map/``;
+    ``maps/a.png`` to ``out/a/``. Two maps that differ only in their
+    extension (``a.png``, ``a.yaml`` in one folder) keep it: ``out/a_png/``,
+    ``out/a_yaml/``. The same map given twice is an error.
+Run record
+    Every output folder gets ``topomap_run.json``: the map it holds (absolute
+    path), size and modification time of the input files (a YAML and the
+    image it names), the options, the topomap version, size and
+    modification time of every output file, and the map's summary row. It
+    is written first as ``"status": "incomplete"`` and rewritten as
+    ``"complete"`` after the last output file, always atomically; a map that
+    fails puts the earlier record back (its earlier outputs are untouched).
+Refusal
+    A folder that holds another map's results, or output files without a
+    run record (results topomap did not write, or of unknown origin), is
+    never written into: the whole batch stops before any map runs
+    (:class:`~topomap.errors.OutputExistsError`) unless ``overwrite=True``.
+Resume
+    A map whose folder has a complete run record for the same input, the
+    same options and version, unchanged input files and unchanged output
+    files is skipped (status ``skipped``; its row comes from the record).
+    ``overwrite=True`` runs every map again.
+Crash safety
+    Every output file is written to a temporary name and renamed into place
+    once all of them are written (:func:`topomap.export.write_outputs`); a
+    run killed in the middle leaves whole files only, with a record that
+    says ``incomplete`` (so the map runs again); temporary files left by a
+    killed run are removed when the map runs again.
+Summary
+    With several maps, ``out/summary.csv`` (:data:`SUMMARY_COLUMNS`, then
+    ``t_<stage>`` seconds per stage, then ``error``), one row per map in the
+    order given, written atomically every :data:`SUMMARY_EVERY` seconds and
+    at the end (also when the batch is interrupted: maps not run yet are
+    ``pending``).
+Executors
+    ``jobs=1``: in this process; ``jobs=N``: N local processes
+    (:class:`concurrent.futures.ProcessPoolExecutor`); ``scheduler=``: an
+    existing Dask distributed cluster (a scheduler address or a
+    ``distributed.Client``; optional extra ``topomap[dask]``). Workers write
+    the outputs themselves, so on a cluster ``out`` and the maps must be on
+    a file system every worker sees, under the same paths (relative map
+    paths are made absolute for the workers).
+"""
+
+from __future__ import annotations
+
+import csv
+import io as _io
+import json
+import logging
+import os
+import sys
+import time
+import traceback
+from collections import Counter
+from pathlib import Path
+from typing import Optional, Sequence
+
+from . import export as _export
+from .errors import MissingDependencyError, OutputExistsError, ParameterError, TopomapError
+
+__all__ = ["segment_many", "output_dirs", "read_summary", "RECORD", "SUMMARY", "SUMMARY_COLUMNS",
+           "OUTPUT_NAMES", "STATUSES", "OK", "SKIPPED", "FAILED", "ERROR", "PENDING", "INCOMPLETE", "COMPLETE",
+           "SUMMARY_EVERY"]
+
+log = logging.getLogger("topomap.batch")
+
+#: Name of the run record in every output folder.
+RECORD = "topomap_run.json"
+#: Name of the batch summary table in ``out``.
+SUMMARY = "summary.csv"
+#: Output files a map's folder may hold (what ``topomap segment`` writes).
+OUTPUT_NAMES = tuple(_export.OUTPUT_FILES.values())
+#: First columns of ``summary.csv`` (``t_<stage>`` columns and ``error`` follow).
+SUMMARY_COLUMNS = ("map", "output", "status", "rooms", "doors", "fragments", "room_area_m2",
+                   "fragment_area_m2", "seconds")
+#: Values of the ``status`` column: segmented now; up to date from an earlier
+#: run; bad input or a failed write (exit code 1); an unexpected internal error
+#: (exit code 3); not run because the batch was interrupted.
+OK, SKIPPED, FAILED, ERROR, PENDING = "ok", "skipped", "failed", "error", "pending"
+STATUSES = (OK, SKIPPED, FAILED, ERROR, PENDING)
+#: ``status`` of a run record: being written (the map must run again), or complete.
+INCOMPLETE, COMPLETE = "incomplete", "complete"
+#: Seconds between two rewrites of ``summary.csv`` while a batch runs.
+SUMMARY_EVERY = 10.0
+
+_STAGES = ("load", "preprocess", "skeletons", "graphs", "doors", "rooms", "segment", "total",
+           "room_graph", "write")
+
+
+# --------------------------------------------------------------------------
+# Output folders
+# --------------------------------------------------------------------------
+
+def output_dirs(paths: Sequence, out) -> list:
+    """The output folder of every map of a batch (the rule of the module docstring).
+
+    Parameters
+    ----------
+    paths : sequence of str or os.PathLike
+        Map files.
+    out : str or os.PathLike
+        The batch's output folder.
+
+    Returns
+    -------
+    list of pathlib.Path
+        One folder per map, in the order of ``paths``; all different.
+
+    Raises
+    ------
+    ParameterError
+        A map given twice, or a map whose folder would be ``out/summary.csv``.
+    """
+    out = Path(out)
+    paths = [Path(p) for p in paths]
+    if len(paths) == 1:
+        return [out]
+    absolute = [Path(os.path.abspath(p)) for p in paths]
+    seen = {}
+    for p, a in zip(paths, absolute):
+        if a in seen:
+            raise ParameterError(f"{p}: map given twice (also as {seen[a]})")
+        seen[a] = p
+    base = Path(os.path.commonpath([str(a.parent) for a in absolute]))
+    rel = [a.relative_to(base) for a in absolute]
+    stems = [r.parent / r.stem if r.suffix else r for r in rel]
+    count = Counter(stems)
+    dirs = [out / (s if count[s] == 1 else s.parent / f"{s.name}_{r.suffix[1:]}") for s, r in zip(stems, rel)]
+    clash = Counter(dirs)
+    for p, d in zip(paths, dirs):
+        if d == out / SUMMARY or clash[d] > 1:
+            raise ParameterError(f"{p}: its output folder {d} is taken (rename the map)")
+    return dirs
+
+
+# --------------------------------------------------------------------------
+# Run records and the resume check
+# --------------------------------------------------------------------------
+
+def _stat(path) -> Optional[list]:
+    try:
+        st = os.stat(path)
+    except OSError:
+        return None
+    return [st.st_size, st.st_mtime_ns]
+
+
+def _input_files(path: Path) -> list:
+    """The map file and, for a YAML, the image it names (absolute paths)."""
+    files = [Path(os.path.abspath(path))]
+    if path.suffix.lower() in (".yaml", ".yml"):
+        try:
+            import yaml
+
+            image = yaml.safe_load(path.read_text()).get("image")
+            if isinstance(image, str):
+                files.append(Path(os.path.abspath(path.parent / image)))
+        except Exception:  # noqa: BLE001 - a bad YAML fails in load_map with its own message
+            pass
+    return files
+
+
+def _fingerprint(path: Path) -> dict:
+    return {str(f): _stat(f) for f in _input_files(path)}
+
+
+def _read_record(folder: Path) -> Optional[dict]:
+    try:
+        rec = json.loads((folder / RECORD).read_text())
+    except FileNotFoundError:
+        return None
+    except (OSError, ValueError):
+        return {}
+    return rec if isinstance(rec, dict) else {}
+
+
+def _write_record(folder: Path, record: dict):
+    from .io import atomic_write
+
+    with atomic_write(folder / RECORD, "w") as fh:
+        fh.write(json.dumps(record, indent=1, sort_keys=True, allow_nan=False) + "\n")
+
+
+def _version() -> str:
+    from . import __version__
+
+    return __version__
+
+
+def _up_to_date(rec: dict, settings: dict, folder: Path) -> bool:
+    if rec.get("status") != COMPLETE or rec.get("settings") != settings or rec.get("topomap") != _version():
+        return False
+    inputs, files = rec.get("inputs") or {}, rec.get("files") or {}
+    if not files or any(_stat(f) != v for f, v in inputs.items()):
+        return False
+    return all(_stat(folder / name) == v for name, v in files.items())
+
+
+def _plan(paths, dirs, settings, overwrite):
+    """Per map ``"run"`` or ``"skip"`` (with the earlier row); raises on a folder this run must not write."""
+    plan, refused = [], []
+    for p, d in zip(paths, dirs):
+        rec = _read_record(d)
+        mine = str(Path(os.path.abspath(p)))
+        if rec is None:
+            theirs = [n for n in OUTPUT_NAMES if (d / n).exists()]
+            if theirs and not overwrite:
+                refused.append(f"{d} holds {theirs[0]} but no {RECORD} (results topomap did not write)")
+            plan.append(("run", None))
+        elif rec.get("input") != mine and not overwrite:
+            other = rec.get("input") or "an unreadable run record"
+            refused.append(f"{d} holds the results of {other}, not of {p}")
+            plan.append(("run", None))
+        elif not overwrite and rec.get("input") == mine and _up_to_date(rec, settings, d):
+            plan.append(("skip", rec.get("row") or {}))
+        else:
+            plan.append(("run", None))
+    if refused:
+        more = f" (and {len(refused) - 1} more)" if len(refused) > 1 else ""
+        raise OutputExistsError(f"{refused[0]}{more}: nothing was written; use another output folder, "
+                                "or --overwrite (overwrite=True) to replace them")
+    return plan
+
+
+# --------------------------------------------------------------------------
+# One map (runs on a worker)
+# --------------------------------------------------------------------------
+
+def _remove_temporaries(folder: Path):
+    """Temporary files a killed run left beside the outputs (names of :func:`topomap.io.atomic_write`)."""
+    if not folder.is_dir():
+        return
+    for name in (*OUTPUT_NAMES, RECORD):
+        for tmp in folder.glob(f".{name}.*.tmp"):
+            try:
+                tmp.unlink()
+            except OSError:
+                pass
+
+
+def _restore_record(folder: Path, previous: Optional[str], existed: bool):
+    from .io import atomic_write
+
+    try:
+        if previous is None:
+            (folder / RECORD).unlink()
+            if not existed:
+                folder.rmdir()  # only if empty
+        else:
+            with atomic_write(folder / RECORD, "w") as fh:
+                fh.write(previous)
+    except OSError:
+        pass
+
+
+def _first_line(exc) -> str:
+    text = str(exc).splitlines()[0] if str(exc) else ""
+    return text or type(exc).__name__
+
+
+def _run_one(task: dict) -> dict:
+    """Segment one map into its folder; the summary row (never raises for a bad map)."""
+    t0 = time.perf_counter()
+    s = task["settings"]
+    folder = Path(task["folder"])
+    row = {"map": task["map"], "output": task["output"], "status": OK}
+    existed = folder.exists()
+    previous = claimed = None
+    try:
+        _remove_temporaries(folder)
+        inputs = _fingerprint(Path(task["path"]))
+        record = {"topomap": _version(), "input": task["input"], "inputs": inputs, "settings": s}
+        folder.mkdir(parents=True, exist_ok=True)
+        if (folder / RECORD).exists():
+            previous = (folder / RECORD).read_text()
+        _write_record(folder, dict(record, status=INCOMPLETE))  # a kill from here on: the map runs again
+        claimed = True
+        from .cli import _segment_one
+
+        seg = _segment_one(task["path"], folder, s["resolution"], s["method"], s["skeletons"],
+                           **task["write_options"])
+        res2 = seg.grid.resolution ** 2
+        row.update(rooms=seg.n_rooms, doors=len(seg.doors), fragments=seg.n_fragments,
+                   room_area_m2=float((seg.room_labels > 0).sum()) * res2,
+                   fragment_area_m2=float(seg.fragment_area))
+        row["seconds"] = time.perf_counter() - t0
+        row.update({f"t_{k}": float(v) for k, v in seg.timings.items()})
+        files = {n: _stat(folder / n) for n in OUTPUT_NAMES if (folder / n).exists()}
+        _write_record(folder, dict(record, status=COMPLETE, files=files, row=row))
+        row["error"] = ""
+        row["traceback"] = ""
+    except Exception as exc:  # noqa: BLE001 - reported in the row, the batch goes on
+        bad_input = isinstance(exc, (TopomapError, OSError, ValueError))
+        row = {"map": task["map"], "output": task["output"], "status": FAILED if bad_input else ERROR,
+               "seconds": time.perf_counter() - t0,
+               "error": _first_line(exc) if bad_input else f"{type(exc).__name__}: {_first_line(exc)}",
+               "traceback": "".join(traceback.format_exception(exc))}
+        if claimed:  # the outputs are as they were (all files or none are replaced): so is the record
+            _restore_record(folder, previous, existed)
+    return row
+
+
+# --------------------------------------------------------------------------
+# Executors
+# --------------------------------------------------------------------------
+
+def _pool_init():
+    # local workers ignore Ctrl-C; the parent stops them
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _crashed(task, exc) -> dict:
+    return {"map": task["map"], "output": task["output"], "status": ERROR,
+            "error": f"worker lost: {type(exc).__name__}: {_first_line(exc)}",
+            "traceback": "".join(traceback.format_exception(exc))}
+
+
+def _client(scheduler):
+    try:
+        from distributed import Client
+    except ImportError:
+        raise MissingDependencyError("running on a Dask cluster needs dask.distributed: "
+                                     "pip install 'topomap[dask]'") from None
+    if isinstance(scheduler, Client):
+        return scheduler, False
+    if not isinstance(scheduler, str) or not scheduler.strip():
+        raise ParameterError(f"scheduler must be an address like tcp://host:8786 or a distributed.Client, "
+                             f"got {scheduler!r}")
+    try:
+        return Client(scheduler, timeout="20s"), True
+    except (OSError, TimeoutError) as exc:
+        raise ParameterError(f"scheduler {scheduler}: cannot reach it: {_first_line(exc)}") from None
+
+
+def _execute(tasks, jobs, scheduler):
+    """Yield ``(index, row)`` as maps finish."""
+    if scheduler is not None:
+        client, own = _client(scheduler)
+        try:
+            from distributed import as_completed
+
+            futures = client.map(_run_one, tasks, pure=False)
+            index = {f.key: i for i, f in enumerate(futures)}
+            try:
+                yield from _collect(as_completed(futures), lambda f: index[f.key], tasks)
+            finally:
+                client.cancel(futures)
+        finally:
+            if own:
+                client.close()
+        return
+    if jobs == 1:
+        for i, t in enumerate(tasks):
+            yield i, _run_one(t)
+        return
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    with ProcessPoolExecutor(max_workers=jobs, initializer=_pool_init) as ex:
+        futures = {ex.submit(_run_one, t): i for i, t in enumerate(tasks)}
+        try:
+            yield from _collect(as_completed(futures), futures.get, tasks)
+        finally:
+            for f in futures:
+                f.cancel()
+
+
+def _collect(finished, index_of, tasks):
+    """``(index, row)`` of every finished future (concurrent.futures or Dask)."""
+    for fut in finished:
+        i = index_of(fut)
+        try:
+            row = fut.result()
+        except Exception as exc:  # noqa: BLE001 - a worker died
+            row = _crashed(tasks[i], exc)
+        yield i, row
+
+
+# --------------------------------------------------------------------------
+# Summary
+# --------------------------------------------------------------------------
+
+def _columns(rows) -> list:
+    stages = []
+    for r in rows:
+        stages += [k for k in r if k.startswith("t_") and k not in stages]
+    order = {f"t_{s}": i for i, s in enumerate(_STAGES)}
+    stages.sort(key=lambda k: order.get(k, len(order)))
+    return [*SUMMARY_COLUMNS, *stages, "error"]
+
+
+def _write_summary(rows, path: Path):
+    from .io import atomic_write
+
+    buf = _io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=_columns(rows), restval="", extrasaction="ignore", lineterminator="\n")
+    w.writeheader()
+    w.writerows(rows)
+    with atomic_write(path, "w") as fh:
+        fh.write(buf.getvalue())
+
+
+def read_summary(path) -> list:
+    """The rows of a ``summary.csv`` as dicts (numbers as float/int, empty cells as None)."""
+    def value(k, v):
+        if v == "":
+            return None
+        if k in ("rooms", "doors", "fragments"):
+            return int(v)
+        if k in ("room_area_m2", "fragment_area_m2", "seconds") or k.startswith("t_"):
+            return float(v)
+        return v
+
+    with open(path, newline="") as fh:
+        return [{k: value(k, v) for k, v in r.items()} for r in csv.DictReader(fh)]
+
+
+# --------------------------------------------------------------------------
+# The batch
+# --------------------------------------------------------------------------
+
+def _line(done, total, row) -> str:
+    st = row["status"]
+    if st == OK:
+        what = f"{row['rooms']} rooms, {row['doors']} doors, {row['seconds']:.1f} s -> {row['output']}"
+    else:
+        what = row.get("error", "")
+    return f"[{done}/{total}] {row['map']}: {st}: {what}"
+
+
+def segment_many(paths: Sequence, out, *, jobs: int = 1, scheduler=None, overwrite: bool = False,
+                 resolution: Optional[float] = None, method: Optional[str] = None, skeletons: bool = False,
+                 write_options: Optional[dict] = None, progress: Optional[bool] = None) -> list:
+    """Segment many maps and write each one's outputs, as ``topomap segment MAP... -o OUT``.
+
+    Parameters
+    ----------
+    paths : sequence of str or os.PathLike
+        Map files (ROS YAML, PGM, PNG).
+    out : str or os.PathLike
+        Output folder: one map's files go straight into it; several maps get
+        a folder each (:func:`output_dirs`) and ``out/summary.csv``.
+    jobs : int, optional
+        Local worker processes (default 1: this process).
+    scheduler : str or distributed.Client, optional
+        Run on this Dask distributed cluster instead (a scheduler address
+        like ``"tcp://10.0.0.5:8786"``, or a client); ``jobs`` must then be 1.
+        Needs ``pip install 'topomap[dask]'`` here and topomap on every
+        worker; maps and ``out`` on a file system the workers share.
+    overwrite : bool, optional
+        Run every map again, and replace results this batch did not write.
+    resolution : float, optional
+        Metres per pixel for images without YAML (default 0.05).
+    method : str, optional
+        Segmentation method (default :data:`topomap.segmentation.DEFAULT_METHOD`).
+    skeletons : bool, optional
+        Draw both skeleton graphs in ``overlay.png``.
+    write_options : dict, optional
+        More keyword options of the single-map writer
+        (:func:`topomap.cli.write_segmentation`).
+    progress : bool, optional
+        A progress bar on stderr (tqdm); default: when stderr is a terminal.
+        Without the bar every finished map is logged at INFO level on the
+        ``topomap.batch`` logger (with it, at DEBUG).
+
+    Returns
+    -------
+    list of dict
+        One row per map in the order of ``paths``: the columns of
+        ``summary.csv`` (:data:`SUMMARY_COLUMNS`, ``t_<stage>`` seconds,
+        ``error``; ``status`` one of :data:`STATUSES`) and ``traceback``
+        (of a failed map, else empty; not in the CSV).
+
+    Raises
+    ------
+    OutputExistsError
+        An output folder holds results this run did not write (nothing is
+        written then).
+    ParameterError
+        Bad options, a map given twice.
+    MissingDependencyError
+        ``scheduler`` without Dask installed.
+    """
+    paths = [Path(p) for p in paths]
+    if not paths:
+        raise ParameterError("no maps given")
+    import numbers
+
+    if isinstance(jobs, bool) or not isinstance(jobs, numbers.Integral) or jobs < 1:
+        raise ParameterError(f"jobs must be an integer >= 1, got {jobs!r}")
+    jobs = int(jobs)
+    if scheduler is not None and jobs != 1:
+        raise ParameterError(f"jobs={jobs} and a scheduler: the cluster decides how many maps run at once")
+    if resolution is not None and not (isinstance(resolution, (int, float)) and resolution > 0):
+        raise ParameterError(f"resolution must be > 0 m/px, got {resolution!r}")
+    if method is not None:
+        from .segmentation import METHODS
+
+        if method not in METHODS:
+            raise ParameterError(f"unknown method {method!r}; methods: {', '.join(METHODS)}")
+    out = Path(out)
+    write_options = dict(write_options or {})
+    settings = {"resolution": None if resolution is None else float(resolution), "method": method,
+                "skeletons": bool(skeletons), **{k: write_options[k] for k in sorted(write_options)}}
+    dirs = output_dirs(paths, out)
+    plan = _plan(paths, dirs, settings, overwrite)
+    many = len(paths) > 1
+    rows = [dict(earlier, map=str(p), output=str(d), status=SKIPPED) if what == "skip"
+            else {"map": str(p), "output": str(d), "status": PENDING}
+            for p, d, (what, earlier) in zip(paths, dirs, plan)]
+    remote = scheduler is not None
+    tasks, where = [], []
+    for i, (p, d, (what, _)) in enumerate(zip(paths, dirs, plan)):
+        if what == "run":
+            where.append(i)
+            tasks.append({"map": str(p), "output": str(d), "input": os.path.abspath(p),
+                          "path": os.path.abspath(p) if remote else str(p),
+                          "folder": os.path.abspath(d) if remote else str(d),
+                          "settings": settings, "write_options": write_options})
+    total, skipped = len(paths), len(paths) - len(tasks)
+    if skipped:
+        log.info("%d of %d maps up to date in %s, skipped (overwrite to run them again)", skipped, total, out)
+    from contextlib import nullcontext
+
+    from tqdm import tqdm
+    from tqdm.contrib.logging import logging_redirect_tqdm
+
+    show = sys.stderr.isatty() if progress is None else bool(progress)
+    show = show and many
+    level = logging.DEBUG if show else logging.INFO
+    if many:
+        out.mkdir(parents=True, exist_ok=True)
+    last = time.monotonic()
+    done = skipped
+    try:
+        with tqdm(total=total, initial=skipped, desc="segmenting", unit="map", file=sys.stderr,
+                  disable=not show, dynamic_ncols=True) as bar, \
+                (logging_redirect_tqdm() if show else nullcontext()):
+            for k, row in _execute(tasks, jobs, scheduler):
+                rows[where[k]] = row
+                done += 1
+                bar.set_postfix_str(Path(row["map"]).name, refresh=False)
+                bar.update(1)
+                log.log(level, "%s", _line(done, total, row))
+                if many and time.monotonic() - last > SUMMARY_EVERY:
+                    _write_summary(rows, out / SUMMARY)
+                    last = time.monotonic()
+    finally:
+        if many:
+            _write_summary(rows, out / SUMMARY)
+    return rows
