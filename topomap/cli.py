@@ -83,7 +83,7 @@ def write_segmentation(seg, outdir, *, overlay: bool = True, skeletons: bool = F
     return write_outputs(seg, outdir, G, overlay_png=png)
 
 
-def _segment_one(path, outdir, resolution, method, skeletons):
+def _segment_one(path, outdir, resolution, method, skeletons, previous=None):
     import time
 
     from . import io
@@ -92,10 +92,15 @@ def _segment_one(path, outdir, resolution, method, skeletons):
     t0 = time.perf_counter()
     grid = io.load_map(path, resolution=resolution)
     t1 = time.perf_counter()
-    seg = segment(grid, method=method)
+    seg = segment(grid, method=method, previous=previous)
     t2 = time.perf_counter()
     seg.room_graph  # built here so its time is its own stage (timings["room_graph"])
     write_segmentation(seg, outdir, skeletons=skeletons)
+    if previous is not None:  # the change record beside the graph (room IDs follow the previous graph)
+        import json
+
+        with io.atomic_write(Path(outdir) / "changes.json", "w") as fh:
+            json.dump(seg.changes.as_dict(), fh, indent=1)
     seg.timings["load"] = t1 - t0
     seg.timings["write"] = time.perf_counter() - t2 - seg.timings.get("room_graph", 0.0)
     return seg
@@ -131,16 +136,27 @@ def _print_profile(path, seg):
 @click.option("--skeletons", is_flag=True, help="Draw both skeleton graphs in overlay.png.")
 @click.option("--profile", is_flag=True,
               help="Print the time of every stage (load, segmentation stages, room graph, write) on stderr.")
-def segment_cmd(maps, outdir, resolution, method, skeletons, profile):
+@click.option("--previous", type=click.Path(path_type=Path), default=None, metavar="GRAPH",
+              help="Room graph of an earlier map of the same place (rooms.graphml, .json or .geojson): "
+                   "rooms keep its IDs and names; writes changes.json.")
+def segment_cmd(maps, outdir, resolution, method, skeletons, profile, previous):
     """Segment MAP files (ROS YAML, PGM or PNG) into rooms and doors.
 
     Writes labels.png (16-bit, 0 = not a room), rooms.graphml, rooms.json
-    (node-link), rooms.geojson and overlay.png per map.
+    (node-link), rooms.geojson and overlay.png per map; with --previous also
+    changes.json (kept, new, vanished, split and merged room IDs).
     """
     from .errors import ParameterError
 
     if resolution is not None and not resolution > 0:
         sys.exit(_fail(ParameterError(f"--resolution must be > 0 m/px, got {resolution!r}")))
+    if previous is not None:
+        from .export import load_graph
+
+        try:
+            previous = load_graph(previous)  # read once for every map
+        except Exception as exc:  # noqa: BLE001
+            sys.exit(_fail(exc, "--previous"))
     many = len(maps) > 1
     failed = 0
     code = EXIT_OK
@@ -150,12 +166,14 @@ def segment_cmd(maps, outdir, resolution, method, skeletons, profile):
         for path in bar:
             target = outdir / path.stem if many else outdir
             try:
-                seg = _segment_one(path, target, resolution, method, skeletons)
+                seg = _segment_one(path, target, resolution, method, skeletons, previous)
                 log.info("%s: %d rooms, %d doors -> %s", path, seg.n_rooms, len(seg.doors), target)
                 if profile:
                     _print_profile(path, seg)
                 if not many:
                     click.echo(f"{path}: {_summary(seg)} -> {target}")
+                if previous is not None:
+                    click.echo(f"{path}: room IDs: {seg.changes.summary()}")
             except Exception as exc:  # noqa: BLE001 - reported, batch goes on
                 failed += 1
                 code = max(code, _fail(exc))
