@@ -322,6 +322,54 @@ def plan_cmd(graph, start, goal, robot_width, as_json):
     click.echo(f"  goal    ({wp[-1, 0]:.2f}, {wp[-1, 1]:.2f}) m  room {route['goal_room']}")
 
 
+@main.command("tour")
+@click.argument("graph", type=click.Path(path_type=Path))
+@click.option("--from", "start", nargs=2, type=float, required=True, metavar="X Y",
+              help="Start point, map-frame metres.")
+@click.option("--rooms", default=None, metavar="IDS",
+              help="Comma-separated room IDs to visit (default: every room reachable from the start).")
+@click.option("--return", "return_to_start", is_flag=True, help="End the tour back at the start.")
+@click.option("--robot-width", type=float, default=0.0, show_default=True,
+              help="Doors narrower than this (m) are not used.")
+@click.option("--json", "as_json", is_flag=True, help="Print the tour as JSON.")
+def tour_cmd(graph, start, rooms, return_to_start, robot_width, as_json):
+    """The order in which to visit the rooms of GRAPH, and the doors to pass.
+
+    GRAPH is rooms.graphml, rooms.json or rooms.geojson as written by
+    ``topomap segment``. Optimal for up to 12 rooms, a heuristic above (see
+    topomap.planning.plan_tour). Prints the rooms in order with the travel
+    distance to each, the doors passed and the total length.
+    """
+    import json
+
+    from .errors import ParameterError
+    from .export import load_graph
+    from .planning import plan_tour
+
+    try:
+        ids = None
+        if rooms is not None:
+            try:
+                ids = [int(t) for t in rooms.split(",") if t.strip()]
+            except ValueError:
+                raise ParameterError(f"--rooms must be comma-separated room IDs, got {rooms!r}") from None
+        G = load_graph(graph)
+        tour = plan_tour(G, tuple(start), rooms=ids, return_to_start=return_to_start, robot_width=robot_width)
+    except Exception as exc:  # noqa: BLE001
+        sys.exit(_fail(exc))
+    if as_json:
+        click.echo(json.dumps(dict(tour, waypoints=tour["waypoints"].tolist())))
+        return
+    click.echo("order: " + " -> ".join(str(r) for r in tour["order"]) + (" -> start" if return_to_start else ""))
+    click.echo(f"length: {tour['length']:.2f} m ({tour['method']})")
+    stops = tour["order"][1:] + (["start"] if return_to_start else [])
+    for r, L in zip(stops, tour["legs"]):
+        click.echo(f"  {'room ' + str(r) if r != 'start' else 'start':<10} +{L:.2f} m")
+    click.echo("doors: " + " ".join(str(d) for d in tour["doors"]))
+    if tour["unreachable"]:
+        click.echo("unreachable rooms: " + ", ".join(str(r) for r in tour["unreachable"]))
+
+
 @main.command("export")
 @click.argument("source", metavar="INPUT", type=click.Path(path_type=Path))
 @click.argument("target", metavar="OUTPUT", type=click.Path(path_type=Path))
