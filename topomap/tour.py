@@ -42,6 +42,8 @@ __all__ = ["plan_tour", "tour_length", "solve_order", "tour_lower_bound", "stop_
 
 #: Largest number of rooms to visit for which the order is computed exactly.
 EXACT_LIMIT = 12
+#: Rounds of iterated local search (double-bridge kicks) of the heuristic.
+KICKS = 30
 
 
 # --------------------------------------------------------------------------
@@ -96,34 +98,94 @@ def _nearest_neighbour(D):
     return order
 
 
-def _improve(D, order, closed):
-    """2-opt and Or-opt moves until none shortens the tour."""
-    order = list(order)
-    best = tour_length(D, order, closed=closed)
-    improved = True
-    while improved:
-        improved = False
-        n = len(order)
-        for i in range(n - 1):  # 2-opt: reverse order[i..k]
-            for k in range(i + 1, n):
-                cand = order[:i] + order[i:k + 1][::-1] + order[k + 1:]
-                L = tour_length(D, cand, closed=closed)
-                if L < best - 1e-9:
-                    order, best, improved = cand, L, True
-        for size in (1, 2, 3):  # Or-opt: move a run of 1-3 stops
-            for i in range(n - size + 1):
-                run, rest = order[i:i + size], order[:i] + order[i + size:]
-                for k in range(len(rest) + 1):
-                    for piece in (run, run[::-1]):
-                        cand = rest[:k] + piece + rest[k:]
-                        L = tour_length(D, cand, closed=closed)
-                        if L < best - 1e-9:
-                            order, best, improved = cand, L, True
-                            break
-                    else:
-                        continue
-                    break
-    return order
+def _as_cycle(D, order, closed):
+    """Distance matrix and cycle of the closed-tour form: an open tour from stop 0
+    is a closed tour through one more stop that is glued to stop 0 (distance
+    ``-big``, so no improving move ever separates them) and 0 from every other stop."""
+    if closed:
+        return D, np.array([0] + list(order))
+    n = D.shape[0]
+    big = 10.0 * (float(np.abs(D).sum()) + 1.0)
+    E = np.zeros((n + 1, n + 1))
+    E[:n, :n] = D
+    E[n, 0] = E[0, n] = -big
+    return E, np.array([0] + list(order) + [n])
+
+
+def _two_opt_move(D, t):
+    """Apply the best improving 2-opt move (reverse a stretch) of cycle ``t``; False if none."""
+    n = len(t)
+    for i in range(n - 2):
+        a, b = t[i], t[i + 1]
+        c = t[i + 2:]
+        d = t[np.r_[i + 3:n, 0]]
+        delta = D[a, c] + D[b, d] - D[a, b] - D[c, d]
+        if i == 0:
+            delta[-1] = 0.0  # the edge closing the cycle touches a
+        k = int(np.argmin(delta))
+        if delta[k] < -1e-9:
+            t[i + 1:i + 3 + k] = t[i + 1:i + 3 + k][::-1]
+            return True
+    return False
+
+
+def _or_opt_move(D, t):
+    """Apply an improving Or-opt move (a run of 1-3 stops moved, maybe reversed); False if none."""
+    n = len(t)
+    for size in (1, 2, 3):
+        if n < size + 3:
+            break
+        for i in range(n):
+            r = np.roll(t, -i)
+            run, rest = r[:size], r[size:]
+            s0, se, p, q = run[0], run[-1], rest[-1], rest[0]
+            gain = D[p, s0] + D[se, q] - D[p, q]
+            x, y = rest[:-1], rest[1:]
+            fwd = D[x, s0] + D[se, y] - D[x, y]
+            rev = D[x, se] + D[s0, y] - D[x, y]
+            add = np.minimum(fwd, rev)
+            j = int(np.argmin(add))
+            if add[j] - gain < -1e-9:
+                piece = run if fwd[j] <= rev[j] else run[::-1]
+                t[:] = np.concatenate([rest[:j + 1], piece, rest[j + 1:]])
+                return True
+    return False
+
+
+def _cycle_length(E, t):
+    return float(E[t, np.roll(t, -1)].sum())
+
+
+def _local_search(E, t):
+    while _two_opt_move(E, t) or _or_opt_move(E, t):
+        pass
+    return t
+
+
+def _improve(D, order, closed, kicks=KICKS):
+    """2-opt and Or-opt moves until none shortens the tour, then ``kicks`` rounds
+    of iterated local search: a random double-bridge move (three cuts, two
+    stretches swapped; seeded, so the result is reproducible) followed by the
+    same local search, kept when the tour got shorter."""
+    E, t = _as_cycle(np.asarray(D, float), order, closed)
+    t = _local_search(E, t)
+    best = _cycle_length(E, t)
+    rng = np.random.default_rng(0)
+    m = len(t)
+    for _ in range(kicks if m >= 8 else 0):
+        a, b, c = np.sort(rng.choice(np.arange(1, m), 3, replace=False))
+        cand = _local_search(E, np.concatenate([t[:a], t[b:c], t[a:b], t[c:]]))
+        L = _cycle_length(E, cand)
+        if L < best - 1e-9:
+            t, best = cand, L
+    k = int(np.nonzero(t == 0)[0][0])
+    t = list(np.roll(t, -k))
+    if not closed:
+        glue = D.shape[0]
+        if t[1] == glue:  # the glued stop after 0: walk the cycle the other way
+            t = [0] + t[1:][::-1]
+        t = [v for v in t if v != glue]
+    return [int(v) for v in t[1:]]
 
 
 def solve_order(D: np.ndarray, *, closed: bool = False, exact_limit: int = EXACT_LIMIT):
@@ -150,7 +212,7 @@ def solve_order(D: np.ndarray, *, closed: bool = False, exact_limit: int = EXACT
     n = D.shape[0] - 1
     if n <= exact_limit:
         return _held_karp(D, closed), "held-karp"
-    return _improve(D, _nearest_neighbour(D), closed), "nearest-neighbour+2-opt+or-opt"
+    return _improve(D, _nearest_neighbour(D), closed), "nearest-neighbour+2-opt+or-opt+kicks"
 
 
 def tour_lower_bound(D: np.ndarray) -> float:
