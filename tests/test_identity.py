@@ -177,3 +177,26 @@ def test_bad_previous():
     G.add_node(1, area=1.0)
     with pytest.raises(ParameterError, match="room 1 has no polygon"):
         match_rooms(G, new)
+
+
+def test_planning_pictures_and_files_with_gaps_in_the_ids(tmp_path):
+    from topomap.cli import write_segmentation
+    from topomap.planning import plan_path, plan_tour, travel_graph
+
+    grid = topomap.load_map(topomap.example_map_path())
+    first = segment(grid)
+    G = nx.relabel_nodes(first.room_graph, {r: 10 * r for r in first.room_graph.nodes})
+    seg = segment(grid, previous=G)
+    ids = tuple(sorted(G.nodes))
+    assert seg.room_ids == ids and seg.n_rooms == len(ids) and seg.next_room_id == max(ids) + 1
+    assert set(np.unique(seg.labels)) - {0} == set(ids) | set(range(max(ids) + 1, max(ids) + 1 + seg.n_fragments))
+    assert all(set(d.rooms) <= set(ids) for d in seg.doors)
+    T = travel_graph(seg)
+    assert sorted(T.nodes) == list(ids)
+    route = plan_path(seg, ids[0], ids[-1])
+    assert route["start_room"] == ids[0] and route["goal_room"] == ids[-1] and set(route["rooms"]) <= set(ids)
+    tour = plan_tour(T, ids[0])
+    assert sorted(tour["order"]) == list(ids)
+    files = write_segmentation(seg, tmp_path)  # labels.png, graphs and the overlay picture
+    H = load_graph(files["graphml"])
+    assert sorted(H.nodes) == list(ids) and H.graph["next_room_id"] == max(ids) + 1
