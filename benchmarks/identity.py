@@ -208,8 +208,8 @@ def main(argv=None):
     tab = table(stats)
     text = f"""## Room identities along exploration runs
 
-`python benchmarks/identity.py` (commit `{_commit()}`; {_machine()}; load average {load0:.1f} at the start;
-{wall:.0f} s wall time, `--jobs {args.jobs}`).
+`python benchmarks/identity.py REAL_DIR --jobs {args.jobs}` (commit `{_commit()}`; {_machine()}; load average {load0:.1f} at the start;
+{wall:.0f} s wall time).
 
 Each exploration sequence of the real maps (ROSE² data; every map a later state of the same
 run) segmented map by map, each map's rooms given the IDs of the previous map's rooms
@@ -217,8 +217,8 @@ run) segmented map by map, each map's rooms given the IDs of the previous map's 
 (the same true room: overlapping by at least half of the smaller in the map frame, both over
 100 cells) *keeps its ID* when the room covering most of it has the same ID in both maps;
 *fresh numbering* is the same share without `previous` (IDs of a row-major scan). An ID change
-is *explained* when the change record links the two IDs (a split or a merge). The last-but-two
-column counts the change records' entries over the sequence. The data set's YAML files give every map the origin
+is *explained* when the change record links the two IDs (a split or a merge); the column
+"new / vanished / split / merged" counts the change records' entries over the sequence. The data set's YAML files give every map the origin
 (0, 0) although the images were cropped anew as the map grew; the script recovers each map's
 origin by aligning its free cells with the previous map's (a whole-cell shift), as a SLAM
 map's own origin would.

@@ -109,7 +109,7 @@ def table(rows):
             allsub[c] += r["sub"][c]
         out.append(f"| {r['map']} | {r['n']} | {_f(r['opt'])} | {_f(r['heur'])} | {_f(r['nn'])} | {_f(r['bound'])} "
                    f"| {_f(r['heur'] / r['bound'] if r['bound'] else np.nan, '.2f')} "
-                   f"| {eq[0]}/{ns[0]}, {eq[1]}/{ns[1]} | {_f(worst, '.2f')} |")
+                   f"| {f'{eq[0]}/{ns[0]}, {eq[1]}/{ns[1]}' if ns[0] else '–'} | {_f(worst, '.2f')} |")
     h = sum(r["heur"] for r in rows)
     nn = sum(r["nn"] for r in rows)
     b = sum(r["bound"] for r in rows)
@@ -141,19 +141,20 @@ def main(argv=None):
         print(f"{bm.name}: {rows[-1]['n']} rooms", file=sys.stderr, flush=True)
     wall = time.perf_counter() - t0
     tab, tot = table(rows)
+    from topomap.tour import KICKS
     t_exact = np.nanmedian([r["t_exact"] for r in rows])
     t_heur = max(r["t_heur"] for r in rows)
     t_dist = np.median([r["t_dist"] for r in rows])
     text = f"""## Room tours
 
-`python benchmarks/tour.py` (commit `{_commit()}`; {_machine()}; load average {load0:.1f} at the start;
+`python benchmarks/tour.py IPA_DIR --subsets {args.subsets}` (commit `{_commit()}`; {_machine()}; load average {load0:.1f} at the start;
 {wall:.0f} s wall time).
 
 The 14 unfurnished floor plans of ipa_room_segmentation, segmented with the default method; a tour
 starts at the point of the largest room and visits every room reachable from it (the start room
 counts as visited), on the travel distances `plan_tour` uses (shortest routes through doors, in-room
-geodesic legs). *Heuristic*: nearest neighbour improved by 2-opt and Or-opt, what `plan_tour` uses
-above 12 rooms; *MST bound*: the weight of a minimum spanning tree of the stops, which no tour
+geodesic legs). *Heuristic*: nearest neighbour improved by 2-opt and Or-opt, then {KICKS} rounds of
+iterated local search (seeded double-bridge kicks), what `plan_tour` uses above 12 rooms; *MST bound*: the weight of a minimum spanning tree of the stops, which no tour
 undercuts; *optimum*: Held–Karp, for maps with at most 12 rooms to visit. On every map with at least
 12 rooms, {args.subsets} random sets of 12 rooms (seed 0) were toured both open and back to the start,
 where the optimum is computed: how often the heuristic found it, and its worst excess over it. Over
