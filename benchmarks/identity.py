@@ -22,41 +22,20 @@ with the previous map's (FFT cross-correlation), chained along the sequence.
 
 from __future__ import annotations
 
-import argparse
 import os
-import platform
-import subprocess
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _section  # noqa: E402
+from _section import _commit, _machine  # noqa: E402
+
 SEQUENCES = {"freiburg079": ("freiburg079_partial_%02d", range(2, 16)),
              "bremen_cartesium": ("bremen_cartesium_partial_%02d", range(3, 18))}
 MIN_GT_CELLS = 100
-HERE = Path(__file__).resolve().parent
-
-
-def _commit():
-    try:
-        out = subprocess.run(["git", "-C", str(HERE), "rev-parse", "--short", "HEAD"], capture_output=True,
-                             text=True, timeout=10).stdout.strip()
-        dirty = subprocess.run(["git", "-C", str(HERE), "status", "--porcelain", "--", "../topomap"],
-                               capture_output=True, text=True, timeout=10).stdout.strip()
-        return out + (" (+ uncommitted changes in topomap/)" if dirty else "")
-    except Exception:  # noqa: BLE001
-        return "?"
-
-
-def _machine():
-    cpu = "?"
-    try:
-        with open("/proc/cpuinfo") as fh:
-            cpu = next((ln.split(":", 1)[1].strip() for ln in fh if ln.startswith("model name")), "?")
-    except OSError:
-        pass
-    return f"{cpu}, {os.cpu_count()} CPUs, Python {platform.python_version()}"
 
 
 def shift(prev_free, free):
@@ -184,17 +163,12 @@ def table(stats):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("directory", nargs="?", default=None, help="real maps directory (default: real_maps_dir())")
-    ap.add_argument("--out", type=Path, default=HERE / "sections" / "70_identity.md",
-                    help="section file to write (default benchmarks/sections/70_identity.md)")
+    ap = _section.parser(__doc__, "real maps directory", "70_identity.md")
     ap.add_argument("--jobs", type=int, default=1, help="run the two sequences in this many processes")
     args = ap.parse_args(argv)
     from topomap.datasets import real_maps_dir
 
-    directory = args.directory or real_maps_dir()
-    if directory is None or not Path(directory).is_dir():
-        sys.exit("error: no real maps directory (pass REAL_DIR or set TOPOMAP_REAL_MAPS_DIR)")
+    directory = _section.directory(args.directory, real_maps_dir, "TOPOMAP_REAL_MAPS_DIR")
     t0 = time.perf_counter()
     load0 = os.getloadavg()[0]
     if args.jobs > 1:
@@ -224,13 +198,7 @@ origin by aligning its free cells with the previous map's (a whole-cell shift), 
 map's own origin would.
 
 {tab}"""
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = args.out.with_name(args.out.name + ".tmp")
-    tmp.write_text(text, encoding="utf-8")
-    tmp.replace(args.out)
-    sys.stdout.write(tab)
-    print(f"-> {args.out} ({wall:.0f} s)")
-
+    _section.write(args.out, text, tab, wall)
 
 if __name__ == "__main__":
     main()

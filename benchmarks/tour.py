@@ -18,38 +18,17 @@ distances between the largest room's point and every room's point
 
 from __future__ import annotations
 
-import argparse
 import os
-import platform
-import subprocess
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _section  # noqa: E402
+from _section import _commit, _machine  # noqa: E402
 
-
-def _commit():
-    try:
-        out = subprocess.run(["git", "-C", str(HERE), "rev-parse", "--short", "HEAD"], capture_output=True,
-                             text=True, timeout=10).stdout.strip()
-        dirty = subprocess.run(["git", "-C", str(HERE), "status", "--porcelain", "--", "../topomap"],
-                               capture_output=True, text=True, timeout=10).stdout.strip()
-        return out + (" (+ uncommitted changes in topomap/)" if dirty else "")
-    except Exception:  # noqa: BLE001
-        return "?"
-
-
-def _machine():
-    cpu = "?"
-    try:
-        with open("/proc/cpuinfo") as fh:
-            cpu = next((ln.split(":", 1)[1].strip() for ln in fh if ln.startswith("model name")), "?")
-    except OSError:
-        pass
-    return f"{cpu}, {os.cpu_count()} CPUs, Python {platform.python_version()}"
 
 
 def run_map(bm, subsets, rng):
@@ -121,17 +100,12 @@ def table(rows):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("directory", nargs="?", default=None, help="ipa_room_segmentation maps (default: benchmark_dir())")
-    ap.add_argument("--out", type=Path, default=HERE / "sections" / "75_tour.md",
-                    help="section file to write (default benchmarks/sections/75_tour.md)")
+    ap = _section.parser(__doc__, "ipa_room_segmentation maps", "75_tour.md")
     ap.add_argument("--subsets", type=int, default=10, help="random 12-room tours per map (default 10)")
     args = ap.parse_args(argv)
     from topomap.datasets import benchmark_dir, load_benchmark
 
-    directory = args.directory or benchmark_dir()
-    if directory is None or not Path(directory).is_dir():
-        sys.exit("error: no benchmark directory (pass IPA_DIR or set TOPOMAP_BENCHMARK_DIR)")
+    directory = _section.directory(args.directory, benchmark_dir, "TOPOMAP_BENCHMARK_DIR")
     load0 = os.getloadavg()[0]
     t0 = time.perf_counter()
     rng = np.random.default_rng(0)
@@ -164,13 +138,7 @@ neighbour's and {100 * (tot['h'] / tot['b'] - 1):.1f} % above the lower bound. T
 {t_exact * 1000:.0f} ms (median).
 
 {tab}"""
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = args.out.with_name(args.out.name + ".tmp")
-    tmp.write_text(text, encoding="utf-8")
-    tmp.replace(args.out)
-    sys.stdout.write(tab)
-    print(f"-> {args.out} ({wall:.0f} s)")
-
+    _section.write(args.out, text, tab, wall)
 
 if __name__ == "__main__":
     main()

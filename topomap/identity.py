@@ -310,12 +310,11 @@ def match_rooms(previous, seg: Segmentation, *, min_overlap: float = DEFAULT_MIN
     """
     from scipy.optimize import linear_sum_assignment
 
-    try:
-        min_overlap = float(min_overlap)
-    except (TypeError, ValueError):
-        raise ParameterError(f"min_overlap must be a share in (0, 1], got {min_overlap!r}") from None
-    if not 0 < min_overlap <= 1:
+    from .options import _check_fraction
+
+    if _check_fraction("min_overlap", min_overlap) == 0:
         raise ParameterError(f"min_overlap must be a share in (0, 1], got {min_overlap!r}")
+    min_overlap = float(min_overlap)
     if not isinstance(seg, Segmentation):
         raise ParameterError(f"match_rooms() needs a Segmentation, got {type(seg).__name__}")
     prev = _Previous(previous)

@@ -279,12 +279,9 @@ def stop_distances(seg_or_G, start, rooms=None, *, robot_width: float = 0.0):
     """
     from .planning import _Ctx, _annotated, _endpoint, door_graph
 
-    try:
-        robot_width = float(robot_width)
-    except (TypeError, ValueError):
-        raise PlanningError(f"robot_width must be a width in metres, got {robot_width!r}") from None
-    if not math.isfinite(robot_width) or robot_width < 0:
-        raise PlanningError(f"robot_width must be >= 0 m, got {robot_width!r}")
+    from .options import check_length
+
+    robot_width = check_length("robot_width", robot_width)
     ctx = _Ctx(seg_or_G)
     G = _annotated(seg_or_G)
     rs, ps, pxs = _endpoint(ctx, G, start, "start")
@@ -377,6 +374,8 @@ def plan_tour(seg_or_G, start, *, rooms=None, return_to_start: bool = False, rob
         The start is not in a room, or an unknown room ID.
     NoPathError
         A room given in ``rooms`` cannot be reached from the start.
+    ParameterError
+        ``robot_width`` is not a length >= 0 m.
     """
     try:
         exact_limit = int(exact_limit)
