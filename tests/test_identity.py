@@ -167,6 +167,13 @@ def test_cli_previous(tmp_path):
     assert not (tmp_path / "c").exists()
 
 
+def test_every_room_gone():
+    prev = seg_of(boxes((42, 42), [A, B, C]))
+    out, ch = match_rooms(prev.room_graph, seg_of(np.zeros((42, 42), np.int32)))
+    assert ch.vanished == (1, 2, 3) and ch.kept == () and out.room_ids == () and out.n_rooms == 0
+    assert out.next_room_id == 4 and out.room_graph.number_of_nodes() == 0
+
+
 def test_bad_previous():
     new = seg_of(boxes((42, 42), [A]))
     with pytest.raises(ParameterError, match="previous must be"):

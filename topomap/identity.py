@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Optional
@@ -205,7 +206,8 @@ class _Previous:
         if isinstance(previous, Segmentation):
             self.seg, self.G = previous, None
             self.name = previous.grid.name
-            L = previous.room_labels
+            L = self.labels = previous.room_labels
+            self.grid = previous.grid
             cnt = np.bincount(L.ravel())
             ids = [int(i) for i in np.nonzero(cnt)[0] if i > 0]
             res2 = previous.grid.resolution ** 2
@@ -237,6 +239,7 @@ class _Previous:
                 if extra:
                     self.attrs[r] = extra
             nxt = previous.graph.get("next_room_id")
+            self.grid, self.labels = _rasterised(previous, ids)
         else:
             raise ParameterError("previous must be a Segmentation, a room graph or the path of a saved room "
                                  f"graph, got {type(previous).__name__}")
@@ -250,26 +253,30 @@ class _Previous:
     def rooms_at(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """Previous room ID at every map-frame point (0 = none)."""
         out = np.zeros(x.shape, np.int64)
-        if self.seg is not None:
-            g = self.seg.grid
-            r, c = g.world_to_pixel(x, y)
-            r, c = np.rint(r).astype(np.int64), np.rint(c).astype(np.int64)
-            H, W = g.shape
-            ok = (r >= 0) & (r < H) & (c >= 0) & (c < W)
-            out[ok] = self.seg.room_labels[r[ok], c[ok]]
-            return out
-        import shapely
-
-        for rid in self.ids:
-            poly = self.G.nodes[rid]["polygon"]
-            if poly.is_empty:
-                continue
-            x0, y0, x1, y1 = poly.bounds
-            near = np.nonzero((x >= x0) & (x <= x1) & (y >= y0) & (y <= y1) & (out == 0))[0]
-            if near.size:
-                inside = shapely.contains_xy(poly, x[near], y[near])
-                out[near[inside]] = rid
+        r, c = self.grid.world_to_pixel(x, y)
+        r, c = np.rint(r).astype(np.int64), np.rint(c).astype(np.int64)
+        H, W = self.grid.shape
+        ok = (r >= 0) & (r < H) & (c >= 0) & (c < W)
+        out[ok] = self.labels[r[ok], c[ok]]
         return out
+
+
+def _rasterised(G, ids):
+    """The map frame of room graph ``G`` and its label image, from the room
+    polygons (which follow cell edges, so this is the label image it was
+    built from; see :mod:`topomap.planning`)."""
+    from .planning import _Ctx
+
+    ctx = _Ctx(G)
+    labels = np.zeros(ctx.shape, np.int64)
+    for r in ids:
+        box = ctx.room_bbox(r)
+        if box is None:
+            continue
+        r0, r1, c0, c1 = box
+        win = ctx.window_labels([r], box)
+        labels[r0:r1, c0:c1] = np.where(win > 0, win, labels[r0:r1, c0:c1])
+    return ctx.grid, labels
 
 
 # --------------------------------------------------------------------------
@@ -312,6 +319,7 @@ def match_rooms(previous, seg: Segmentation, *, min_overlap: float = DEFAULT_MIN
 
     from .options import _check_fraction
 
+    t0 = time.perf_counter()
     if _check_fraction("min_overlap", min_overlap) == 0:
         raise ParameterError(f"min_overlap must be a share in (0, 1], got {min_overlap!r}")
     min_overlap = float(min_overlap)
@@ -326,20 +334,16 @@ def match_rooms(previous, seg: Segmentation, *, min_overlap: float = DEFAULT_MIN
     area_cur = {j: float(cnt[j]) * res2 for j in cur}
     rr, cc = np.nonzero(L)
     x, y = grid.pixel_to_world(rr, cc)
-    if prev.G is not None:
-        from .planning import _PROBE  # the point of a cell that lies inside its room's polygon
-
-        x, y = grid.pixel_to_world(rr + _PROBE, cc + _PROBE)
     p = prev.rooms_at(np.asarray(x, float), np.asarray(y, float))
-    has = p > 0
-    ci = {j: k for k, j in enumerate(cur)}
     pi = {i: k for k, i in enumerate(prev.ids)}
-    O = np.zeros((len(cur), len(prev.ids)))
-    if has.any():
-        pairs, n = np.unique(np.stack([L[rr[has], cc[has]], p[has]]), axis=1, return_counts=True)
-        for (j, i), k in zip(pairs.T, n):
-            if int(i) in pi:
-                O[ci[int(j)], pi[int(i)]] = k * res2
+    # overlap (m²) of new room a (index into cur) and previous room b (index into prev.ids)
+    lut_c = np.zeros(int(L.max(initial=0)) + 1, np.int64)
+    lut_c[cur] = np.arange(len(cur))
+    lut_p = np.full(int(p.max(initial=0)) + 1, len(prev.ids), np.int64)  # last column: no previous room
+    lut_p[[i for i in prev.ids if i < lut_p.size]] = [pi[i] for i in prev.ids if i < lut_p.size]
+    key = lut_c[L[rr, cc]] * (len(prev.ids) + 1) + lut_p[p]
+    O = np.bincount(key, minlength=len(cur) * (len(prev.ids) + 1)).reshape(len(cur), len(prev.ids) + 1)
+    O = O[:, :-1] * res2
     # rooms are compared on the part of the map both know: a room's overlap
     # with every room of the other map (the area of a room that was only
     # partly explored before, or is only partly in the new map, does not count)
@@ -376,6 +380,7 @@ def match_rooms(previous, seg: Segmentation, *, min_overlap: float = DEFAULT_MIN
         vanished=tuple(sorted(i for b, i in enumerate(prev.ids) if not sig[:, b].any())),
         split=split, merged=merged, next_room_id=int(nxt))
     out = _relabelled(seg, ids, changes, {i: prev.attrs[i] for i in kept_set if i in prev.attrs})
+    out.timings["match_rooms"] = time.perf_counter() - t0
     log.info("%s: room IDs follow %s: %s", grid.name, prev.name, changes.summary())
     return out, changes
 
