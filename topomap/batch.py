@@ -239,7 +239,7 @@ def _remove_temporaries(folder: Path):
     """Temporary files a killed run left beside the outputs (names of :func:`topomap.io.atomic_write`)."""
     if not folder.is_dir():
         return
-    for name in (*OUTPUT_NAMES, RECORD):
+    for name in (*OUTPUT_NAMES, "changes.json", RECORD):
         for tmp in folder.glob(f".{name}.*.tmp"):
             try:
                 tmp.unlink()

@@ -83,16 +83,20 @@ def write_segmentation(seg, outdir, *, overlay: bool = True, skeletons: bool = F
     return write_outputs(seg, outdir, G, overlay_png=png)
 
 
-def _segment_one(path, outdir, resolution, method, skeletons, topic=None, at=None, bag=None):
+def _segment_one(path, outdir, resolution, method, skeletons, topic=None, at=None, bag=None, previous=None):
     import time
 
     from . import io
     from .segmentation import segment
 
+    if isinstance(previous, (str, Path)):
+        from .export import load_graph
+
+        previous = load_graph(previous)
     t0 = time.perf_counter()
     grid = io.load_map(path, resolution=resolution, topic=topic, time=at)
     t1 = time.perf_counter()
-    seg = segment(grid, method=method)
+    seg = segment(grid, method=method, previous=previous)
     t2 = time.perf_counter()
     seg.room_graph  # built here so its time is its own stage (timings["room_graph"])
     write_segmentation(seg, outdir, skeletons=skeletons)
@@ -100,9 +104,25 @@ def _segment_one(path, outdir, resolution, method, skeletons, topic=None, at=Non
         from .ros import write_bag
 
         write_bag(seg, bag)
+    if previous is not None:  # the change record beside the graph (room IDs follow the previous graph)
+        import json
+
+        with io.atomic_write(Path(outdir) / "changes.json", "w") as fh:
+            json.dump(seg.changes.as_dict(), fh, indent=1)
     seg.timings["load"] = t1 - t0
     seg.timings["write"] = time.perf_counter() - t2 - seg.timings.get("room_graph", 0.0)
     return seg
+
+
+def _id_changes(path) -> str:
+    """One line on the room-ID changes recorded in ``path`` (changes.json)."""
+    import json
+
+    from .identity import RoomChanges
+
+    d = json.loads(Path(path).read_text(encoding="utf-8"))
+    return RoomChanges(kept=tuple(d["kept"]), new=tuple(d["new"]), vanished=tuple(d["vanished"]),
+                       split=d["split"], merged=d["merged"], next_room_id=d["next_room_id"]).summary()
 
 
 def _summary(row) -> str:
@@ -167,13 +187,19 @@ def _report_failure(row) -> int:
 @click.option("--overwrite", is_flag=True,
               help="Segment every map again (no skipping of up-to-date outputs) and replace results "
                    "this run did not write.")
-def segment_cmd(maps, outdir, resolution, method, skeletons, profile, topic, at, bag, jobs, scheduler, overwrite):
+@click.option("--previous", type=click.Path(path_type=Path), default=None, metavar="GRAPH",
+              help="Room graph of an earlier map of the same place (rooms.graphml, .json or .geojson): "
+                   "rooms keep its IDs and names; writes changes.json.")
+def segment_cmd(maps, outdir, resolution, method, skeletons, profile, topic, at, bag, jobs, scheduler, overwrite,
+                previous):
     """Segment MAP files (ROS YAML, PGM, PNG or a ROS bag) into rooms and doors.
 
     Writes labels.png (16-bit, 0 = not a room), labels.pgm + labels.yaml
     (the labels as a map_server raw-mode map), rooms.graphml, rooms.json
     (node-link), rooms.geojson, overlay.png and topomap_run.json per map.
     Maps whose outputs are complete and newer than the map are skipped.
+    With --previous also changes.json (kept, new, vanished, split and
+    merged room IDs).
     """
     from .batch import ERROR, FAILED, OK, SKIPPED, segment_many
     from .errors import ParameterError
@@ -189,13 +215,20 @@ def segment_cmd(maps, outdir, resolution, method, skeletons, profile, topic, at,
             check_bag_path(bag)
         except Exception as exc:  # noqa: BLE001
             sys.exit(_fail(exc))
+    if previous is not None:
+        from .export import load_graph
+
+        try:
+            load_graph(previous)  # a bad file stops the run before anything is written
+        except Exception as exc:  # noqa: BLE001
+            sys.exit(_fail(exc, "--previous"))
     many = len(maps) > 1
     batch_log = logging.getLogger("topomap.batch")
     if many and not sys.stderr.isatty() and batch_log.getEffectiveLevel() > logging.INFO:
         batch_log.setLevel(logging.INFO)  # no progress bar: a line per map
     try:
-        extra = {k: v for k, v in (("topic", topic), ("at", at), ("bag", None if bag is None else str(bag)))
-                 if v is not None}
+        extra = {k: v for k, v in (("topic", topic), ("at", at), ("bag", None if bag is None else str(bag)),
+                                   ("previous", None if previous is None else str(previous))) if v is not None}
         rows = segment_many(maps, outdir, jobs=jobs, scheduler=scheduler, overwrite=overwrite,
                             resolution=resolution, method=method, skeletons=skeletons, write_options=extra)
     except Exception as exc:  # noqa: BLE001 - nothing ran
@@ -211,6 +244,8 @@ def segment_cmd(maps, outdir, resolution, method, skeletons, profile, topic, at,
         if not many:
             done = " (up to date, skipped)" if row["status"] == SKIPPED else ""
             click.echo(f"{row['map']}: {_summary(row)} -> {row['output']}{done}")
+            if previous is not None and row["status"] == OK:
+                click.echo(f"{row['map']}: room IDs: {_id_changes(Path(row['output']) / 'changes.json')}")
     if many:
         good = sum(r["status"] in (OK, SKIPPED) for r in rows)
         skipped = sum(r["status"] == SKIPPED for r in rows)
@@ -346,6 +381,54 @@ def plan_cmd(graph, start, goal, robot_width, as_json):
         a, b, d = doors[did]
         click.echo(f"  door {did:<3d}({wp[i, 0]:.2f}, {wp[i, 1]:.2f}) m  rooms {a}-{b}, width {d['width']:.2f} m")
     click.echo(f"  goal    ({wp[-1, 0]:.2f}, {wp[-1, 1]:.2f}) m  room {route['goal_room']}")
+
+
+@main.command("tour")
+@click.argument("graph", type=click.Path(path_type=Path))
+@click.option("--from", "start", nargs=2, type=float, required=True, metavar="X Y",
+              help="Start point, map-frame metres.")
+@click.option("--rooms", default=None, metavar="IDS",
+              help="Comma-separated room IDs to visit (default: every room reachable from the start).")
+@click.option("--return", "return_to_start", is_flag=True, help="End the tour back at the start.")
+@click.option("--robot-width", type=float, default=0.0, show_default=True,
+              help="Doors narrower than this (m) are not used.")
+@click.option("--json", "as_json", is_flag=True, help="Print the tour as JSON.")
+def tour_cmd(graph, start, rooms, return_to_start, robot_width, as_json):
+    """The order in which to visit the rooms of GRAPH, and the doors to pass.
+
+    GRAPH is rooms.graphml, rooms.json or rooms.geojson as written by
+    ``topomap segment``. Optimal for up to 12 rooms, a heuristic above (see
+    topomap.planning.plan_tour). Prints the rooms in order with the travel
+    distance to each, the doors passed and the total length.
+    """
+    import json
+
+    from .errors import ParameterError
+    from .export import load_graph
+    from .planning import plan_tour
+
+    try:
+        ids = None
+        if rooms is not None:
+            try:
+                ids = [int(t) for t in rooms.split(",") if t.strip()]
+            except ValueError:
+                raise ParameterError(f"--rooms must be comma-separated room IDs, got {rooms!r}") from None
+        G = load_graph(graph)
+        tour = plan_tour(G, tuple(start), rooms=ids, return_to_start=return_to_start, robot_width=robot_width)
+    except Exception as exc:  # noqa: BLE001
+        sys.exit(_fail(exc))
+    if as_json:
+        click.echo(json.dumps(dict(tour, waypoints=tour["waypoints"].tolist())))
+        return
+    click.echo("order: " + " -> ".join(str(r) for r in tour["order"]) + (" -> start" if return_to_start else ""))
+    click.echo(f"length: {tour['length']:.2f} m ({tour['method']})")
+    stops = tour["order"][1:] + (["start"] if return_to_start else [])
+    for r, L in zip(stops, tour["legs"]):
+        click.echo(f"  {'room ' + str(r) if r != 'start' else 'start':<10} +{L:.2f} m")
+    click.echo("doors: " + " ".join(str(d) for d in tour["doors"]))
+    if tour["unreachable"]:
+        click.echo("unreachable rooms: " + ", ".join(str(r) for r in tour["unreachable"]))
 
 
 @main.command("export")

@@ -541,3 +541,4 @@ def plan_path(seg_or_G, start, goal, *, robot_width: float = 0.0) -> dict:
     pts = [ps] + [ctx.doors[d][5] for d in doors] + [pg]
     return {"rooms": rooms, "doors": doors, "waypoints": np.asarray(pts, float).reshape(-1, 2),
             "length": float(length), "legs": legs, "start_room": rs, "goal_room": rg}
+from .tour import plan_tour  # noqa: E402,F401  (re-exported: room tours, topomap.tour)

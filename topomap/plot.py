@@ -65,8 +65,8 @@ def plot_rooms(seg, ax=None, *, alpha: float = 0.75, ids: bool = True):
     """Colour every room of ``seg`` over its map (fragments all in
     :data:`FRAGMENT_COLOR`); label rooms with their ID."""
     ax = plot_map(seg.grid, ax)
-    n = seg.n_rooms
-    colors = np.vstack([room_colors(n), np.tile(FRAGMENT_COLOR, (seg.n_fragments, 1))])
+    n = int(seg.room_labels.max()) if seg.labels.size else 0  # the largest room ID (IDs may have gaps)
+    colors = np.vstack([room_colors(n), np.tile(FRAGMENT_COLOR, (int(seg.labels.max(initial=0)) - n, 1))])
     rgba = colors[seg.labels]
     rgba[..., 3] *= alpha
     ax.imshow(rgba, extent=_extent(seg.grid), interpolation="nearest")

@@ -109,7 +109,7 @@ def room_graph(seg) -> nx.MultiGraph:
     """
     grid = seg.grid
     labels = seg.room_labels
-    n = seg.n_rooms
+    n = int(labels.max()) if labels.size else 0  # the largest room ID (IDs may have gaps)
     G = nx.MultiGraph(resolution=grid.resolution, origin=tuple(grid.origin), method=seg.method,
                       threshold=seg.threshold, map=grid.name, shape=tuple(labels.shape),
                       n_fragments=int(seg.n_fragments), fragment_area=float(seg.fragment_area))

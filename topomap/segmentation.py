@@ -678,7 +678,7 @@ METHODS = {
 DEFAULT_METHOD = "topomap"
 
 
-def segment(grid: OccupancyGrid, *, method: str = None, **params) -> Segmentation:
+def segment(grid: OccupancyGrid, *, method: str = None, previous=None, **params) -> Segmentation:
     """Segment an occupancy grid into rooms and doors.
 
     Parameters
@@ -687,6 +687,9 @@ def segment(grid: OccupancyGrid, *, method: str = None, **params) -> Segmentatio
         The map (see :func:`topomap.io.load_map`).
     method : str, optional
         One of :data:`METHODS` (default :data:`DEFAULT_METHOD`).
+    previous : Segmentation or networkx.MultiGraph or str or os.PathLike, optional
+        An earlier result (or saved room graph file) of the same place: rooms
+        keep its IDs (:func:`topomap.identity.match_rooms`; ``seg.changes``).
     **params
         Keyword options of the method, lengths in metres (for ``"topomap"``
         and ``"paper"`` the fields of :class:`~topomap.options.TopomapOptions`
@@ -710,5 +713,9 @@ def segment(grid: OccupancyGrid, *, method: str = None, **params) -> Segmentatio
         raise ParameterError(f"segment() needs an OccupancyGrid (see topomap.load_map), got {type(grid).__name__}")
     t0 = time.perf_counter()
     seg = METHODS[method](grid, **params)
+    if previous is not None:
+        from .identity import match_rooms
+
+        seg, _ = match_rooms(previous, seg)
     seg.timings["total"] = time.perf_counter() - t0
     return seg

@@ -1,0 +1,204 @@
+"""Room identities along exploration runs: do rooms keep their IDs as the map grows?
+
+On each exploration sequence of the real maps (ROSE² data: freiburg079_partial_02..15,
+bremen_cartesium_partial_03..17, each map a later state of the same run), every map
+is segmented with ``topomap.segment`` and its rooms given the IDs of the previous
+map's rooms (``topomap.identity.match_rooms``, what ``segment(grid, previous=...)``
+does). A ground-truth room present in two consecutive maps (the same true room:
+one-to-one, overlapping by at least half of the smaller in the map frame, both over
+100 cells) *keeps its ID* when the topomap room covering most of it carries the same
+ID in both maps; an ID change is *explained* when the change record links the two
+IDs (a split or a merge). The same share with fresh numbering (no ``previous``) is
+the reference.
+
+The data set's YAML files give every map the origin (0, 0), although the Bremen
+images were cropped anew as the map grew (the building shifts by up to 248 cells
+between two maps). The script recovers each map's origin the way a SLAM map's
+own origin would give it: the whole-cell shift that best aligns its free cells
+with the previous map's (FFT cross-correlation), chained along the sequence.
+
+    python benchmarks/identity.py [REAL_DIR] [--out benchmarks/sections/70_identity.md]
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _section  # noqa: E402
+from _section import _commit, _machine  # noqa: E402
+
+SEQUENCES = {"freiburg079": ("freiburg079_partial_%02d", range(2, 16)),
+             "bremen_cartesium": ("bremen_cartesium_partial_%02d", range(3, 18))}
+MIN_GT_CELLS = 100
+
+
+def shift(prev_free, free):
+    """``(dr, dc)``: ``free[r + dr, c + dc]`` best matches ``prev_free[r, c]`` (whole cells)."""
+    from scipy.signal import fftconvolve
+
+    c = fftconvolve(free.astype(np.float32), prev_free[::-1, ::-1].astype(np.float32), mode="full")
+    r, k = np.unravel_index(int(np.argmax(c)), c.shape)
+    return int(r - (prev_free.shape[0] - 1)), int(k - (prev_free.shape[1] - 1))
+
+
+def aligned(grid, prev_grid, prev_free):
+    """``grid`` with its origin moved so that its free cells fall on ``prev_grid``'s."""
+    from topomap.io import OccupancyGrid
+
+    dr, dc = shift(prev_free, grid.free)
+    x0, y0 = prev_grid.pixel_to_world(0, 0)   # prev cell (0, 0) ...
+    x1, y1 = grid.pixel_to_world(dr, dc)      # ... is this cell of the new map
+    ox, oy, yaw = grid.origin
+    return OccupancyGrid(grid.cells, grid.resolution, (ox + x0 - x1, oy + y0 - y1, yaw), grid.source, grid.gray)
+
+
+def gt_pairs(gt0, grid0, gt1, grid1):
+    """``[(g0, g1)]``: true rooms of two maps that are the same room (one-to-one)."""
+    from scipy.optimize import linear_sum_assignment
+
+    rr, cc = np.nonzero(gt1)
+    x, y = grid1.pixel_to_world(rr, cc)
+    r0, c0 = grid0.world_to_pixel(x, y)
+    r0, c0 = np.rint(r0).astype(int), np.rint(c0).astype(int)
+    ok = (r0 >= 0) & (r0 < gt0.shape[0]) & (c0 >= 0) & (c0 < gt0.shape[1])
+    a = np.zeros(rr.shape, np.int64)
+    a[ok] = gt0[r0[ok], c0[ok]]
+    b = gt1[rr, cc].astype(np.int64)
+    n0, n1 = np.bincount(gt0.ravel()), np.bincount(gt1.ravel())
+    ids0 = [i for i in range(1, n0.size) if n0[i] > MIN_GT_CELLS]
+    ids1 = [i for i in range(1, n1.size) if n1[i] > MIN_GT_CELLS]
+    O = np.zeros((len(ids0), len(ids1)))
+    i0, i1 = {g: k for k, g in enumerate(ids0)}, {g: k for k, g in enumerate(ids1)}
+    m = a > 0
+    pairs, cnt = np.unique(np.stack([a[m], b[m]]), axis=1, return_counts=True)
+    for (g, h), k in zip(pairs.T, cnt):
+        if g in i0 and h in i1 and k >= 0.5 * min(n0[g], n1[h]):
+            O[i0[g], i1[h]] = k
+    rows, cols = linear_sum_assignment(O, maximize=True)
+    return [(ids0[r], ids1[c]) for r, c in zip(rows, cols) if O[r, c] > 0]
+
+
+def room_of(labels, top, gt, g):
+    """The room label (<= ``top``) covering most of true room ``g`` (0: none)."""
+    v = labels[gt == g]
+    v = v[(v > 0) & (v <= top)]
+    return int(np.bincount(v).argmax()) if v.size else 0
+
+
+def run_sequence(directory, name):
+    import topomap
+    from PIL import Image
+    from topomap.identity import match_rooms
+
+    pattern, rng = SEQUENCES[name]
+    st = dict(sequence=name, maps=0, pairs=0, gt=0, kept=0, fresh_kept=0, changed=0, explained=0, uncovered=0,
+              new=0, vanished=0, split=0, merged=0, t_segment=0.0, t_match=0.0)
+    prev = prev_grid = prev_free = prev_gt = None
+    for i in rng:
+        stem = pattern % i
+        grid = topomap.load_map(Path(directory) / f"{stem}.yaml")
+        gt = np.array(Image.open(Path(directory) / f"{stem}_gt.png")).astype(np.int64)
+        if prev_grid is not None:
+            grid = aligned(grid, prev_grid, prev_free)
+        t0 = time.perf_counter()
+        fresh = topomap.segment(grid)
+        t1 = time.perf_counter()
+        st["t_segment"] += t1 - t0
+        st["maps"] += 1
+        if prev is None:
+            seg = fresh
+        else:
+            seg, ch = match_rooms(prev, fresh)
+            st["t_match"] += time.perf_counter() - t1
+            st["pairs"] += 1
+            for k in ("new", "vanished", "split", "merged"):
+                st[k] += len(getattr(ch, k))
+            top_p, top_s = getattr(prev, "top_room_id", prev.n_rooms), seg.top_room_id
+            for g0, g1 in gt_pairs(prev_gt, prev_grid, gt, grid):
+                a = room_of(prev.labels, top_p, prev_gt, g0)
+                b = room_of(seg.labels, top_s, gt, g1)
+                st["gt"] += 1
+                if not a or not b:
+                    st["uncovered"] += 1
+                    continue
+                st["fresh_kept"] += int(room_of(prev_fresh.labels, prev_fresh.n_rooms, prev_gt, g0)
+                                        == room_of(fresh.labels, fresh.n_rooms, gt, g1))
+                if a == b:
+                    st["kept"] += 1
+                else:
+                    st["changed"] += 1
+                    st["explained"] += int(ch.explains(a, b))
+        prev, prev_fresh, prev_grid, prev_free, prev_gt = seg, fresh, grid, grid.free, gt
+    return st
+
+
+def _pct(a, b):
+    return f"{100 * a / b:.1f}" if b else "–"
+
+
+def table(stats):
+    lines = ["| sequence | maps | GT rooms in two consecutive maps | keep their ID % | fresh numbering % "
+             "| ID changes | explained by the change record % | new / vanished / split / merged (record) "
+             "| segment s | match s |",
+             "| --- | ---: | ---: | ---: | ---: | ---: | ---: | --- | ---: | ---: |"]
+    tot = {k: 0 for k in stats[0] if k != "sequence"}
+    for st in stats + [None]:
+        if st is None:
+            st = dict(tot, sequence="**all**")
+        else:
+            for k in tot:
+                tot[k] += st[k]
+        n = st["gt"] - st["uncovered"]
+        lines.append(f"| {st['sequence']} | {st['maps']} | {n} | {_pct(st['kept'], n)} | {_pct(st['fresh_kept'], n)} "
+                     f"| {st['changed']} | {_pct(st['explained'], st['changed'])} "
+                     f"| {st['new']} / {st['vanished']} / {st['split']} / {st['merged']} "
+                     f"| {st['t_segment']:.1f} | {st['t_match']:.1f} |")
+    return "\n".join(lines) + "\n"
+
+
+def main(argv=None):
+    ap = _section.parser(__doc__, "real maps directory", "70_identity.md")
+    ap.add_argument("--jobs", type=int, default=1, help="run the two sequences in this many processes")
+    args = ap.parse_args(argv)
+    from topomap.datasets import real_maps_dir
+
+    directory = _section.directory(args.directory, real_maps_dir, "TOPOMAP_REAL_MAPS_DIR")
+    t0 = time.perf_counter()
+    load0 = os.getloadavg()[0]
+    if args.jobs > 1:
+        from concurrent.futures import ProcessPoolExecutor
+
+        with ProcessPoolExecutor(min(args.jobs, len(SEQUENCES))) as ex:
+            stats = list(ex.map(run_sequence, [directory] * len(SEQUENCES), list(SEQUENCES)))
+    else:
+        stats = [run_sequence(directory, name) for name in SEQUENCES]
+    wall = time.perf_counter() - t0
+    tab = table(stats)
+    text = f"""## Room identities along exploration runs
+
+`python benchmarks/identity.py REAL_DIR --jobs {args.jobs}` (commit `{_commit()}`; {_machine()}; load average {load0:.1f} at the start;
+{wall:.0f} s wall time).
+
+Each exploration sequence of the real maps (ROSE² data; every map a later state of the same
+run) segmented map by map, each map's rooms given the IDs of the previous map's rooms
+(`topomap.segment(grid, previous=...)`). A ground-truth room present in two consecutive maps
+(the same true room: overlapping by at least half of the smaller in the map frame, both over
+100 cells) *keeps its ID* when the room covering most of it has the same ID in both maps;
+*fresh numbering* is the same share without `previous` (IDs of a row-major scan). An ID change
+is *explained* when the change record links the two IDs (a split or a merge); the column
+"new / vanished / split / merged" counts the change records' entries over the sequence. The data set's YAML files give every map the origin
+(0, 0) although the images were cropped anew as the map grew; the script recovers each map's
+origin by aligning its free cells with the previous map's (a whole-cell shift), as a SLAM
+map's own origin would.
+
+{tab}"""
+    _section.write(args.out, text, tab, wall)
+
+if __name__ == "__main__":
+    main()

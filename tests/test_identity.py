@@ -1,0 +1,209 @@
+"""Stable room IDs across map updates: topomap.identity and segment(previous=...)."""
+
+import json
+
+import numpy as np
+import networkx as nx
+import pytest
+from click.testing import CliRunner
+
+import topomap
+from topomap.errors import ParameterError
+from topomap.export import load_graph, save_graph
+from topomap.identity import TrackedSegmentation, match_rooms
+from topomap.io import FREE, OCCUPIED, OccupancyGrid
+from topomap.planning import room_at
+from topomap.segmentation import Segmentation, segment
+
+RES = 0.05
+
+
+def seg_of(labels, *, res=RES, origin=(0.0, 0.0, 0.0), room_count=None):
+    """A Segmentation made of a hand-drawn label image (free = labelled)."""
+    labels = np.asarray(labels, np.int32)
+    cells = np.where(labels > 0, FREE, OCCUPIED).astype(np.int8)
+    return Segmentation(grid=OccupancyGrid(cells, res, origin), labels=labels, doors=[], method="hand",
+                        room_count=room_count)
+
+
+def boxes(shape, rects):
+    """Labels 1.. for the half-open pixel rectangles ``(r0, r1, c0, c1)``."""
+    L = np.zeros(shape, np.int32)
+    for k, (r0, r1, c0, c1) in enumerate(rects, start=1):
+        L[r0:r1, c0:c1] = k
+    return L
+
+
+A, B, C = (2, 20, 2, 20), (2, 20, 22, 40), (22, 40, 2, 20)  # three rooms of 18 x 18 cells
+
+
+def id_at(seg, r, c):
+    return int(seg.labels[r, c])
+
+
+def test_renumbered_rooms_keep_their_ids():
+    prev = seg_of(boxes((42, 42), [A, B, C]))
+    new = seg_of(boxes((42, 42), [C, B, A]))  # same rooms, numbered the other way round
+    out, ch = match_rooms(prev, new)
+    assert isinstance(out, TrackedSegmentation)
+    for r, c in ((5, 5), (5, 30), (30, 5)):
+        assert id_at(out, r, c) == id_at(prev, r, c)
+    assert ch.kept == (1, 2, 3) and not (ch.new or ch.vanished or ch.split or ch.merged)
+    assert new.labels[5, 5] == 3  # the input is not modified
+
+
+def test_new_room_never_reuses_a_vanished_id():
+    prev = seg_of(boxes((42, 42), [A, B, C]))
+    D = (22, 40, 22, 40)
+    new = seg_of(boxes((42, 42), [A, B, D]))  # C gone, D appeared
+    out, ch = match_rooms(prev, new)
+    assert ch.vanished == (3,) and ch.new == (4,) and ch.kept == (1, 2)
+    assert id_at(out, 30, 30) == 4 and out.room_ids == (1, 2, 4) and out.next_room_id == 5
+    # C comes back: it is a new room again, with a new ID (5), and D keeps 4
+    again, ch2 = match_rooms(out, seg_of(boxes((42, 42), [A, B, C, D])))
+    assert id_at(again, 30, 5) == 5 and id_at(again, 30, 30) == 4 and ch2.new == (5,)
+    # the counter survives a saved room graph
+    G = again.room_graph
+    assert G.graph["next_room_id"] == 6
+    assert sorted(G.nodes) == [1, 2, 4, 5] and again.n_rooms == 4
+
+
+def test_split_and_merge_are_reported():
+    prev = seg_of(boxes((42, 42), [(2, 20, 2, 40), C, (22, 40, 22, 40)]))  # 1 = A+B, 2 = C, 3 = D
+    L = boxes((42, 42), [(2, 20, 2, 28), (2, 20, 28, 40)])  # room 1 cut in a large and a small piece
+    L[22:40, 2:40] = 3  # C and D one room
+    L[22:40, 20:22] = 3
+    new = seg_of(L)
+    out, ch = match_rooms(prev, new)
+    big, small = id_at(out, 5, 5), id_at(out, 5, 35)
+    assert big == 1 and small == 4  # the larger piece keeps the ID, the other is a new ID
+    assert ch.split == {1: (1, 4)}
+    merged = id_at(out, 30, 30)
+    assert merged in (2, 3) and ch.merged == {merged: (2, 3)}
+    assert ch.explains(1, 4) and ch.explains(2, merged) and ch.explains(3, merged)
+    assert not ch.explains(1, merged)
+    assert set(ch.vanished) | set(ch.kept) | {2, 3} >= {1, 2, 3}
+
+
+def test_other_origin_and_resolution():
+    prev = seg_of(boxes((42, 42), [A, B, C]))
+    # the new map: half the resolution, 10 more cells (0.5 m) on the left and on top
+    fine = np.zeros((52, 52), np.int32)
+    fine[10:, 10:] = boxes((42, 42), [C, A, B])
+    coarse = fine[::2, ::2]
+    # its lower-left corner is where the old one's is, 0.5 m further left
+    new = seg_of(coarse, res=2 * RES, origin=(-0.5, 0.0, 0.0))
+    out, ch = match_rooms(prev, new)
+    assert ch.kept == (1, 2, 3) and not ch.new
+    for x, y in ((0.5, 1.5), (1.5, 1.5), (0.5, 0.5)):
+        assert room_at(out, x, y) == room_at(prev, x, y) != 0
+
+
+def test_fragments_follow_the_largest_id():
+    prev = seg_of(boxes((42, 42), [A, B, C]))
+    L = boxes((42, 42), [C, A])
+    L[40, 40] = 3  # a speck: a fragment after the 2 rooms
+    new = seg_of(L, room_count=2)
+    out, ch = match_rooms(prev, new)
+    assert out.room_ids == (1, 3) and ch.vanished == (2,)
+    assert out.n_rooms == 2 and out.n_fragments == 1 and out.labels[40, 40] == 4
+    assert out.room_labels[40, 40] == 0 and out.fragment_area == pytest.approx(RES ** 2)
+    # every free cell in exactly one room or fragment, as before
+    assert np.array_equal(out.labels > 0, new.labels > 0)
+    assert sorted(out.room_graph.nodes) == [1, 3]
+    assert out.room_graph.graph["n_fragments"] == 1
+
+
+def test_user_attributes_carry_over_through_a_saved_graph(tmp_path):
+    prev = seg_of(boxes((42, 42), [A, B, C]))
+    G = prev.room_graph
+    G.nodes[2]["name"] = "kitchen"
+    G.nodes[3]["no_go"] = True
+    path = save_graph(G, tmp_path / "rooms.graphml")
+    new = seg_of(boxes((42, 42), [B, A]))  # C gone
+    out, ch = match_rooms(path, new)
+    H = out.room_graph
+    assert H.nodes[2]["name"] == "kitchen" and "no_go" not in H.nodes[1]
+    assert ch.vanished == (3,)
+    # and from the Segmentation itself (its built graph holds the name)
+    out2, _ = match_rooms(prev, new)
+    assert out2.room_graph.nodes[2]["name"] == "kitchen"
+
+
+def test_segment_previous_on_the_example_map():
+    grid = topomap.load_map(topomap.example_map_path())
+    first = segment(grid)
+    # the same building with 8 more cells of unknown on top and on the left:
+    # another image, the same map frame
+    cells = np.full((grid.shape[0] + 8, grid.shape[1] + 8), -1, np.int8)
+    cells[8:, 8:] = grid.cells
+    shifted = OccupancyGrid(cells, grid.resolution, (grid.origin[0] - 8 * grid.resolution, grid.origin[1], 0.0))
+    again = segment(shifted, previous=first.room_graph)
+    assert again.changes.kept == tuple(sorted(first.room_graph.nodes))
+    for r, d in first.room_graph.nodes(data=True):
+        rr, cc = np.argwhere(first.labels == r)[0]
+        x, y = grid.pixel_to_world(rr, cc)
+        assert again.room_at(float(x), float(y)) == r
+
+
+def test_cli_previous(tmp_path):
+    from topomap.cli import main
+
+    ex = str(topomap.example_map_path())
+    run = CliRunner().invoke
+    assert run(main, ["segment", ex, "-o", str(tmp_path / "a")]).exit_code == 0
+    G = load_graph(tmp_path / "a" / "rooms.graphml")
+    G.nodes[1]["name"] = "hall"
+    save_graph(G, tmp_path / "a" / "rooms.graphml")
+    res = run(main, ["segment", ex, "-o", str(tmp_path / "b"), "--previous", str(tmp_path / "a" / "rooms.graphml")])
+    assert res.exit_code == 0, res.output
+    assert "kept" in res.output
+    changes = json.loads((tmp_path / "b" / "changes.json").read_text())
+    assert changes["kept"] == sorted(G.nodes) and changes["next_room_id"] == max(G.nodes) + 1
+    H = load_graph(tmp_path / "b" / "rooms.graphml")
+    assert H.nodes[1]["name"] == "hall" and H.graph["next_room_id"] == max(G.nodes) + 1
+    bad = run(main, ["segment", ex, "-o", str(tmp_path / "c"), "--previous", str(tmp_path / "nope.graphml")])
+    assert bad.exit_code == 1 and "nope.graphml" in bad.output
+    assert not (tmp_path / "c").exists()
+
+
+def test_every_room_gone():
+    prev = seg_of(boxes((42, 42), [A, B, C]))
+    out, ch = match_rooms(prev.room_graph, seg_of(np.zeros((42, 42), np.int32)))
+    assert ch.vanished == (1, 2, 3) and ch.kept == () and out.room_ids == () and out.n_rooms == 0
+    assert out.next_room_id == 4 and out.room_graph.number_of_nodes() == 0
+
+
+def test_bad_previous():
+    new = seg_of(boxes((42, 42), [A]))
+    with pytest.raises(ParameterError, match="previous must be"):
+        match_rooms(42, new)
+    with pytest.raises(ParameterError, match="min_overlap"):
+        match_rooms(new, new, min_overlap=0)
+    G = nx.MultiGraph()
+    G.add_node(1, area=1.0)
+    with pytest.raises(ParameterError, match="room 1 has no polygon"):
+        match_rooms(G, new)
+
+
+def test_planning_pictures_and_files_with_gaps_in_the_ids(tmp_path):
+    from topomap.cli import write_segmentation
+    from topomap.planning import plan_path, plan_tour, travel_graph
+
+    grid = topomap.load_map(topomap.example_map_path())
+    first = segment(grid)
+    G = nx.relabel_nodes(first.room_graph, {r: 10 * r for r in first.room_graph.nodes})
+    seg = segment(grid, previous=G)
+    ids = tuple(sorted(G.nodes))
+    assert seg.room_ids == ids and seg.n_rooms == len(ids) and seg.next_room_id == max(ids) + 1
+    assert set(np.unique(seg.labels)) - {0} == set(ids) | set(range(max(ids) + 1, max(ids) + 1 + seg.n_fragments))
+    assert all(set(d.rooms) <= set(ids) for d in seg.doors)
+    T = travel_graph(seg)
+    assert sorted(T.nodes) == list(ids)
+    route = plan_path(seg, ids[0], ids[-1])
+    assert route["start_room"] == ids[0] and route["goal_room"] == ids[-1] and set(route["rooms"]) <= set(ids)
+    tour = plan_tour(T, ids[0])
+    assert sorted(tour["order"]) == list(ids)
+    files = write_segmentation(seg, tmp_path)  # labels.png, graphs and the overlay picture
+    H = load_graph(files["graphml"])
+    assert sorted(H.nodes) == list(ids) and H.graph["next_room_id"] == max(ids) + 1

@@ -1,0 +1,408 @@
+"""Room identities that last across map updates.
+
+A robot names its rooms, then keeps exploring or re-maps; a fresh
+segmentation numbers rooms by a row-major scan of the new image, so "room 4"
+may now be another room. :func:`match_rooms` gives the rooms of a new
+segmentation the IDs of the rooms of a previous one (a
+:class:`~topomap.segmentation.Segmentation`, a room graph, or a saved room
+graph file) and says what changed; ``topomap.segment(grid, previous=...)``
+calls it after the method has run.
+
+Matching
+--------
+Every room cell of the new map is looked up in the previous rooms at the
+same map-frame point (both maps' ``origin`` and ``resolution`` are used, so
+the maps may differ in size, extent and cell size; a previous room graph is
+read from its room polygons). The overlap of a new room ``j`` and a previous
+room ``i`` (m²) is *significant* when it is at least ``min_overlap`` of the
+smaller of the two rooms. Among the significant pairs a one-to-one
+assignment of largest total overlap (:func:`scipy.optimize.linear_sum_assignment`)
+decides which new room keeps which previous ID. Every other new room gets a
+new ID, counted up from the previous ``next_room_id`` (one more than the
+largest ID ever given), so an ID is never reused, not even the ID of a room
+that vanished.
+
+The change record (:class:`RoomChanges`) explains every ID that is not kept:
+a previous room with two or more significant new rooms was *split* (the
+piece of largest overlap keeps its ID), a new room with two or more
+significant previous rooms is a *merge* (it keeps the ID of its largest
+overlap), a previous room with no significant new room *vanished*, a new
+room with no significant previous room is *new*.
+
+Labels with stable IDs
+----------------------
+Room IDs are still the labels of the label image and the node keys of the
+room graph, but they need not be ``1..N`` any more: IDs of vanished rooms
+are gaps. Fragments follow the largest room ID (labels
+``max(ID) + 1 ..``), so every free cell is still in exactly one room or one
+fragment, and a label is a room exactly when it is a node of the room graph.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Optional
+
+import numpy as np
+import networkx as nx
+
+from .errors import ParameterError
+from .segmentation import Segmentation
+
+log = logging.getLogger("topomap")
+
+__all__ = ["RoomChanges", "TrackedSegmentation", "match_rooms", "DEFAULT_MIN_OVERLAP"]
+
+#: Default share of the smaller room two rooms must have in common to be the same room.
+DEFAULT_MIN_OVERLAP = 0.5
+#: Share of the smaller room an overlap must also reach (slivers along a moved door are no link).
+_MIN_SHARE = 0.1
+
+
+@dataclass(frozen=True)
+class RoomChanges:
+    """What happened to the rooms between a previous and a new segmentation.
+
+    Attributes
+    ----------
+    kept : tuple of int
+        IDs present in both (the new room took the previous room's ID).
+    new : tuple of int
+        IDs of new rooms that overlap no previous room significantly.
+    vanished : tuple of int
+        Previous IDs whose room overlaps no new room significantly.
+    split : dict
+        ``previous ID -> tuple of new IDs``: a previous room now covered by
+        two or more new rooms (its own ID, when kept, is among them).
+    merged : dict
+        ``new ID -> tuple of previous IDs``: a new room covering two or more
+        previous rooms (it keeps one of their IDs).
+    next_room_id : int
+        The ID the next new room will get (one more than every ID given so far).
+    """
+
+    kept: tuple = ()
+    new: tuple = ()
+    vanished: tuple = ()
+    split: dict = field(default_factory=dict)
+    merged: dict = field(default_factory=dict)
+    next_room_id: int = 1
+
+    def explains(self, old: int, new: int) -> bool:
+        """True when the record links previous room ``old`` to new room ``new``:
+        the same ID kept, a split of ``old`` into ``new``, or a merge of
+        ``old`` into ``new``."""
+        old, new = int(old), int(new)
+        if old == new:
+            return old in self.kept
+        return new in self.split.get(old, ()) or old in self.merged.get(new, ())
+
+    def as_dict(self) -> dict:
+        """Plain JSON-ready form (dict keys as strings)."""
+        return {"kept": list(self.kept), "new": list(self.new), "vanished": list(self.vanished),
+                "split": {str(k): list(v) for k, v in self.split.items()},
+                "merged": {str(k): list(v) for k, v in self.merged.items()},
+                "next_room_id": int(self.next_room_id)}
+
+    def summary(self) -> str:
+        """One line, e.g. ``"9 kept, 1 new, 0 vanished, 1 split, 0 merged"``."""
+        return (f"{len(self.kept)} kept, {len(self.new)} new, {len(self.vanished)} vanished, "
+                f"{len(self.split)} split, {len(self.merged)} merged")
+
+
+@dataclass
+class TrackedSegmentation(Segmentation):
+    """A :class:`~topomap.segmentation.Segmentation` whose room IDs follow a
+    previous one (returned by :func:`match_rooms`).
+
+    Room IDs are the labels of ``labels`` and need not be contiguous;
+    fragments are the labels above the largest room ID.
+
+    Attributes
+    ----------
+    room_ids : tuple of int
+        The room IDs, ascending (the room graph's nodes).
+    next_room_id : int
+        The ID the next new room will get; saved as the room graph's graph
+        attribute ``next_room_id``.
+    changes : RoomChanges
+        What changed against the previous segmentation.
+    room_attributes : dict
+        ``ID -> {name: value}``: attributes a user had added to the previous
+        rooms (``name``, ...), put on the matched nodes of :attr:`room_graph`.
+    """
+
+    room_ids: tuple = ()
+    next_room_id: int = 1
+    changes: Optional[RoomChanges] = None
+    room_attributes: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def n_rooms(self) -> int:
+        """Number of rooms (``len(room_ids)``)."""
+        return len(self.room_ids)
+
+    @property
+    def top_room_id(self) -> int:
+        """The largest room ID (0 without rooms): labels above it are fragments."""
+        return max(self.room_ids, default=0)
+
+    @property
+    def n_fragments(self) -> int:
+        """Number of fragments: the labels above :attr:`top_room_id`."""
+        top = int(self.labels.max()) if self.labels.size else 0
+        return max(top - self.top_room_id, 0)
+
+    @property
+    def room_labels(self) -> np.ndarray:
+        """``labels`` with the fragments set to 0: rooms only."""
+        if self.n_fragments == 0:
+            return self.labels
+        return np.where(self.labels <= self.top_room_id, self.labels, 0)
+
+    @property
+    def fragment_area(self) -> float:
+        """Total area of the fragments, m²."""
+        return float((self.labels > self.top_room_id).sum()) * self.grid.resolution ** 2
+
+    @property
+    def room_graph(self):
+        """The room–door graph, with ``next_room_id`` and the carried user attributes."""
+        if self._room_graph is None:
+            G = Segmentation.room_graph.fget(self)
+            G.graph["next_room_id"] = int(self.next_room_id)
+            for r, attrs in self.room_attributes.items():
+                if r in G:
+                    for k, v in attrs.items():
+                        G.nodes[r].setdefault(k, v)
+        return self._room_graph
+
+
+# --------------------------------------------------------------------------
+# The previous rooms
+# --------------------------------------------------------------------------
+
+def _computed_node_attributes():
+    from .export import NODE_TYPES
+
+    return set(NODE_TYPES)
+
+
+class _Previous:
+    """Room IDs, areas (m²), user attributes and ``next_room_id`` of a previous result,
+    and a lookup of its room at map-frame points."""
+
+    def __init__(self, previous):
+        if isinstance(previous, (str, Path)):
+            from .export import load_graph
+
+            previous = load_graph(previous)
+        self.name = "previous"
+        computed = _computed_node_attributes()
+        if isinstance(previous, Segmentation):
+            self.seg, self.G = previous, None
+            self.name = previous.grid.name
+            L = self.labels = previous.room_labels
+            self.grid = previous.grid
+            cnt = np.bincount(L.ravel())
+            ids = [int(i) for i in np.nonzero(cnt)[0] if i > 0]
+            res2 = previous.grid.resolution ** 2
+            self.area = {i: float(cnt[i]) * res2 for i in ids}
+            attrs = dict(getattr(previous, "room_attributes", {}))
+            if previous._room_graph is not None:  # names a user put on the built graph
+                for r, d in previous._room_graph.nodes(data=True):
+                    extra = {k: v for k, v in d.items() if k not in computed}
+                    if extra:
+                        attrs[int(r)] = {**attrs.get(int(r), {}), **extra}
+            self.attrs = attrs
+            nxt = getattr(previous, "next_room_id", None)
+        elif isinstance(previous, nx.Graph):
+            self.seg, self.G = None, previous
+            self.name = str(previous.graph.get("map", "previous room graph"))
+            ids, self.area, self.attrs = [], {}, {}
+            for r, d in previous.nodes(data=True):
+                try:
+                    r = int(r)
+                except (TypeError, ValueError):
+                    raise ParameterError(f"previous room graph {self.name}: node {r!r} is not a room ID") from None
+                poly = d.get("polygon")
+                if poly is None or not hasattr(poly, "geom_type"):
+                    raise ParameterError(f"previous room graph {self.name}: room {r} has no polygon "
+                                         "(build it with topomap.room_graph or load a file topomap segment wrote)")
+                ids.append(r)
+                self.area[r] = float(d.get("area", poly.area))
+                extra = {k: v for k, v in d.items() if k not in computed}
+                if extra:
+                    self.attrs[r] = extra
+            nxt = previous.graph.get("next_room_id")
+            self.grid, self.labels = _rasterised(previous, ids)
+        else:
+            raise ParameterError("previous must be a Segmentation, a room graph or the path of a saved room "
+                                 f"graph, got {type(previous).__name__}")
+        self.ids = sorted(ids)
+        top = max(self.ids, default=0) + 1
+        try:
+            self.next_id = max(int(nxt), top) if nxt not in (None, "") else top
+        except (TypeError, ValueError):
+            raise ParameterError(f"previous room graph {self.name}: next_room_id {nxt!r} is not an integer") from None
+
+    def rooms_at(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Previous room ID at every map-frame point (0 = none)."""
+        out = np.zeros(x.shape, np.int64)
+        r, c = self.grid.world_to_pixel(x, y)
+        r, c = np.rint(r).astype(np.int64), np.rint(c).astype(np.int64)
+        H, W = self.grid.shape
+        ok = (r >= 0) & (r < H) & (c >= 0) & (c < W)
+        out[ok] = self.labels[r[ok], c[ok]]
+        return out
+
+
+def _rasterised(G, ids):
+    """The map frame of room graph ``G`` and its label image, from the room
+    polygons (which follow cell edges, so this is the label image it was
+    built from; see :mod:`topomap.planning`)."""
+    from .planning import _Ctx
+
+    ctx = _Ctx(G)
+    labels = np.zeros(ctx.shape, np.int64)
+    for r in ids:
+        box = ctx.room_bbox(r)
+        if box is None:
+            continue
+        r0, r1, c0, c1 = box
+        win = ctx.window_labels([r], box)
+        labels[r0:r1, c0:c1] = np.where(win > 0, win, labels[r0:r1, c0:c1])
+    return ctx.grid, labels
+
+
+# --------------------------------------------------------------------------
+# Matching and relabelling
+# --------------------------------------------------------------------------
+
+def match_rooms(previous, seg: Segmentation, *, min_overlap: float = DEFAULT_MIN_OVERLAP):
+    """Give the rooms of ``seg`` the IDs of the matching rooms of ``previous``.
+
+    Parameters
+    ----------
+    previous : Segmentation or networkx.MultiGraph or str or os.PathLike
+        The earlier result: a segmentation, its room graph (rooms need
+        their ``polygon``; a graph loaded from a file ``topomap segment``
+        wrote has them), or the path of such a file (GraphML, JSON or
+        GeoJSON).
+    seg : Segmentation
+        The new segmentation (not modified).
+    min_overlap : float
+        Share (0..1] of the smaller of two rooms they must have in common
+        (in the map frame) to count as the same room, a split or a merge.
+
+    Returns
+    -------
+    seg : TrackedSegmentation
+        ``seg`` with its rooms relabelled: labels, doors' ``rooms`` and the
+        room graph use the stable IDs; fragments follow the largest ID.
+    changes : RoomChanges
+        Kept, new, vanished, split and merged rooms (also ``seg.changes``).
+
+    Raises
+    ------
+    ParameterError
+        ``previous`` is not a segmentation or room graph, a previous room
+        has no polygon, or ``min_overlap`` is not in (0, 1].
+    GraphFormatError, MapFileError
+        ``previous`` is a file that cannot be loaded.
+    """
+    from scipy.optimize import linear_sum_assignment
+
+    from .options import _check_fraction
+
+    t0 = time.perf_counter()
+    if _check_fraction("min_overlap", min_overlap) == 0:
+        raise ParameterError(f"min_overlap must be a share in (0, 1], got {min_overlap!r}")
+    min_overlap = float(min_overlap)
+    if not isinstance(seg, Segmentation):
+        raise ParameterError(f"match_rooms() needs a Segmentation, got {type(seg).__name__}")
+    prev = _Previous(previous)
+    grid = seg.grid
+    res2 = grid.resolution ** 2
+    L = seg.room_labels
+    cnt = np.bincount(L.ravel())
+    cur = [int(j) for j in np.nonzero(cnt)[0] if j > 0]  # the new rooms' labels
+    area_cur = {j: float(cnt[j]) * res2 for j in cur}
+    rr, cc = np.nonzero(L)
+    x, y = grid.pixel_to_world(rr, cc)
+    p = prev.rooms_at(np.asarray(x, float), np.asarray(y, float))
+    pi = {i: k for k, i in enumerate(prev.ids)}
+    # overlap (m²) of new room a (index into cur) and previous room b (index into prev.ids)
+    lut_c = np.zeros(int(L.max(initial=0)) + 1, np.int64)
+    lut_c[cur] = np.arange(len(cur))
+    lut_p = np.full(int(p.max(initial=0)) + 1, len(prev.ids), np.int64)  # last column: no previous room
+    lut_p[[i for i in prev.ids if i < lut_p.size]] = [pi[i] for i in prev.ids if i < lut_p.size]
+    key = lut_c[L[rr, cc]] * (len(prev.ids) + 1) + lut_p[p]
+    O = np.bincount(key, minlength=len(cur) * (len(prev.ids) + 1)).reshape(len(cur), len(prev.ids) + 1)
+    O = O[:, :-1] * res2
+    # rooms are compared on the part of the map both know: a room's overlap
+    # with every room of the other map (the area of a room that was only
+    # partly explored before, or is only partly in the new map, does not count)
+    known = np.minimum.outer(O.sum(1), O.sum(0))
+    whole = np.minimum.outer(np.array([area_cur[j] for j in cur], float).reshape(-1),
+                             np.array([prev.area[i] for i in prev.ids], float).reshape(-1))
+    sig = (O > 0) & (O >= min_overlap * known) & (O >= _MIN_SHARE * whole)
+    W = np.where(sig, O, 0.0)
+    ids = {}
+    if W.size and sig.any():
+        rows, cols = linear_sum_assignment(W, maximize=True)
+        for a, b in zip(rows, cols):
+            if sig[a, b]:
+                ids[cur[a]] = prev.ids[b]
+    nxt = prev.next_id
+    for j in cur:
+        if j not in ids:
+            ids[j] = nxt
+            nxt += 1
+    split = {}
+    for b, i in enumerate(prev.ids):
+        into = sorted(ids[cur[a]] for a in np.nonzero(sig[:, b])[0])
+        if len(into) >= 2:
+            split[i] = tuple(into)
+    merged = {}
+    for a, j in enumerate(cur):
+        frm = sorted(prev.ids[b] for b in np.nonzero(sig[a])[0])
+        if len(frm) >= 2:
+            merged[ids[j]] = tuple(frm)
+    kept_set = {i for i in ids.values() if i in pi}
+    changes = RoomChanges(
+        kept=tuple(sorted(kept_set)),
+        new=tuple(sorted(ids[j] for a, j in enumerate(cur) if not sig[a].any())),
+        vanished=tuple(sorted(i for b, i in enumerate(prev.ids) if not sig[:, b].any())),
+        split=split, merged=merged, next_room_id=int(nxt))
+    out = _relabelled(seg, ids, changes, {i: prev.attrs[i] for i in kept_set if i in prev.attrs})
+    out.timings["match_rooms"] = time.perf_counter() - t0
+    log.info("%s: room IDs follow %s: %s", grid.name, prev.name, changes.summary())
+    return out, changes
+
+
+def _relabelled(seg: Segmentation, ids: dict, changes: RoomChanges, attrs: dict) -> TrackedSegmentation:
+    """``seg`` with room label ``j`` renamed ``ids[j]`` and fragments placed after the largest ID."""
+    room_top = int(seg.room_labels.max()) if seg.labels.size else 0
+    top = int(seg.labels.max()) if seg.labels.size else 0
+    new_top = max(ids.values(), default=0)
+    lut = np.zeros(top + 1, np.int64)
+    for j, i in ids.items():
+        lut[j] = i
+    frag = np.arange(room_top + 1, top + 1)
+    lut[frag] = new_top + np.arange(1, frag.size + 1)
+    if lut.max(initial=0) > np.iinfo(np.int32).max:
+        raise ParameterError(f"room IDs beyond {np.iinfo(np.int32).max}")
+    labels = lut[seg.labels].astype(np.int32)
+    doors = []
+    for d in seg.doors:
+        a, b = (int(lut[r]) for r in d.rooms)
+        doors.append(dataclasses.replace(d, rooms=(min(a, b), max(a, b)), extra=dict(d.extra)))
+    base = {f.name: getattr(seg, f.name) for f in dataclasses.fields(Segmentation)}
+    base.update(labels=labels, doors=doors, room_count=None, _room_graph=None, timings=dict(seg.timings))
+    return TrackedSegmentation(**base, room_ids=tuple(sorted(ids.values())), next_room_id=changes.next_room_id,
+                               changes=changes, room_attributes=attrs)

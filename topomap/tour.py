@@ -1,0 +1,415 @@
+"""Room tours: the order in which to visit rooms, and the doors to pass.
+
+:func:`plan_tour` (also ``topomap.planning.plan_tour``) answers "in which
+order should the robot visit these rooms?" for room-by-room cleaning or
+inspection. It works on the same travel distances as
+:func:`topomap.planning.plan_path`: the in-room door-to-door geodesic
+distances a room graph carries after :func:`topomap.planning.travel_graph`
+(every saved ``rooms.graphml`` / ``rooms.json``), plus the in-room legs from
+the start point and to each room's point.
+
+Visiting a room means reaching its point: its centroid, or the room's cell
+nearest the centroid when the centroid lies outside the room (the point
+``plan_path`` uses for a room ID). The start room counts as visited at the
+start. The distance between two stops is the shortest route through doors
+(Dijkstra on the door graph), so the distances are a metric and every tour
+is a sequence of real routes through free space.
+
+Solvers
+-------
+Up to ``exact_limit`` rooms (12 by default) the order is the optimum, by the
+Held–Karp dynamic programme over subsets (``O(2^n n^2)``; 12 rooms take a
+few tens of milliseconds). Above that, a heuristic: the nearest-neighbour
+tour improved by 2-opt (reversing a stretch of the tour) and Or-opt (moving
+one, two or three consecutive stops elsewhere) until no move shortens it;
+:func:`tour_lower_bound` (a minimum spanning tree of the stops) bounds how far
+from the optimum it can be.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+
+import numpy as np
+import networkx as nx
+
+from .errors import NoPathError, NotInRoomError, PlanningError
+
+log = logging.getLogger("topomap")
+
+__all__ = ["plan_tour", "tour_length", "solve_order", "tour_lower_bound", "stop_distances", "EXACT_LIMIT"]
+
+#: Largest number of rooms to visit for which the order is computed exactly.
+EXACT_LIMIT = 12
+#: Rounds of iterated local search (double-bridge kicks) of the heuristic.
+KICKS = 30
+
+
+# --------------------------------------------------------------------------
+# The order of the stops, on a distance matrix
+# --------------------------------------------------------------------------
+
+def tour_length(D: np.ndarray, order, *, closed: bool = False) -> float:
+    """Length of visiting stops ``order`` (indices into ``D``, starting at stop 0)."""
+    seq = [0] + [int(i) for i in order] + ([0] if closed else [])
+    return float(sum(D[a, b] for a, b in zip(seq[:-1], seq[1:])))
+
+
+def _held_karp(D, closed):
+    n = D.shape[0] - 1  # stops 1..n to visit, 0 is the start
+    if n == 0:
+        return []
+    full = (1 << n) - 1
+    dp = np.full((1 << n, n), np.inf)
+    parent = np.full((1 << n, n), -1, np.int64)
+    d = D[1:, 1:]
+    for j in range(n):
+        dp[1 << j, j] = D[0, j + 1]
+    bits = np.array([1 << j for j in range(n)])
+    for mask in sorted(range(1, full + 1), key=lambda m: bin(m).count("1")):
+        row = dp[mask]
+        if not np.isfinite(row).any():
+            continue
+        cand = row[:, None] + d  # from last stop i (in mask) to j
+        best = cand.argmin(0)
+        val = cand[best, np.arange(n)]
+        for j in np.nonzero((mask & bits) == 0)[0]:
+            m2 = mask | (1 << j)
+            if val[j] < dp[m2, j]:
+                dp[m2, j] = val[j]
+                parent[m2, j] = best[j]
+    last = dp[full] + (D[1:, 0] if closed else 0.0)
+    j = int(np.argmin(last))
+    order, mask = [], full
+    while j >= 0:
+        order.append(j + 1)
+        j, mask = int(parent[mask, j]), mask & ~(1 << j)
+    return order[::-1]
+
+
+def _nearest_neighbour(D):
+    n = D.shape[0]
+    left, at, order = set(range(1, n)), 0, []
+    while left:
+        at = min(left, key=lambda j: (D[at, j], j))
+        order.append(at)
+        left.discard(at)
+    return order
+
+
+def _as_cycle(D, order, closed):
+    """Distance matrix and cycle of the closed-tour form: an open tour from stop 0
+    is a closed tour through one more stop that is glued to stop 0 (distance
+    ``-big``, so no improving move ever separates them) and 0 from every other stop."""
+    if closed:
+        return D, np.array([0] + list(order))
+    n = D.shape[0]
+    big = 10.0 * (float(np.abs(D).sum()) + 1.0)
+    E = np.zeros((n + 1, n + 1))
+    E[:n, :n] = D
+    E[n, 0] = E[0, n] = -big
+    return E, np.array([0] + list(order) + [n])
+
+
+def _two_opt_move(D, t):
+    """Apply the best improving 2-opt move (reverse a stretch) of cycle ``t``; False if none."""
+    n = len(t)
+    for i in range(n - 2):
+        a, b = t[i], t[i + 1]
+        c = t[i + 2:]
+        d = t[np.r_[i + 3:n, 0]]
+        delta = D[a, c] + D[b, d] - D[a, b] - D[c, d]
+        if i == 0:
+            delta[-1] = 0.0  # the edge closing the cycle touches a
+        k = int(np.argmin(delta))
+        if delta[k] < -1e-9:
+            t[i + 1:i + 3 + k] = t[i + 1:i + 3 + k][::-1]
+            return True
+    return False
+
+
+def _or_opt_move(D, t):
+    """Apply an improving Or-opt move (a run of 1-3 stops moved, maybe reversed); False if none."""
+    n = len(t)
+    for size in (1, 2, 3):
+        if n < size + 3:
+            break
+        for i in range(n):
+            r = np.roll(t, -i)
+            run, rest = r[:size], r[size:]
+            s0, se, p, q = run[0], run[-1], rest[-1], rest[0]
+            gain = D[p, s0] + D[se, q] - D[p, q]
+            x, y = rest[:-1], rest[1:]
+            fwd = D[x, s0] + D[se, y] - D[x, y]
+            rev = D[x, se] + D[s0, y] - D[x, y]
+            add = np.minimum(fwd, rev)
+            j = int(np.argmin(add))
+            if add[j] - gain < -1e-9:
+                piece = run if fwd[j] <= rev[j] else run[::-1]
+                t[:] = np.concatenate([rest[:j + 1], piece, rest[j + 1:]])
+                return True
+    return False
+
+
+def _cycle_length(E, t):
+    return float(E[t, np.roll(t, -1)].sum())
+
+
+def _local_search(E, t):
+    while _two_opt_move(E, t) or _or_opt_move(E, t):
+        pass
+    return t
+
+
+def _improve(D, order, closed, kicks=KICKS):
+    """2-opt and Or-opt moves until none shortens the tour, then ``kicks`` rounds
+    of iterated local search: a random double-bridge move (three cuts, two
+    stretches swapped; seeded, so the result is reproducible) followed by the
+    same local search, kept when the tour got shorter."""
+    E, t = _as_cycle(np.asarray(D, float), order, closed)
+    t = _local_search(E, t)
+    best = _cycle_length(E, t)
+    rng = np.random.default_rng(0)
+    m = len(t)
+    for _ in range(kicks if m >= 8 else 0):
+        a, b, c = np.sort(rng.choice(np.arange(1, m), 3, replace=False))
+        cand = _local_search(E, np.concatenate([t[:a], t[b:c], t[a:b], t[c:]]))
+        L = _cycle_length(E, cand)
+        if L < best - 1e-9:
+            t, best = cand, L
+    k = int(np.nonzero(t == 0)[0][0])
+    t = list(np.roll(t, -k))
+    if not closed:
+        glue = D.shape[0]
+        if t[1] == glue:  # the glued stop after 0: walk the cycle the other way
+            t = [0] + t[1:][::-1]
+        t = [v for v in t if v != glue]
+    return [int(v) for v in t[1:]]
+
+
+def solve_order(D: np.ndarray, *, closed: bool = False, exact_limit: int = EXACT_LIMIT):
+    """The order in which to visit stops ``1..n`` of distance matrix ``D`` from stop 0.
+
+    Parameters
+    ----------
+    D : (n + 1, n + 1) ndarray of float
+        Distances (m), stop 0 the start; finite.
+    closed : bool
+        Come back to stop 0 at the end.
+    exact_limit : int
+        Up to this many stops the optimum (Held–Karp), above it the
+        nearest-neighbour tour improved by 2-opt and Or-opt.
+
+    Returns
+    -------
+    order : list of int
+        Stop indices ``1..n`` in visiting order.
+    method : str
+        ``"held-karp"`` (optimal) or ``"nearest-neighbour+2-opt+or-opt"``.
+    """
+    D = np.asarray(D, float)
+    n = D.shape[0] - 1
+    if n <= exact_limit:
+        return _held_karp(D, closed), "held-karp"
+    return _improve(D, _nearest_neighbour(D), closed), "nearest-neighbour+2-opt+or-opt+kicks"
+
+
+def tour_lower_bound(D: np.ndarray) -> float:
+    """Weight of a minimum spanning tree of all stops: no tour (open or closed) is shorter."""
+    D = np.asarray(D, float)
+    n = D.shape[0]
+    if n < 2:
+        return 0.0
+    inside = np.zeros(n, bool)
+    inside[0] = True
+    best = D[0].copy()
+    total = 0.0
+    for _ in range(n - 1):
+        j = int(np.argmin(np.where(inside, np.inf, best)))
+        total += best[j]
+        inside[j] = True
+        best = np.minimum(best, D[j])
+    return float(total)
+
+
+# --------------------------------------------------------------------------
+# Stops on the room graph
+# --------------------------------------------------------------------------
+
+def _attach(ctx, H, node, room, px):
+    """Join ``node`` (at pixel ``px`` of ``room``) to the room's doors of ``H`` by in-room legs.
+
+    Returns the room space (to measure more legs in the same room), or None
+    when the pixel is not on the room's traversable cells."""
+    from .planning import _RoomSpace
+
+    doors = [d for d in ctx.doors_of(room) if d in H]
+    space = _RoomSpace(ctx, room, doors=doors)
+    src = space.local(*px)
+    if src is None:
+        return None
+    reach = [d for d in doors if d in space.door_px]
+    for d, L in zip(reach, space.distances(src, [space.door_px[d] for d in reach])):
+        if math.isfinite(L):
+            H.add_edge(node, d, length=L, room=room)
+    return space
+
+
+def stop_distances(seg_or_G, start, rooms=None, *, robot_width: float = 0.0):
+    """Travel distances between a start and the rooms to visit.
+
+    Parameters
+    ----------
+    seg_or_G : Segmentation or networkx.MultiGraph
+    start : (float, float) or int
+        Map-frame point (m) or room ID.
+    rooms : iterable of int, optional
+        Rooms to visit (default every room of the graph).
+    robot_width : float
+        Doors narrower than this (m) are not used.
+
+    Returns
+    -------
+    dict
+        ``D`` ((n + 1, n + 1) ndarray, m; stop 0 the start, ``inf`` where
+        unreachable), ``stops`` (the n room IDs), ``points`` (n + 1 map-frame
+        points), ``paths`` (``(i, j) -> list of door IDs`` along the shortest
+        route), ``start_room``, ``graph`` (the door graph with the stops).
+    """
+    from .planning import _Ctx, _annotated, _endpoint, door_graph
+
+    from .options import check_length
+
+    robot_width = check_length("robot_width", robot_width)
+    ctx = _Ctx(seg_or_G)
+    G = _annotated(seg_or_G)
+    rs, ps, pxs = _endpoint(ctx, G, start, "start")
+    if rooms is None:
+        stops = sorted(int(r) for r in G.nodes)
+    else:
+        try:
+            stops = sorted({int(r) for r in rooms})
+        except (TypeError, ValueError):
+            raise PlanningError(f"rooms must be room IDs, got {rooms!r}") from None
+        missing = [r for r in stops if r not in G]
+        if missing:
+            raise NotInRoomError(f"no room {', '.join(map(str, missing))} in the graph (rooms: "
+                                 f"{', '.join(str(n) for n in sorted(G.nodes))})")
+    stops = [r for r in stops if r != rs]  # the start room is visited at the start
+    H = door_graph(G, min_width=robot_width)
+    names = [("start",)] + [("room", r) for r in stops]
+    points, pixels = [ps], [pxs]
+    for r in stops:
+        _, p, px = _endpoint(ctx, G, r, "room")
+        points.append(p)
+        pixels.append(px)
+    spaces = {}
+    for name, room, px in zip(names, [rs] + stops, pixels):
+        H.add_node(name)
+        space = _attach(ctx, H, name, room, px)
+        if room == rs and space is not None:
+            spaces[name] = (space, px)
+    # the start and the stops in the start room's free space: direct legs
+    if ("start",) in spaces:
+        space, px0 = spaces[("start",)]
+        src = space.local(*px0)
+        for name, px in zip(names[1:], pixels[1:]):
+            q = space.local(*px)
+            if q is not None:
+                (L,) = space.distances(src, [q])
+                if math.isfinite(L):
+                    H.add_edge(("start",), name, length=L, room=rs)
+    n = len(names)
+    D = np.full((n, n), np.inf)
+    paths = {}
+    for i, a in enumerate(names):
+        dist, route = nx.single_source_dijkstra(H, a, weight="length")
+        for j, b in enumerate(names):
+            if b in dist:
+                D[i, j] = dist[b]
+                paths[(i, j)] = route[b]
+    return {"D": D, "stops": stops, "points": points, "paths": paths, "start_room": rs, "graph": H}
+
+
+def plan_tour(seg_or_G, start, *, rooms=None, return_to_start: bool = False, robot_width: float = 0.0,
+              exact_limit: int = EXACT_LIMIT) -> dict:
+    """The order in which to visit rooms from ``start``, with the doors to pass.
+
+    Parameters
+    ----------
+    seg_or_G : Segmentation or networkx.MultiGraph
+        A segmentation or a room–door graph (best one saved by ``topomap
+        segment``, which carries the in-room door-to-door distances).
+    start : (float, float) or int
+        A map-frame point ``(x, y)`` in metres, or a room ID (its point).
+    rooms : iterable of int, optional
+        The rooms to visit. Default: every room that can be reached from
+        the start (the others are listed in ``unreachable``).
+    return_to_start : bool
+        End the tour back at the start point.
+    robot_width : float
+        Doors narrower than this (m) are not used.
+    exact_limit : int
+        Up to this many rooms to visit the order is optimal (Held–Karp);
+        above it, nearest neighbour improved by 2-opt and Or-opt.
+
+    Returns
+    -------
+    dict
+        ``order`` (list of int): the rooms in visiting order, the start room
+        first; ``doors`` (list of int): every door passed, in order;
+        ``rooms`` (list of int): every room passed, in order (rooms crossed
+        on the way included); ``legs`` (list of float, m): the travel
+        distance to each room of ``order`` after the first (and back to the
+        start when ``return_to_start``); ``length`` (float, m): their sum;
+        ``waypoints`` ((K, 2) ndarray, m): the start, the door midpoints and
+        the room points in order; ``method`` (str): ``"held-karp"``
+        (optimal) or the heuristic's name; ``start_room`` (int);
+        ``unreachable`` (list of int).
+
+    Raises
+    ------
+    NotInRoomError
+        The start is not in a room, or an unknown room ID.
+    NoPathError
+        A room given in ``rooms`` cannot be reached from the start.
+    ParameterError
+        ``robot_width`` is not a length >= 0 m.
+    """
+    try:
+        exact_limit = int(exact_limit)
+    except (TypeError, ValueError):
+        raise PlanningError(f"exact_limit must be an integer, got {exact_limit!r}") from None
+    sd = stop_distances(seg_or_G, start, rooms, robot_width=robot_width)
+    D, stops, rs = sd["D"], sd["stops"], sd["start_room"]
+    reach = [k for k in range(1, len(stops) + 1) if np.isfinite(D[0, k])]
+    unreachable = [stops[k - 1] for k in range(1, len(stops) + 1) if not np.isfinite(D[0, k])]
+    if unreachable and rooms is not None:
+        why = f" with doors at least {robot_width:g} m wide" if robot_width else ""
+        raise NoPathError(f"rooms {', '.join(map(str, unreachable))} cannot be reached from room {rs}{why}")
+    idx = [0] + reach
+    sub = D[np.ix_(idx, idx)]
+    local, method = solve_order(sub, closed=return_to_start, exact_limit=exact_limit)
+    seq = [idx[k] for k in local]
+    visits = [0] + seq + ([0] if return_to_start else [])
+    H = sd["graph"]
+    doors, passed, legs, pts = [], [rs], [], [sd["points"][0]]
+    for a, b in zip(visits[:-1], visits[1:]):
+        route = sd["paths"][(a, b)]
+        legs.append(float(D[a, b]))
+        for u, v in zip(route[:-1], route[1:]):
+            room = int(H.edges[u, v]["room"])
+            if room != passed[-1]:
+                passed.append(room)
+            if isinstance(v, int):
+                doors.append(int(v))
+                pts.append((H.nodes[v]["x"], H.nodes[v]["y"]))
+        end_room = rs if b == 0 else stops[b - 1]
+        if end_room != passed[-1]:
+            passed.append(end_room)
+        pts.append(sd["points"][b])
+    log.info("tour of %d rooms from room %d: %.2f m (%s)", len(seq) + 1, rs, sum(legs), method)
+    return {"order": [rs] + [stops[k - 1] for k in seq], "doors": doors, "rooms": passed, "legs": legs,
+            "length": float(sum(legs)), "waypoints": np.asarray(pts, float).reshape(-1, 2), "method": method,
+            "start_room": rs, "unreachable": unreachable}
