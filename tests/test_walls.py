@@ -1,6 +1,7 @@
 """Openings in straight walls (topomap.walls), on small hand-drawn maps."""
 
 import numpy as np
+import pytest
 
 from topomap import walls as W
 from topomap.io import from_array
@@ -59,3 +60,49 @@ def test_wide_doorway_onto_corridor_separates_the_room():
     assert top != seg.labels[55, 30] and top == seg.labels[10, 65]
     off = segment(from_array(free, resolution=RES), openings=False)
     assert off.n_rooms == 1  # what the clearance alone gives
+
+
+def test_rise_resolved_from_the_straightness_of_the_walls():
+    from topomap.options import TopomapOptions
+
+    o = TopomapOptions()
+    assert o.resolved(0.05, 0.9).rise == pytest.approx(0.1 * (np.sqrt(2) / 2 + 0.5))
+    assert o.resolved(0.05, 0.5).rise == o.scan_rise == 0.25
+    assert o.resolved(0.05).rise == pytest.approx(0.1 * (np.sqrt(2) / 2 + 0.5))  # no walls measured
+    assert TopomapOptions(rise=0.3).resolved(0.05, 0.1).rise == 0.3  # given: used as it is
+    seg = segment(from_array(_corridor_with_room(2.5), resolution=RES))
+    assert seg.intermediates.straight_share >= seg.params["straight_walls"]
+    assert seg.params["rise"] == pytest.approx(0.1 * (np.sqrt(2) / 2 + 0.5))
+
+
+def _first_maps(directory, load, names):
+    from pathlib import Path
+
+    return [bm.load() for bm in load(Path(directory), names=names)]
+
+
+def test_scanned_maps_measure_as_scanned_and_plans_as_drawn():
+    """On the real laser SLAM maps of the benchmark the walls are not
+    straight (scan_rise is used); on its drawn floor plans they are."""
+    from topomap.datasets import benchmark_dir, load_benchmark, load_labelled, real_maps_dir
+
+    real, ipa = real_maps_dir(), benchmark_dir()
+    if real is None or ipa is None:
+        pytest.skip("benchmark data sets not found")
+    for grid in _first_maps(real, load_labelled, ["freiburg079_full", "bremen_cartesium_partial_10"]):
+        seg = segment(grid)
+        assert seg.intermediates.straight_share < seg.params["straight_walls"], grid.name
+        assert seg.params["rise"] == seg.params["scan_rise"]
+    for grid in _first_maps(ipa, load_benchmark, ["office_c", "lab_ipa"]):
+        seg = segment(grid)
+        assert seg.intermediates.straight_share >= seg.params["straight_walls"], grid.name
+
+
+def test_straight_share_counts_face_cells_on_lines():
+    free = np.zeros((40, 80), bool)
+    free[10:30, 10:70] = True
+    faces = W.wall_faces(~free, free)
+    lines = W.wall_lines(faces, min_length_px=20)
+    assert W.straight_share(faces, lines) > 0.9
+    assert W.straight_share(faces, np.zeros((0, 4))) == 0.0
+    assert W.straight_share(np.zeros((5, 5), bool), lines) == 1.0

@@ -150,12 +150,26 @@ class TopomapOptions(_Options):
     rise : float or None
         The clearance must grow by this much (m) on both sides of a
         bottleneck within ``reach``: doors lead from one space into a wider
-        one. None (default): the discretisation noise of a clearance read
-        along the skeleton — the skeleton may run half a cell's diagonal off
-        the true medial axis, and clearances are compared to half a cell —
-        so ``(sqrt(2)/2 + 1/2) * max(skeleton_cell, resolution)`` (0.12 m):
-        any smaller rise may be the grid's, not the building's. Filled in
+        one. None (default): measured on the map, as the noise the
+        clearance carries without any door. On a map with straight walls
+        (at least ``straight_walls`` of the wall faces on straight lines),
+        the grid's own noise: the skeleton may run half a cell's diagonal
+        off the true medial axis, and clearances are compared to half a
+        cell, so ``(sqrt(2)/2 + 1/2) * max(skeleton_cell, resolution)``
+        (0.12 m). On a map a laser scanner drew, ``scan_rise``. Filled in
         by :meth:`resolved` before the method runs.
+    scan_rise : float
+        ``rise`` (m) on a map whose walls are not straight (fewer than
+        ``straight_walls`` of its wall faces on straight lines): a laser
+        SLAM map draws each wall a cell or two (0.05-0.1 m) off its line,
+        so a plain corridor's clearance wanders by up to 0.2 m with no door
+        in it; a door frame narrows the passage by more. 0.25 m.
+    straight_walls : float
+        Share (0..1) of the wall-face cells on straight lines of at least
+        ``min_wall_length`` (:func:`topomap.walls.straight_share`) from which
+        a map counts as drawn with straight walls: 0.7, between the drawn
+        floor plans of the benchmark (0.77-0.98, furnished or not) and its
+        laser SLAM maps (0.14-0.67).
     reach : float
         How far (m) along the skeleton the rise is looked for: 1.5 m, a
         door's frame and the first step into the room behind it.
@@ -265,6 +279,8 @@ class TopomapOptions(_Options):
     max_door_width: float = _opt(3.0, "length")
     window: float = _opt(0.5, "length")
     rise: Optional[float] = _opt(None, "optional length")
+    scan_rise: float = _opt(0.25, "length")
+    straight_walls: float = _opt(0.7, "fraction")
     reach: float = _opt(1.5, "length")
     protrusion_min: float = _opt(0.6, "fraction")
     flat_min: float = _opt(0.45, "fraction")
@@ -282,11 +298,14 @@ class TopomapOptions(_Options):
     furniture_size: float = _opt(0.0, "length")
     wall_thickness: float = _opt(0.5, "length")
 
-    def resolved(self, resolution: float) -> "TopomapOptions":
+    def resolved(self, resolution: float, straight: float = 1.0) -> "TopomapOptions":
         """These options with the map-dependent default ``rise`` filled in
-        for a map of ``resolution`` m/px (what actually runs)."""
+        for a map of ``resolution`` m/px whose wall faces lie on straight
+        lines at a share of ``straight`` (what actually runs)."""
         if self.rise is not None:
             return self
+        if straight < self.straight_walls:
+            return dataclasses.replace(self, rise=self.scan_rise)
         return dataclasses.replace(self, rise=max(self.skeleton_cell, resolution) * (np.sqrt(2) / 2 + 0.5))
 
 

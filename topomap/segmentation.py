@@ -75,6 +75,13 @@ class Intermediates:
     closed_gaps : (M, N) ndarray of bool or None
         ``"topomap"``: the free cells of the gaps narrower than ``wall_gap``
         that were closed before doors were searched and rooms cut.
+    wall_lines : (K, 4) ndarray of float or None
+        ``"topomap"``: the straight wall faces ``(r1, c1, r2, c2)`` (pixels)
+        found on the map (:func:`topomap.walls.wall_lines`).
+    straight_share : float or None
+        ``"topomap"``: the share of wall-face cells on those lines
+        (:func:`topomap.walls.straight_share`), which decides the ``rise``
+        the method ran with.
 
     Notes
     -----
@@ -89,6 +96,8 @@ class Intermediates:
     clutter: Optional[np.ndarray] = None
     skeleton_factor: int = 1
     closed_gaps: Optional[np.ndarray] = None
+    wall_lines: Optional[np.ndarray] = None
+    straight_share: Optional[float] = None
 
 
 @dataclass
@@ -475,6 +484,8 @@ def uncrop(seg: Segmentation, full: OccupancyGrid, box) -> Segmentation:
         im = seg.intermediates
         for name in ("free_mask", "occupied_mask", "clearance", "occupied_clearance", "clutter", "closed_gaps"):
             setattr(im, name, _paste(getattr(im, name), full.shape, box))
+        if im.wall_lines is not None:
+            im.wall_lines = im.wall_lines + np.array([r0, c0, r0, c0], float)
     seg.grid = full
     seg.labels = labels
     return seg
@@ -597,7 +608,7 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
     from . import skeleton as S
     from . import walls as W
 
-    opts = options_from_kwargs(TopomapOptions, "topomap", options, kwargs).resolved(grid.resolution)
+    opts = options_from_kwargs(TopomapOptions, "topomap", options, kwargs)
     res = grid.resolution
     T = _Timer()
     # work on the bounding box of free space plus the wall band: the rest of
@@ -611,6 +622,11 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
         search, closed = close_wall_gaps(looked, opts.wall_gap)
         space = search.free if clutter is None else search.free & ~clutter
         f, d_free, occ = preprocess_masks(search, opts)
+    with T("walls"):
+        faces = W.wall_faces(search.occupied, search.free)
+        lines = W.wall_lines(faces, min_length_px=opts.min_wall_length / res)
+        straight = W.straight_share(faces, lines)
+        opts = opts.resolved(res, straight)  # rise measured on the map
     factor = skeleton_factor(opts.skeleton_cell, res)
     with T("skeletons"):
         fs, os_ = coarse_skeletons(f, occ, factor)
@@ -626,14 +642,16 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
             ops = D.opening_candidates(W.wall_openings(
                 search.occupied, search.free, min_wall_px=opts.min_wall_length / res,
                 min_gap_px=opts.min_door_width / res, max_gap_px=opts.max_door_width / res,
-                side_px=opts.min_door_width / res, depth_px=opts.alcove_depth / res), res)
+                side_px=opts.min_door_width / res, depth_px=opts.alcove_depth / res, faces=faces, lines=lines),
+                res)
             segs = segs + D.suppress_duplicates(ops, res, kept=segs)
             cands = cands + [c for _, c in ops]
     with T("rooms"):
         min_cells = int(np.ceil(opts.min_room_area / res ** 2 - 1e-9))
         labels, door_objs, n_rooms = cut_rooms(rooms_grid, segs, space=space, min_room_cells=min_cells)
     im = Intermediates(free_mask=f, occupied_mask=occ, clearance=d_free, occupied_clearance=d_occ,
-                       clutter=clutter, skeleton_factor=factor, closed_gaps=closed)
+                       clutter=clutter, skeleton_factor=factor, closed_gaps=closed, wall_lines=lines,
+                       straight_share=straight)
     seg = Segmentation(grid=rooms_grid, labels=labels, doors=door_objs, method="topomap",
                        params=opts.as_params(), threshold=thr_px * res, free_graph=Gf, occupied_graph=Go,
                        candidates=cands, timings=T.t, options=opts, intermediates=im, room_count=n_rooms)

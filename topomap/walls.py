@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["wall_faces", "wall_lines", "wall_openings"]
+__all__ = ["wall_faces", "wall_lines", "straight_share", "wall_openings"]
 
 
 def wall_faces(obstacle: np.ndarray, free: np.ndarray) -> np.ndarray:
@@ -58,6 +58,25 @@ def wall_lines(faces: np.ndarray, *, min_length_px: float, max_gap_px: float = 3
         return np.zeros((0, 4))
     x1, y1, x2, y2 = lines.reshape(-1, 4).T.astype(float)
     return np.stack([y1, x1, y2, x2], 1)
+
+
+def straight_share(faces: np.ndarray, lines: np.ndarray) -> float:
+    """Share (0..1) of the wall-face cells within a cell of a straight wall line.
+
+    Drawn floor plans have straight walls (on the benchmark's plans 0.77-0.98
+    of the face cells lie on lines of at least 1 m); a laser scanner's map
+    draws walls that wander a cell or two off their line (0.14-0.67 there).
+    1.0 when there are no faces.
+    """
+    import cv2
+
+    n = int(faces.sum())
+    if n == 0:
+        return 1.0
+    on = np.zeros(faces.shape, np.uint8)
+    for r1, c1, r2, c2 in lines:
+        cv2.line(on, (int(round(c1)), int(round(r1))), (int(round(c2)), int(round(r2))), 1, 3)
+    return float((faces & (on > 0)).sum()) / n
 
 
 def _samples(shape, start, d, n, offsets):
@@ -101,7 +120,8 @@ def _face_runs(faces, start, d, n, offsets) -> bool:
 
 
 def wall_openings(obstacle: np.ndarray, free: np.ndarray, *, min_wall_px: float, min_gap_px: float,
-                  max_gap_px: float, side_px: float, depth_px: float = 0.0, band_px: int = 1) -> list:
+                  max_gap_px: float, side_px: float, depth_px: float = 0.0, band_px: int = 1,
+                  faces: np.ndarray | None = None, lines: np.ndarray | None = None) -> list:
     """Openings between collinear pieces of straight walls.
 
     From each end of every straight wall face (:func:`wall_lines`, at least
@@ -134,6 +154,10 @@ def wall_openings(obstacle: np.ndarray, free: np.ndarray, *, min_wall_px: float,
     band_px : int
         Half-width of the band around the line that cells are looked for in
         (scan noise on a straight wall).
+    faces, lines : ndarray, optional
+        :func:`wall_faces` of ``obstacle`` and ``free`` and their
+        :func:`wall_lines` (at least ``min_wall_px`` long), when the caller
+        has them already.
 
     Returns
     -------
@@ -141,8 +165,9 @@ def wall_openings(obstacle: np.ndarray, free: np.ndarray, *, min_wall_px: float,
         Opening segments, from the end of one wall piece to the start of the
         next, each once.
     """
-    faces = wall_faces(obstacle, free)
-    segs = wall_lines(faces, min_length_px=min_wall_px)
+    if faces is None:
+        faces = wall_faces(obstacle, free)
+    segs = wall_lines(faces, min_length_px=min_wall_px) if lines is None else lines
     back = 3  # samples start this far inside the wall piece: Hough's end may be off by a cell or two
     n_gap = int(np.ceil(max_gap_px)) + back + 1
     n_side = max(int(np.ceil(side_px)), 1)
