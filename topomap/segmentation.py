@@ -623,7 +623,7 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
         space = search.free if clutter is None else search.free & ~clutter
         f, d_free, occ = preprocess_masks(search, opts)
     with T("walls"):
-        faces = W.wall_faces(search.occupied, search.free)
+        faces = W.wall_faces(~search.free, search.free)
         lines = W.wall_lines(faces, min_length_px=opts.min_wall_length / res)
         straight = W.straight_share(faces, lines)
         opts = opts.resolved(res, straight)  # rise measured on the map
@@ -640,7 +640,7 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
     if opts.openings:
         with T("openings"):
             ops = D.opening_candidates(W.wall_openings(
-                search.occupied, search.free, min_wall_px=opts.min_wall_length / res,
+                ~search.free, search.free, min_wall_px=opts.min_wall_length / res,
                 min_gap_px=opts.min_door_width / res, max_gap_px=opts.max_door_width / res,
                 side_px=opts.min_door_width / res, depth_px=opts.alcove_depth / res, faces=faces, lines=lines),
                 res)

@@ -148,7 +148,8 @@ def wall_openings(obstacle: np.ndarray, free: np.ndarray, *, min_wall_px: float,
     Parameters
     ----------
     obstacle, free : (M, N) ndarray of bool
-        The cells walls are made of, and free space.
+        The cells walls are made of (every non-free cell: occupied, or
+        unknown where a map draws its walls in mid-gray), and free space.
     min_wall_px, min_gap_px, max_gap_px, side_px, depth_px : float
         Lengths in pixels.
     band_px : int
