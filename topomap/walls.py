@@ -112,6 +112,37 @@ def _depth_ok(obstacle, p, q, depth_px) -> bool:
     return True
 
 
+def _free_run(obstacle, start, d, n) -> int:
+    """Samples from ``start`` along ``d`` (at most ``n``) before the first
+    obstacle cell or the map's edge."""
+    rr, cc, inside = _samples(obstacle.shape, start, d, n, [0])
+    stop = np.flatnonzero(obstacle[rr[0], cc[0]] | ~inside[0])
+    return int(stop[0]) if stop.size else n
+
+
+def _spans_passage(obstacle, p, q, depth_px, slack: float = 1.25) -> bool:
+    """Whether the segment ``p``-``q`` lies across a passage as wide as it:
+    on both sides, somewhere within ``depth_px`` of it, the free space along
+    the segment's direction is at most ``slack`` times its length (a
+    corridor running on through the gap; a room opening off a corridor's
+    wall has the whole corridor beside it)."""
+    v = q - p
+    L = float(np.hypot(*v))
+    d = v / max(L, 1e-9)
+    n = np.array([-d[1], d[0]])
+    mid = (p + q) / 2
+    cap = int(np.ceil(slack * L)) + 2
+    for side in (n, -n):
+        narrow = False
+        for t in (0.25 * depth_px, 0.5 * depth_px, 0.75 * depth_px, depth_px):
+            c = mid + t * side
+            w = _free_run(obstacle, c - d, -d, cap) + _free_run(obstacle, c, d, cap) + 1
+            narrow |= w <= slack * L
+        if not narrow:
+            return False
+    return True
+
+
 def _face_runs(faces, start, d, n, offsets) -> bool:
     """Whether a wall face runs on past ``start`` along ``d`` for ``n``
     samples (within the band of ``offsets``), at 70 % of them at least."""
@@ -143,7 +174,12 @@ def wall_openings(obstacle: np.ndarray, free: np.ndarray, *, min_wall_px: float,
       that happen to be collinear, and
     - the space behind it is deep: free of obstacles for at least
       ``depth_px`` on both sides of the gap, perpendicular to the wall, so
-      that the mouth of a niche or an alcove is no opening.
+      that the mouth of a niche or an alcove is no opening, and
+    - it does not lie across a passage as wide as itself: where, on both
+      sides and somewhere within ``depth_px``, the free space along the
+      gap's line is at most 1.25 times its width, the gap is the width of a
+      corridor running through it (between the ends of two partitions), not
+      a doorway.
 
     Parameters
     ----------
@@ -212,7 +248,8 @@ def wall_openings(obstacle: np.ndarray, free: np.ndarray, *, min_wall_px: float,
                 # an end lies on a wall face that crosses the line: the gap is
                 # the width of a passage between two walls, not a doorway
                 continue
-            if depth_px > 0 and not _depth_ok(obstacle, p, far, depth_px):
+            if depth_px > 0 and (not _depth_ok(obstacle, p, far, depth_px)
+                                 or _spans_passage(obstacle, p, far, depth_px)):
                 continue
             key = tuple(np.rint(np.concatenate([np.minimum(p, far), np.maximum(p, far)])).astype(int))
             if key in seen:
