@@ -21,9 +21,6 @@ FURNITURE_REASON = (
     "default method gives 2 rooms / 2 doors: it cuts the room between the table and the "
     "north cabinet (0.92 m) and between the table and the south cabinet (1.42 m), "
     "furniture taken for door posts")
-BESIDE_REASON = (
-    "default method gives 1 room / 0 doors: the 0.8 m door between the end of the dividing "
-    "wall and the north outer wall is not found (a protruding wall end on one side only)")
 PILLARS_REASON = (
     "default method gives 4 rooms / 3 doors: besides the office door it cuts the corridor "
     "twice, at the pairs of pillars against the walls at x = 7.2 m and x = 13.2 m "
@@ -35,8 +32,7 @@ NOISY_REASON = (
 CASES = [
     pytest.param(T.room_with_furniture, 1, 0, id="room_with_furniture",
                  marks=pytest.mark.xfail(strict=True, reason=FURNITURE_REASON)),
-    pytest.param(T.door_beside_wall, 2, 1, id="door_beside_wall",
-                 marks=pytest.mark.xfail(strict=True, reason=BESIDE_REASON)),
+    pytest.param(T.door_beside_wall, 2, 1, id="door_beside_wall"),
     pytest.param(T.corridor_with_pillars, 2, 1, id="corridor_with_pillars",
                  marks=pytest.mark.xfail(strict=True, reason=PILLARS_REASON)),
     pytest.param(T.corridor_with_niches, 3, 2, id="corridor_with_niches"),

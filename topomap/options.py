@@ -247,6 +247,13 @@ class TopomapOptions(_Options):
         ``min_door_width`` past the gap. On a robot's map a room often opens
         onto a corridor through a doorway as wide as the corridor, where
         the clearance does not narrow; the wall's line shows the doorway.
+    beside_wall : float
+        With ``openings``, a gap at most this wide (m) between the end of a
+        straight wall and the face of a wall that crosses its line is cut
+        too: a door beside a wall, the end of a partition next to the
+        corridor or outer wall it meets. 1.0 m, a single door leaf
+        (0.7-1.0 m); wider gaps there are more often the passage between a
+        partition's end and the wall across (kept whole). 0 turns this off.
     alcove_depth : float
         An opening in a wall is cut only where the space reaches at least
         this far (m) from it on both sides: 1.2 m, the depth of the smallest
@@ -294,6 +301,7 @@ class TopomapOptions(_Options):
     wide_opening: float = _opt(1.5, "length")
     min_room_area: float = _opt(1.0, "area")
     openings: bool = _opt(True, "bool")
+    beside_wall: float = _opt(1.0, "length")
     alcove_depth: float = _opt(1.2, "length")
     furniture_size: float = _opt(0.0, "length")
     wall_thickness: float = _opt(0.5, "length")

@@ -642,7 +642,8 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
             ops = D.opening_candidates(W.wall_openings(
                 ~search.free, search.free, min_wall_px=opts.min_wall_length / res,
                 min_gap_px=opts.min_door_width / res, max_gap_px=opts.max_door_width / res,
-                side_px=opts.min_door_width / res, depth_px=opts.alcove_depth / res, faces=faces, lines=lines),
+                side_px=opts.min_door_width / res, depth_px=opts.alcove_depth / res, faces=faces, lines=lines,
+                beside_px=opts.beside_wall / res),
                 res)
             segs = segs + D.suppress_duplicates(ops, res, kept=segs)
             cands = cands + [c for _, c in ops]

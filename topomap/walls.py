@@ -152,7 +152,8 @@ def _face_runs(faces, start, d, n, offsets) -> bool:
 
 def wall_openings(obstacle: np.ndarray, free: np.ndarray, *, min_wall_px: float, min_gap_px: float,
                   max_gap_px: float, side_px: float, depth_px: float = 0.0, band_px: int = 1,
-                  faces: np.ndarray | None = None, lines: np.ndarray | None = None) -> list:
+                  faces: np.ndarray | None = None, lines: np.ndarray | None = None,
+                  beside_px: float = 0.0) -> list:
     """Openings between collinear pieces of straight walls.
 
     From each end of every straight wall face (:func:`wall_lines`, at least
@@ -191,6 +192,10 @@ def wall_openings(obstacle: np.ndarray, free: np.ndarray, *, min_wall_px: float,
     band_px : int
         Half-width of the band around the line that cells are looked for in
         (scan noise on a straight wall).
+    beside_px : float
+        A gap at most this long that ends on a wall face crossing the line
+        (instead of the same wall going on) is an opening too: a door beside
+        a wall. 0 (default): none.
     faces, lines : ndarray, optional
         :func:`wall_faces` of ``obstacle`` and ``free`` and their
         :func:`wall_lines` (at least ``min_wall_px`` long), when the caller
@@ -240,14 +245,18 @@ def wall_openings(obstacle: np.ndarray, free: np.ndarray, *, min_wall_px: float,
                 continue
             p = start + s0 * d            # last wall sample before the gap
             far = start + (e0 + 1) * d    # first wall sample after it
-            if not _face_runs(faces, far - d, d, n_side, offsets):
-                continue
             perp = np.array([-d[1], d[0]])
-            if any(_face_runs(faces, q - perp, perp, n_side, offsets)
-                   and _face_runs(faces, q + perp, -perp, n_side, offsets) for q in (p, far)):
-                # an end lies on a wall face that crosses the line: the gap is
-                # the width of a passage between two walls, not a doorway
-                continue
+            crossed = [_face_runs(faces, q - perp, perp, n_side, offsets)
+                       and _face_runs(faces, q + perp, -perp, n_side, offsets) for q in (p, far)]
+            if crossed[0]:
+                continue  # the wall piece's end lies on a wall that crosses its line: no wall end
+            if _face_runs(faces, far - d, d, n_side, offsets):
+                if crossed[1]:
+                    # the far end lies on a wall face that crosses the line
+                    # too: the gap is the width of a passage, not a doorway
+                    continue
+            elif not (crossed[1] and gap <= beside_px):
+                continue  # neither does the wall go on, nor does a door-wide gap end on a wall
             if depth_px > 0 and (not _depth_ok(obstacle, p, far, depth_px)
                                  or _spans_passage(obstacle, p, far, depth_px)):
                 continue
