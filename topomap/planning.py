@@ -219,14 +219,158 @@ class _RoomSpace:
 
     def distances(self, src, targets):
         """Geodesic distances (m) from local pixel ``src`` to local pixels ``targets`` (inf if unreachable)."""
-        from skimage.graph import MCP_Geometric
-
         if not targets:
             return []
-        costs = np.where(self.mask, 1.0, np.inf)
-        mcp = MCP_Geometric(costs, fully_connected=True)
-        cum, _ = mcp.find_costs([src], targets)
+        cum = _mcp_costs(self.mask, [src], targets)
         return [float(cum[t]) * self.ctx.res for t in targets]
+
+    def door_distances(self, *, exact=False):
+        """``{(door_i, door_j): metres}`` between this room's doors (``i < j``, reachable pairs only).
+
+        Exact 8-connected geodesics on the map's grid for small rooms (or
+        ``exact=True``); on a coarse grid with short pairs refined on the
+        map's grid otherwise (see the module notes).
+        """
+        ids = sorted(self.door_px)
+        if len(ids) < 2:
+            return {}
+        if exact:  # the reference: one search per door on the map's grid
+            out = {}
+            for i, di in enumerate(ids[:-1]):
+                rest = ids[i + 1:]
+                for dj, L in zip(rest, self.distances(self.door_px[di], [self.door_px[d] for d in rest])):
+                    if np.isfinite(L):
+                        out[(di, dj)] = L
+            return out
+        f = 1 if self.mask.size <= EXACT_CELLS else _coarse_factor(self.ctx.res)
+        pts = np.array([self.door_px[d] for d in ids], float)
+        D = _coarse_door_distances(self.mask, pts, f)
+        short = REFINE_CELLS * f if f > 1 else 0
+        for i in range(len(ids)):
+            near = [j for j in range(i + 1, len(ids)) if D[i, j] < short]
+            if near:
+                D[i, near] = _windowed_distances(self.mask, pts, i, near, D[i, near], f)
+        res = self.ctx.res
+        return {(ids[i], ids[j]): float(D[i, j]) * res
+                for i in range(len(ids)) for j in range(i + 1, len(ids)) if np.isfinite(D[i, j])}
+
+
+#: Side (m) of the coarse cells on which door-to-door distances are computed in large rooms.
+TRAVEL_CELL = 0.2
+#: Rooms (their window: bounding box of the room and its doors) of at most this many cells get
+#: exact distances on the map's own grid.
+EXACT_CELLS = 5_000
+#: Door pairs closer than this many coarse cells (on the coarse grid) are measured again on the map's grid.
+REFINE_CELLS = 16
+
+
+def _coarse_factor(res):
+    """Map cells per coarse cell side: :data:`TRAVEL_CELL` / resolution, at least 1."""
+    return max(1, int(round(TRAVEL_CELL / res)))
+
+
+def _mcp_costs(mask, starts, ends):
+    """Cumulative 8-connected travel cost (cells; steps 1 and sqrt 2) from ``starts`` over ``mask``."""
+    from skimage.graph import MCP_Geometric
+
+    mcp = MCP_Geometric(np.where(mask, 1.0, np.inf), fully_connected=True)
+    cum, _ = mcp.find_costs(list(starts), list(ends), find_all_ends=True)
+    return cum
+
+
+def _octile(dr, dc):
+    a, b = np.abs(dr), np.abs(dc)
+    return np.maximum(a, b) + (np.sqrt(2) - 1) * np.minimum(a, b)
+
+
+def _block_components(mask, f):
+    """Connected pieces of ``mask`` inside each ``f`` x ``f`` block: labels ``1..n`` (0 off the mask)."""
+    import cv2
+
+    h, w = mask.shape
+    H, W = -(-h // f), -(-w // f)
+    m = np.zeros((H * f, W * f), np.uint8)
+    m[:h, :w] = mask
+    g = np.zeros((H, f + 1, W, f + 1), np.uint8)  # blocks one empty cell apart: pieces never join across
+    g[:, :f, :, :f] = m.reshape(H, f, W, f)
+    n, lab = cv2.connectedComponents(g.reshape(H * (f + 1), W * (f + 1)), connectivity=8, ltype=cv2.CV_32S)
+    lab = lab.reshape(H, f + 1, W, f + 1)[:, :f, :, :f].reshape(H * f, W * f)[:h, :w]
+    return lab, n - 1
+
+
+def _touching(a, b):
+    """Label pairs of 8-adjacent cells, ``a`` the row above ``b`` (0 = no cell)."""
+    out = []
+    w = a.shape[1]
+    for dc in (-1, 0, 1):
+        x, y = a[:, max(0, -dc):w - max(0, dc)], b[:, max(0, dc):w - max(0, -dc)]
+        ok = (x > 0) & (y > 0) & (x != y)
+        out.append(np.stack([x[ok], y[ok]], 1))
+    return out
+
+
+def _coarse_door_distances(mask, pts, f):
+    """(k, k) travel distances (map cells) between the points ``pts`` (local ``(row, col)``
+    cells of ``mask``) on the coarse grid of ``f`` x ``f`` blocks of ``mask``.
+
+    A node is a connected piece of the mask inside one block (so walls and
+    furniture within a block are never crossed), placed at the piece's
+    centroid; two pieces are joined when any of their cells are
+    8-neighbours, with the octile distance (steps of 1 and sqrt 2 cells, the
+    metric of the map-grid geodesic) between their centroids; each point
+    is joined to the pieces of its 3 x 3 neighbourhood by the octile distance
+    to their centroids. Shortest paths: Dijkstra
+    (:func:`scipy.sparse.csgraph.dijkstra`) from every point.
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import dijkstra
+
+    lab, n = _block_components(mask, f)
+    rr, cc = np.nonzero(lab)
+    ll = lab[rr, cc]
+    cnt = np.bincount(ll, minlength=n + 1).astype(float)
+    cnt[0] = 1.0
+    cr = np.bincount(ll, weights=rr, minlength=n + 1) / cnt
+    ccol = np.bincount(ll, weights=cc, minlength=n + 1) / cnt
+    nb = len(lab[f::f])
+    pairs = _touching(lab[f - 1::f][:nb], lab[f::f])
+    nb = len(lab.T[f::f])
+    pairs += [p[:, ::-1] for p in _touching(lab.T[f - 1::f][:nb], lab.T[f::f])]
+    E = np.concatenate(pairs) if pairs else np.zeros((0, 2), np.int64)
+    E = np.sort(E.astype(np.int64), axis=1)
+    key = np.unique(E[:, 0] * (n + 1) + E[:, 1])
+    u, v = key // (n + 1), key % (n + 1)
+    wt = _octile(cr[u] - cr[v], ccol[u] - ccol[v])
+    k = len(pts)
+    h, w = mask.shape
+    su, sv, sw = [], [], []
+    for i, (pr, pc) in enumerate(pts):
+        r, c = int(pr), int(pc)
+        near = np.unique(lab[max(r - 1, 0):r + 2, max(c - 1, 0):c + 2])
+        near = near[near > 0]
+        su.append(np.full(len(near), n + 1 + i))
+        sv.append(near)
+        sw.append(_octile(pr - cr[near], pc - ccol[near]) + 1e-9)
+    rows = np.concatenate([u] + su)
+    cols = np.concatenate([v] + sv)
+    wts = np.concatenate([np.maximum(wt, 1e-9)] + sw)
+    A = coo_matrix((wts, (rows, cols)), shape=(n + 1 + k, n + 1 + k)).tocsr()
+    dist = dijkstra(A, directed=False, indices=np.arange(n + 1, n + 1 + k))
+    return dist[:, n + 1:]
+
+
+def _windowed_distances(mask, pts, i, near, bound, f):
+    """Exact distances (cells) from point ``i`` to points ``near`` inside a window of ``mask``
+    around them large enough to hold every path not much longer than ``bound``."""
+    p = pts[[i] + list(near)]
+    pad = int(np.ceil(0.6 * np.nanmax(np.where(np.isfinite(bound), bound, 0)))) + 2 * f + 2
+    h, w = mask.shape
+    r0, c0 = max(int(p[:, 0].min()) - pad, 0), max(int(p[:, 1].min()) - pad, 0)
+    r1, c1 = min(int(p[:, 0].max()) + pad + 1, h), min(int(p[:, 1].max()) + pad + 1, w)
+    loc = [(int(r) - r0, int(c) - c0) for r, c in p]
+    cum = _mcp_costs(mask[r0:r1, c0:c1], loc[:1], loc[1:])
+    got = np.array([cum[t] for t in loc[1:]], float)
+    return np.where(np.isfinite(got), got, bound)
 
 
 # --------------------------------------------------------------------------
@@ -308,7 +452,7 @@ def doors_between(G, a: int, b: int) -> list:
 # Travel distances
 # --------------------------------------------------------------------------
 
-def room_distances(seg_or_G, room: int) -> dict:
+def room_distances(seg_or_G, room: int, *, exact: bool = False) -> dict:
     """In-room travel distances between every pair of the room's doors.
 
     Parameters
@@ -316,6 +460,10 @@ def room_distances(seg_or_G, room: int) -> dict:
     seg_or_G : Segmentation or networkx.MultiGraph
     room : int
         Room ID.
+    exact : bool
+        Measure every pair on the map's own grid (one search per door over
+        the whole room) instead of the coarse grid large rooms use by
+        default (see the module notes); slower, for checking.
 
     Returns
     -------
@@ -327,23 +475,16 @@ def room_distances(seg_or_G, room: int) -> dict:
     ctx = _Ctx(seg_or_G)
     if room not in ctx.G:
         raise NotInRoomError(f"no room {room!r} in the graph")
-    return _room_distances(ctx, room)
+    return _room_distances(ctx, room, exact=exact)
 
 
-def _room_distances(ctx, room):
-    space = _RoomSpace(ctx, room)
-    ids = sorted(space.door_px)
-    out = {}
-    for i, di in enumerate(ids[:-1]):
-        rest = ids[i + 1:]
-        dist = space.distances(space.door_px[di], [space.door_px[d] for d in rest])
-        for dj, L in zip(rest, dist):
-            if np.isfinite(L):
-                out[(di, dj)] = L
-    return out
+def _room_distances(ctx, room, exact=False):
+    if len(ctx.doors_of(room)) < 2:
+        return {}
+    return _RoomSpace(ctx, room).door_distances(exact=exact)
 
 
-def travel_graph(seg_or_G) -> nx.MultiGraph:
+def travel_graph(seg_or_G, *, exact: bool = False) -> nx.MultiGraph:
     """A copy of the room–door graph with in-room door-to-door distances.
 
     Every room node gets ``door_distances``: a tuple of
@@ -357,6 +498,9 @@ def travel_graph(seg_or_G) -> nx.MultiGraph:
     Parameters
     ----------
     seg_or_G : Segmentation or networkx.MultiGraph
+    exact : bool
+        Every pair measured on the map's own grid (see
+        :func:`room_distances`); slower.
 
     Returns
     -------
@@ -367,7 +511,7 @@ def travel_graph(seg_or_G) -> nx.MultiGraph:
     ctx = _Ctx(seg_or_G)
     G = ctx.G.copy()
     for r in G.nodes:
-        dist = _room_distances(ctx, r)
+        dist = _room_distances(ctx, r, exact=exact)
         G.nodes[r]["door_distances"] = tuple((int(i), int(j), float(L)) for (i, j), L in sorted(dist.items()))
     G.graph["travel_distances"] = "geodesic"
     return G
