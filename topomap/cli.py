@@ -56,34 +56,80 @@ def main(debug, verbose):
     logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
 
 
-def write_segmentation(seg, outdir, *, overlay: bool = True, skeletons: bool = False) -> dict:
+def write_segmentation(seg, outdir, *, overlay: bool = True, skeletons: bool = False, geojson: bool = True,
+                       timings: dict | None = None) -> dict:
     """The files ``topomap segment`` writes for ``seg`` into ``outdir``.
 
     Computes what is saved — the travel graph
     (:func:`topomap.planning.travel_graph`: the room–door graph with
     in-room door-to-door distances, so ``topomap plan`` works from
-    ``rooms.graphml`` or ``rooms.json`` alone) and the overlay picture
-    (:func:`topomap.plot.overlay_png`) — then writes everything with
-    :func:`topomap.export.write_outputs` (all files or none).
+    ``rooms.graphml`` or ``rooms.json`` alone) and, unless ``overlay`` is
+    False, the overlay picture (:func:`topomap.plot.overlay_png`) — then
+    writes everything with :func:`topomap.export.write_outputs` (all files
+    or none; ``rooms.geojson`` only when ``geojson``).
+
+    ``timings``, when given, receives the seconds of each step: ``travel``,
+    ``overlay`` and ``write_<file>`` per file.
 
     Returns
     -------
     dict
         ``{name: path}`` of the files written.
     """
+    import time
+
     from .export import write_outputs
     from .planning import travel_graph
 
+    t = {} if timings is None else timings
+    t0 = time.perf_counter()
     G = travel_graph(seg)
+    t["travel"] = time.perf_counter() - t0
     png = None
     if overlay:
         from .plot import overlay_png
 
+        t0 = time.perf_counter()
         png = overlay_png(seg, skeletons=skeletons)
-    return write_outputs(seg, outdir, G, overlay_png=png)
+        t["overlay"] = time.perf_counter() - t0
+    return write_outputs(seg, outdir, G, overlay_png=png, geojson=geojson, timings=t)
 
 
-def _segment_one(path, outdir, resolution, method, skeletons):
+#: Modules the segment command uses, imported up front (their import time is the
+#: ``import`` stage of ``--profile``, not hidden in the first map's stages).
+_PRELOAD = ("numpy", "scipy.ndimage", "scipy.sparse.csgraph", "scipy.spatial", "cv2", "PIL.Image",
+            "PIL.PngImagePlugin", "yaml", "networkx", "shapely", "shapely.geometry", "shapely.ops", "skimage.draw",
+            "skimage.graph", "skimage.morphology", "skimage.segmentation", "topomap.io", "topomap.segmentation",
+            "topomap.roomgraph", "topomap.planning", "topomap.export", "topomap.plot")
+
+
+def _preload() -> float:
+    """Import :data:`_PRELOAD`; returns the seconds it took."""
+    import importlib
+    import time
+
+    t0 = time.perf_counter()
+    for name in _PRELOAD:
+        importlib.import_module(name)
+    return time.perf_counter() - t0
+
+
+def _process_age() -> float | None:
+    """Seconds since this process started (Linux ``/proc``), or None."""
+    import os
+    import time
+
+    try:
+        with open("/proc/self/stat") as fh:
+            start = int(fh.read().rsplit(")", 1)[1].split()[19])
+        with open("/proc/uptime") as fh:
+            up = float(fh.read().split()[0])
+        return max(up - start / os.sysconf("SC_CLK_TCK"), 0.0) if time else None
+    except (OSError, ValueError, IndexError):
+        return None
+
+
+def _segment_one(path, outdir, resolution, method, skeletons, *, overlay=True, geojson=True):
     import time
 
     from . import io
@@ -93,11 +139,12 @@ def _segment_one(path, outdir, resolution, method, skeletons):
     grid = io.load_map(path, resolution=resolution)
     t1 = time.perf_counter()
     seg = segment(grid, method=method)
-    t2 = time.perf_counter()
     seg.room_graph  # built here so its time is its own stage (timings["room_graph"])
-    write_segmentation(seg, outdir, skeletons=skeletons)
+    t2 = time.perf_counter()
+    write_segmentation(seg, outdir, skeletons=skeletons, overlay=overlay, geojson=geojson, timings=seg.timings)
     seg.timings["load"] = t1 - t0
-    seg.timings["write"] = time.perf_counter() - t2 - seg.timings.get("room_graph", 0.0)
+    seg.timings["write"] = time.perf_counter() - t2
+    seg.timings["job"] = time.perf_counter() - t0
     return seg
 
 
@@ -111,12 +158,18 @@ def _summary(seg) -> str:
     return text
 
 
+#: Stages of ``--profile`` in the order of the job. ``total`` is the segmentation call (its
+#: stages before it); ``write`` is travel distances, overlay and every ``write_<file>``;
+#: ``job`` is the map from loading to the last file.
+PROFILE_ORDER = ["start", "import", "load", "preprocess", "skeletons", "graphs", "doors", "rooms", "segment",
+                 "total", "room_graph", "travel", "overlay", "write_labels", "write_graphml", "write_json",
+                 "write_geojson", "write_overlay", "write", "job"]
+
+
 def _print_profile(path, seg):
     """One line per stage on stderr: where the time of a map went."""
-    order = ["load", "preprocess", "skeletons", "graphs", "doors", "rooms", "segment", "total",
-             "room_graph", "write"]
     t = seg.timings
-    stages = [k for k in order if k in t] + sorted(k for k in t if k not in order)
+    stages = [k for k in PROFILE_ORDER if k in t] + sorted(k for k in t if k not in PROFILE_ORDER)
     click.echo(f"{path}: " + ", ".join(f"{k} {t[k] * 1000:.0f} ms" for k in stages), err=True)
 
 
@@ -129,15 +182,21 @@ def _print_profile(path, seg):
 @click.option("--method", type=click.Choice(_method_names()), default=None,
               help="Segmentation method (default: the library's default).")
 @click.option("--skeletons", is_flag=True, help="Draw both skeleton graphs in overlay.png.")
+@click.option("--no-overlay", "no_overlay", is_flag=True, help="Do not draw or write overlay.png (batch runs).")
+@click.option("--no-geojson", "no_geojson", is_flag=True, help="Do not write rooms.geojson.")
 @click.option("--profile", is_flag=True,
-              help="Print the time of every stage (load, segmentation stages, room graph, write) on stderr.")
-def segment_cmd(maps, outdir, resolution, method, skeletons, profile):
+              help="Print the time of every stage (start, imports, load, segmentation stages, room graph, "
+                   "travel distances, overlay, each file written) on stderr.")
+def segment_cmd(maps, outdir, resolution, method, skeletons, no_overlay, no_geojson, profile):
     """Segment MAP files (ROS YAML, PGM or PNG) into rooms and doors.
 
     Writes labels.png (16-bit, 0 = not a room), rooms.graphml, rooms.json
     (node-link), rooms.geojson and overlay.png per map.
     """
     from .errors import ParameterError
+
+    start = _process_age()
+    imported = _preload()
 
     if resolution is not None and not resolution > 0:
         sys.exit(_fail(ParameterError(f"--resolution must be > 0 m/px, got {resolution!r}")))
@@ -150,9 +209,15 @@ def segment_cmd(maps, outdir, resolution, method, skeletons, profile):
         for path in bar:
             target = outdir / path.stem if many else outdir
             try:
-                seg = _segment_one(path, target, resolution, method, skeletons)
+                seg = _segment_one(path, target, resolution, method, skeletons, overlay=not no_overlay,
+                                   geojson=not no_geojson)
                 log.info("%s: %d rooms, %d doors -> %s", path, seg.n_rooms, len(seg.doors), target)
                 if profile:
+                    if imported is not None:  # the process's start and imports: once, with the first map
+                        if start is not None:
+                            seg.timings["start"] = start
+                        seg.timings["import"] = imported
+                        imported = None
                     _print_profile(path, seg)
                 if not many:
                     click.echo(f"{path}: {_summary(seg)} -> {target}")

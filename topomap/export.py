@@ -659,7 +659,8 @@ def load_label_map(path):
 # All outputs of a segmentation
 # --------------------------------------------------------------------------
 
-def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None) -> dict:
+def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None, geojson: bool = True,
+                  timings: dict | None = None) -> dict:
     """Write ``labels.png``, ``rooms.graphml``, ``rooms.json``, ``rooms.geojson`` and ``overlay.png``.
 
     Writes only: the graph and the picture are computed by the caller
@@ -678,6 +679,11 @@ def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None) -> di
     overlay_png : bytes, optional
         PNG content of ``overlay.png`` (:func:`topomap.plot.overlay_png`);
         None writes no overlay.
+    geojson : bool
+        Also write ``rooms.geojson``.
+    timings : dict, optional
+        When given, the seconds each file took are stored in it as
+        ``write_<name>`` (``write_labels``, ``write_graphml``, ...).
 
     Returns
     -------
@@ -691,18 +697,23 @@ def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None) -> di
 
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
-    names = {"labels": "labels.png", "graphml": "rooms.graphml", "json": "rooms.json",
-             "geojson": "rooms.geojson"}
+    import time
+
+    names = {"labels": "labels.png", "graphml": "rooms.graphml", "json": "rooms.json"}
+    if geojson:
+        names["geojson"] = "rooms.geojson"
     if overlay_png is not None:
         names["overlay"] = "overlay.png"
+    writers = {"labels": lambda p: save_labels(seg.labels, p), "graphml": lambda p: save_graphml(graph, p),
+               "json": lambda p: save_json(graph, p), "geojson": lambda p: save_geojson(graph, p),
+               "overlay": lambda p: save_bytes(overlay_png, p)}
     with ExitStack() as stack:  # on success renames every temporary file; on error removes them all
         tmp = {k: stack.enter_context(atomic_write(outdir / f, None)) for k, f in names.items()}
-        save_labels(seg.labels, tmp["labels"])
-        save_graphml(graph, tmp["graphml"])
-        save_json(graph, tmp["json"])
-        save_geojson(graph, tmp["geojson"])
-        if overlay_png is not None:
-            save_bytes(overlay_png, tmp["overlay"])
+        for k in names:
+            t = time.perf_counter()
+            writers[k](tmp[k])
+            if timings is not None:
+                timings[f"write_{k}"] = time.perf_counter() - t
     return {k: outdir / f for k, f in names.items()}
 
 
