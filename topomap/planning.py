@@ -284,7 +284,11 @@ def _octile(dr, dc):
 
 
 def _block_components(mask, f):
-    """Connected pieces of ``mask`` inside each ``f`` x ``f`` block: labels ``1..n`` (0 off the mask)."""
+    """Connected pieces of ``mask`` inside each ``f`` x ``f`` block.
+
+    Returns labels ``1..n`` (0 off the mask), ``n`` and the (n + 1, 2)
+    ``(row, col)`` centroids of the pieces (row 0 unused).
+    """
     import cv2
 
     h, w = mask.shape
@@ -293,9 +297,12 @@ def _block_components(mask, f):
     m[:h, :w] = mask
     g = np.zeros((H, f + 1, W, f + 1), np.uint8)  # blocks one empty cell apart: pieces never join across
     g[:, :f, :, :f] = m.reshape(H, f, W, f)
-    n, lab = cv2.connectedComponents(g.reshape(H * (f + 1), W * (f + 1)), connectivity=8, ltype=cv2.CV_32S)
+    n, lab, _, cen = cv2.connectedComponentsWithStats(g.reshape(H * (f + 1), W * (f + 1)), connectivity=8,
+                                                      ltype=cv2.CV_32S)
     lab = lab.reshape(H, f + 1, W, f + 1)[:, :f, :, :f].reshape(H * f, W * f)[:h, :w]
-    return lab, n - 1
+    cen = cen[:, ::-1]  # (row, col) in the spaced image: take out one gap cell per block before it
+    cen = cen - np.floor(cen / (f + 1))
+    return lab, n - 1, cen
 
 
 def _touching(a, b):
@@ -305,7 +312,10 @@ def _touching(a, b):
     for dc in (-1, 0, 1):
         x, y = a[:, max(0, -dc):w - max(0, dc)], b[:, max(0, dc):w - max(0, -dc)]
         ok = (x > 0) & (y > 0) & (x != y)
-        out.append(np.stack([x[ok], y[ok]], 1))
+        x, y = x[ok], y[ok]
+        keep = np.ones(len(x), bool)  # runs of the same pair along a block edge: keep one
+        keep[1:] = (x[1:] != x[:-1]) | (y[1:] != y[:-1])
+        out.append(np.stack([x[keep], y[keep]], 1))
     return out
 
 
@@ -325,36 +335,28 @@ def _coarse_door_distances(mask, pts, f):
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import dijkstra
 
-    lab, n = _block_components(mask, f)
-    rr, cc = np.nonzero(lab)
-    ll = lab[rr, cc]
-    cnt = np.bincount(ll, minlength=n + 1).astype(float)
-    cnt[0] = 1.0
-    cr = np.bincount(ll, weights=rr, minlength=n + 1) / cnt
-    ccol = np.bincount(ll, weights=cc, minlength=n + 1) / cnt
+    lab, n, cen = _block_components(mask, f)
+    cr, ccol = cen[:, 0], cen[:, 1]
     nb = len(lab[f::f])
     pairs = _touching(lab[f - 1::f][:nb], lab[f::f])
     nb = len(lab.T[f::f])
     pairs += [p[:, ::-1] for p in _touching(lab.T[f - 1::f][:nb], lab.T[f::f])]
-    E = np.concatenate(pairs) if pairs else np.zeros((0, 2), np.int64)
-    E = np.sort(E.astype(np.int64), axis=1)
-    key = np.unique(E[:, 0] * (n + 1) + E[:, 1])
-    u, v = key // (n + 1), key % (n + 1)
-    wt = _octile(cr[u] - cr[v], ccol[u] - ccol[v])
     k = len(pts)
-    h, w = mask.shape
-    su, sv, sw = [], [], []
+    su, sv = [], []
     for i, (pr, pc) in enumerate(pts):
         r, c = int(pr), int(pc)
-        near = np.unique(lab[max(r - 1, 0):r + 2, max(c - 1, 0):c + 2])
+        near = lab[max(r - 1, 0):r + 2, max(c - 1, 0):c + 2].ravel()
         near = near[near > 0]
         su.append(np.full(len(near), n + 1 + i))
         sv.append(near)
-        sw.append(_octile(pr - cr[near], pc - ccol[near]) + 1e-9)
-    rows = np.concatenate([u] + su)
-    cols = np.concatenate([v] + sv)
-    wts = np.concatenate([np.maximum(wt, 1e-9)] + sw)
-    A = coo_matrix((wts, (rows, cols)), shape=(n + 1 + k, n + 1 + k)).tocsr()
+    E = np.concatenate(pairs + [np.stack([np.concatenate(su), np.concatenate(sv)], 1)]).astype(np.int32)
+    # one entry per joined pair (the sparse matrix merges repeats), then its length
+    A = coo_matrix((np.ones(len(E), np.float32), (E[:, 0], E[:, 1])), shape=(n + 1 + k, n + 1 + k)).tocsr()
+    u = np.repeat(np.arange(n + 1 + k), np.diff(A.indptr))
+    v = A.indices
+    pr = np.concatenate([cr, pts[:, 0]])
+    pc = np.concatenate([ccol, pts[:, 1]])
+    A.data = (_octile(pr[u] - pr[v], pc[u] - pc[v]) + 1e-9).astype(float)
     dist = dijkstra(A, directed=False, indices=np.arange(n + 1, n + 1 + k))
     return dist[:, n + 1:]
 
