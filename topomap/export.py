@@ -33,6 +33,7 @@ and never clobbers an earlier output.
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -55,7 +56,7 @@ def save_labels(labels: np.ndarray, path) -> Path:
         raise ValueError(f"{path}: {int(labels.max())} rooms do not fit a 16-bit PNG")
     img = Image.fromarray(labels.astype(np.uint16))
     with atomic_write(path) as fh:
-        img.save(fh, format="PNG")
+        img.save(fh, format="PNG", compress_level=1)  # fast zlib level: label images compress well anyway
     return Path(path)
 
 
@@ -65,11 +66,22 @@ def save_labels(labels: np.ndarray, path) -> Path:
 
 def _num(v) -> str:
     """Shortest decimal that reads back as exactly ``v`` (no exponent)."""
-    return np.format_float_positional(float(v), unique=True, trim="-")
+    t = repr(float(v))  # shortest round-trip decimal; positional unless tiny or huge
+    if "e" in t or "n" in t:
+        return np.format_float_positional(float(v), unique=True, trim="-")
+    return t[:-2] if t.endswith(".0") else t
+
+
+_POINT_ZERO = re.compile(r"\.0(?=[ ,)]|$)")
 
 
 def _ring(coords) -> str:
-    return "(" + ", ".join(f"{_num(c[0])} {_num(c[1])}" for c in coords) + ")"
+    vals = np.asarray(coords, float).reshape(-1).tolist()  # 2-D only: geometry with z goes to shapely.to_wkt
+    toks = list(map(repr, vals))
+    if any("e" in t or "n" in t for t in toks):
+        toks = [_num(v) for v in vals]
+    text = ", ".join(map(" ".join, zip(toks[::2], toks[1::2])))
+    return "(" + _POINT_ZERO.sub("", text) + ")"
 
 
 def _poly_wkt(p) -> str:
@@ -337,9 +349,9 @@ def node_link(G: nx.Graph) -> dict:
 
 def save_json(G: nx.Graph, path) -> Path:
     """Write the room graph as node-link JSON (atomically); see :func:`node_link`."""
-    data = node_link(G)
+    text = json.dumps(node_link(G))  # compact: json's C encoder (indent or json.dump would use the Python one)
     with atomic_write(path, "w") as fh:
-        json.dump(data, fh, indent=1)
+        fh.write(text)
     return Path(path)
 
 
@@ -391,15 +403,13 @@ def to_geojson(G: nx.Graph) -> dict:
         ``{"kind": "door", "door": id, "rooms": [a, b], "width": m, ...}``.
         Coordinates are map-frame metres (not WGS84).
     """
-    from shapely.geometry import mapping
-
     feats = []
     for n, d in G.nodes(data=True):
         geom = d.get("polygon")
         props = {"kind": "room", "room": _plain(n)}
         props.update({k: _plain(v) for k, v in d.items() if k != "polygon"})
         feats.append({"type": "Feature", "id": f"room-{n}",
-                      "geometry": _plain_geom(mapping(geom)) if geom is not None else None,
+                      "geometry": _geom_json(geom) if geom is not None else None,
                       "properties": props})
     edges = G.edges(keys=True, data=True) if G.is_multigraph() else ((u, v, None, d) for u, v, d in G.edges(data=True))
     for u, v, k, d in edges:
@@ -411,6 +421,22 @@ def to_geojson(G: nx.Graph) -> dict:
                       "geometry": {"type": "LineString", "coordinates": line}, "properties": props})
     return {"type": "FeatureCollection", "properties": {k: _plain(v) for k, v in G.graph.items()},
             "features": feats}
+
+
+def _geom_json(geom) -> dict:
+    """GeoJSON geometry of a shapely geometry: plain lists of floats (exact values)."""
+    t = geom.geom_type
+
+    def rings(p):
+        return [np.asarray(r.coords, float).tolist() for r in [p.exterior, *p.interiors]]
+
+    if t == "Polygon" and not geom.is_empty:
+        return {"type": "Polygon", "coordinates": rings(geom)}
+    if t == "MultiPolygon" and not geom.is_empty:
+        return {"type": "MultiPolygon", "coordinates": [rings(p) for p in geom.geoms]}
+    from shapely.geometry import mapping
+
+    return _plain_geom(mapping(geom))
 
 
 def _plain_geom(m):
@@ -464,9 +490,9 @@ def from_geojson(data: dict, name: str = "<geojson>") -> nx.MultiGraph:
 
 def save_geojson(G: nx.Graph, path) -> Path:
     """Write :func:`to_geojson` of ``G`` to ``path`` (atomically)."""
-    data = to_geojson(G)
+    text = json.dumps(to_geojson(G))
     with atomic_write(path, "w") as fh:
-        json.dump(data, fh)
+        fh.write(text)
     return Path(path)
 
 
@@ -704,8 +730,15 @@ def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None, geojs
         names["geojson"] = "rooms.geojson"
     if overlay_png is not None:
         names["overlay"] = "overlay.png"
-    writers = {"labels": lambda p: save_labels(seg.labels, p), "graphml": lambda p: save_graphml(graph, p),
-               "json": lambda p: save_json(graph, p), "geojson": lambda p: save_geojson(graph, p),
+    scalar = {}
+
+    def plain():  # the GraphML scalars, encoded once for both GraphML and JSON (encoding them again is a no-op)
+        if not scalar:
+            scalar["G"] = to_graphml_graph(graph)
+        return scalar["G"]
+
+    writers = {"labels": lambda p: save_labels(seg.labels, p), "graphml": lambda p: save_graphml(plain(), p),
+               "json": lambda p: save_json(plain(), p), "geojson": lambda p: save_geojson(graph, p),
                "overlay": lambda p: save_bytes(overlay_png, p)}
     with ExitStack() as stack:  # on success renames every temporary file; on error removes them all
         tmp = {k: stack.enter_context(atomic_write(outdir / f, None)) for k, f in names.items()}
