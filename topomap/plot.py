@@ -254,7 +254,12 @@ def _overlay_indexed(seg, skeletons=False, graph=False, alpha=0.75):
         x0 = int(round(G.nodes[i]["col"])) - tw // 2
         y0 = int(round(G.nodes[i]["row"])) + tht // 2
         cv2.rectangle(idx, (x0 - 2, y0 - tht - 2), (x0 + tw + 1, y0 + below - 1), _BOX, -1)
-        cv2.putText(idx, text, (x0, y0), font, scale, _WALL, th, cv2.LINE_8)
+        # the glyphs into their own mask (text may be drawn antialiased), then set in one colour
+        r0, c0 = max(y0 - tht - 2, 0), max(x0 - 2, 0)
+        sub = idx[r0:max(y0 + below, 0), c0:max(x0 + tw + 2, 0)]
+        mask = np.zeros(sub.shape, np.uint8)
+        cv2.putText(mask, text, (x0 - c0, y0 - r0), font, scale, 255, th, cv2.LINE_8)
+        sub[mask > 127] = _WALL
     return idx, palette
 
 
