@@ -271,7 +271,11 @@ def main(argv=None):
         # largest map, stage by stage
         big = max(maps, key=_cells)
         name = Path(big).stem
-        st = prof.get(name, {})
+        st = dict(prof.get(name, {}))
+        for d in prof.values():  # start and import: on the first map's line, once per command
+            for k in ("start", "import"):
+                if k in d:
+                    st[k] = d[k]
         job = st.get("job", float("nan"))
         lines += [f"Stages of the largest map, {name} ({_cells(big) / 1e6:.2f} M cells), from `--profile` of the "
                   "last topomap round (`start`: process start to the command; `import`: every module the "
@@ -322,7 +326,7 @@ def _growth(directory, name, scales, tmp):
     head = "| stage | " + " | ".join(f"x{k} ({cells * k * k / 1e6:.1f} M)" for k in scales) + \
         f" | x{scales[-1]} / x1 |"
     out += [head, "| --- |" + " ---: |" * (len(scales) + 1)]
-    for s in TOPO_STAGES[2:] + ["job"]:
+    for s in TOPO_STAGES + ["job"]:
         vals = [rows[("topomap", k)][2].get(s) for k in scales]
         if all(v is None for v in vals):
             continue
