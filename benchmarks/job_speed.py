@@ -241,7 +241,7 @@ def main(argv=None):
     walls = {"topomap": [], "watershed": []}
     per_map = {"topomap": {}, "watershed": {}}
     peak = {"topomap": 0.0, "watershed": 0.0}
-    prof = {}
+    prof, ws_last = {}, {}
     with tempfile.TemporaryDirectory() as tmp:
         for r in range(rounds):
             for kind in ("topomap", "watershed") if r % 2 == 0 else ("watershed", "topomap"):
@@ -252,6 +252,8 @@ def main(argv=None):
                     per_map[kind].setdefault(m, []).append(d["job"])
                 if kind == "topomap":
                     prof = st
+                else:
+                    ws_last = st
                 print(f"round {r + 1} {kind}: {wall:.2f} s, {mb:.0f} MB", file=sys.stderr, flush=True)
         fwall, fmb, fst = run("floor", maps, res, Path(tmp) / "floor")
         lines += ["| round | topomap (s) | watershed (s) | ratio |", "| --- | ---: | ---: | ---: |"]
@@ -268,6 +270,26 @@ def main(argv=None):
                   f"Physical floor (one process: `topomap.load_map`, one OpenCV distance transform, the 16-bit "
                   f"PNG of the free space's components, per map): {fwall:.2f} s, {fmb:.0f} MB; the whole "
                   f"topomap job is **{tt / fwall:.1f} x** the floor, the watershed job {tw / fwall:.1f} x.", ""]
+        # where the time of the whole topomap job goes, summed over the maps (last round)
+        groups = [("start + imports (once)", ["start", "import"]), ("load", ["load"]),
+                  ("segmentation (`segment()`)", ["total"]), ("room graph", ["room_graph"]),
+                  ("travel distances", ["travel"]), ("overlay drawn", ["overlay"]),
+                  ("files written", ["write_labels", "write_graphml", "write_json", "write_geojson",
+                                     "write_overlay"])]
+        wsum = {k: sum(d.get(k, 0.0) for d in prof.values()) for k in
+                ["start", "import", "load", "total", "room_graph", "travel", "overlay", "write_labels",
+                 "write_graphml", "write_json", "write_geojson", "write_overlay", "job"]}
+        wsh = {k: sum(d.get(k, 0.0) for d in ws_last.values()) for k in ["import", "load", "distance", "segment",
+                                                                          "write", "job"]}
+        lines += ["Where the time goes, summed over the maps (last round; the watershed job's own stages beside "
+                  "it):", "", "| topomap stage | s | watershed stage | s |", "| --- | ---: | --- | ---: |"]
+        wrows = [("imports (once)", wsh["import"]), ("load", wsh["load"]),
+                 ("distance transform + watershed", wsh["distance"] + wsh["segment"]), ("", None), ("", None),
+                 ("", None), ("label PNG written", wsh["write"])]
+        for (lbl, keys), (wl, wv) in zip(groups, wrows):
+            lines.append(f"| {lbl} | {sum(wsum[k] for k in keys):.2f} | {wl} | "
+                         f"{'' if wv is None else f'{wv:.2f}'} |")
+        lines += [f"| **maps, load to last file** | {wsum['job']:.2f} | **maps** | {wsh['job']:.2f} |", ""]
         # largest map, stage by stage
         big = max(maps, key=_cells)
         name = Path(big).stem

@@ -129,6 +129,11 @@ class _Ctx:
             p1 = tuple(float(v) for v in d["p1"])
             p2 = tuple(float(v) for v in d["p2"])
             self.doors[did] = (int(a), int(b), p1, p2, float(d["width"]), (float(d["x"]), float(d["y"])))
+        self._of = {}  # room -> its door IDs, ascending
+        for did in sorted(self.doors):
+            a, b = self.doors[did][:2]
+            for r in {a, b}:
+                self._of.setdefault(r, []).append(did)
         self._bbox = None
 
     # -- rooms ------------------------------------------------------------
@@ -190,7 +195,7 @@ class _Ctx:
         return 0
 
     def doors_of(self, r):
-        return sorted(k for k, v in self.doors.items() if r in (v[0], v[1]))
+        return list(self._of.get(r, ()))
 
     def door_cells(self, did):
         _, _, p1, p2, _, _ = self.doors[did]
@@ -389,14 +394,29 @@ def _coarse_door_distances(mask, pts, f):
     return dist[:, n + 1:]
 
 
+#: Slack of the refinement windows: a path up to this factor (plus two coarse cells) longer
+#: than the coarse distance still fits in the window.
+_WINDOW_SLACK = 1.1
+
+
 def _windowed_distances(mask, pts, i, near, bound, f):
-    """Exact distances (cells) from point ``i`` to points ``near`` inside a window of ``mask``
-    around them large enough to hold every path not much longer than ``bound``."""
+    """Exact distances (cells) from point ``i`` to points ``near`` on ``mask``, searched in a window.
+
+    A path of length at most ``L`` between two points stays inside the
+    ellipse with the two points as foci and ``L`` as the sum of the
+    distances to them, so inside their bounding box padded by ``(L - |pq|) /
+    2``; the window is the union of these boxes for ``L`` =
+    :data:`_WINDOW_SLACK` x the coarse distance ``bound`` + 2 ``f``. Where the
+    window holds no path, the coarse distance is kept.
+    """
     p = pts[[i] + list(near)]
-    pad = int(np.ceil(0.6 * np.nanmax(np.where(np.isfinite(bound), bound, 0)))) + 2 * f + 2
     h, w = mask.shape
-    r0, c0 = max(int(p[:, 0].min()) - pad, 0), max(int(p[:, 1].min()) - pad, 0)
-    r1, c1 = min(int(p[:, 0].max()) + pad + 1, h), min(int(p[:, 1].max()) + pad + 1, w)
+    L = np.where(np.isfinite(bound), bound, max(h, w) * 2.0) * _WINDOW_SLACK + 2 * f
+    pad = np.ceil(np.maximum(L - np.hypot(*(p[1:] - p[0]).T), 0) / 2) + 1
+    r0 = max(int(np.min(np.minimum(p[0, 0], p[1:, 0]) - pad)), 0)
+    c0 = max(int(np.min(np.minimum(p[0, 1], p[1:, 1]) - pad)), 0)
+    r1 = min(int(np.max(np.maximum(p[0, 0], p[1:, 0]) + pad)) + 1, h)
+    c1 = min(int(np.max(np.maximum(p[0, 1], p[1:, 1]) + pad)) + 1, w)
     loc = [(int(r) - r0, int(c) - c0) for r, c in p]
     cum = _mcp_costs(mask[r0:r1, c0:c1], loc[:1], loc[1:])
     got = np.array([cum[t] for t in loc[1:]], float)
