@@ -197,8 +197,8 @@ def _load():
 # the report
 # --------------------------------------------------------------------------
 
-TOPO_STAGES = ["start", "import", "load", "preprocess", "skeletons", "graphs", "doors", "rooms", "room_graph",
-               "travel", "overlay", "write_labels", "write_graphml", "write_json", "write_geojson",
+TOPO_STAGES = ["start", "import", "warmup", "load", "preprocess", "skeletons", "graphs", "doors", "rooms",
+               "room_graph", "travel", "overlay", "write_labels", "write_graphml", "write_json", "write_geojson",
                "write_overlay"]
 
 
@@ -271,13 +271,13 @@ def main(argv=None):
                   f"PNG of the free space's components, per map): {fwall:.2f} s, {fmb:.0f} MB; the whole "
                   f"topomap job is **{tt / fwall:.1f} x** the floor, the watershed job {tw / fwall:.1f} x.", ""]
         # where the time of the whole topomap job goes, summed over the maps (last round)
-        groups = [("start + imports (once)", ["start", "import"]), ("load", ["load"]),
+        groups = [("start, imports, warm-up (once)", ["start", "import", "warmup"]), ("load", ["load"]),
                   ("segmentation (`segment()`)", ["total"]), ("room graph", ["room_graph"]),
                   ("travel distances", ["travel"]), ("overlay drawn", ["overlay"]),
                   ("files written", ["write_labels", "write_graphml", "write_json", "write_geojson",
                                      "write_overlay"])]
         wsum = {k: sum(d.get(k, 0.0) for d in prof.values()) for k in
-                ["start", "import", "load", "total", "room_graph", "travel", "overlay", "write_labels",
+                ["start", "import", "warmup", "load", "total", "room_graph", "travel", "overlay", "write_labels",
                  "write_graphml", "write_json", "write_geojson", "write_overlay", "job"]}
         wsh = {k: sum(d.get(k, 0.0) for d in ws_last.values()) for k in ["import", "load", "distance", "segment",
                                                                           "write", "job"]}
@@ -295,18 +295,19 @@ def main(argv=None):
         name = Path(big).stem
         st = dict(prof.get(name, {}))
         for d in prof.values():  # start and import: on the first map's line, once per command
-            for k in ("start", "import"):
+            for k in ("start", "import", "warmup"):
                 if k in d:
                     st[k] = d[k]
         job = st.get("job", float("nan"))
         lines += [f"Stages of the largest map, {name} ({_cells(big) / 1e6:.2f} M cells), from `--profile` of the "
                   "last topomap round (`start`: process start to the command; `import`: every module the "
-                  "command uses, loaded once before the first map; both paid once per command, so shared by "
-                  "all maps of a batch):", "",
+                  "command uses, loaded once before the first map; `warmup`: the job once on a tiny map, so "
+                  "one-off first-call costs are not in the first map; all three paid once per command, so "
+                  "shared by all maps of a batch):", "",
                   "| stage | ms | share of the map's job |", "| --- | ---: | ---: |"]
         for k in TOPO_STAGES:
             if k in st:
-                share = "" if k in ("start", "import") else f"{100 * st[k] / job:.0f} %"
+                share = "" if k in ("start", "import", "warmup") else f"{100 * st[k] / job:.0f} %"
                 lines.append(f"| {k} | {st[k] * 1000:.0f} | {share} |")
         lines.append(f"| **job** (load to last file) | {job * 1000:.0f} | 100 % |")
         ws = fst.get(name, {})

@@ -277,7 +277,7 @@ def test_segment_profile_prints_every_stage(tmp_path):
     r = CliRunner().invoke(main, ["segment", str(example_map_path()), "-o", str(tmp_path / "o"), "--profile"])
     assert r.exit_code == 0, r.output
     err = r.stderr if hasattr(r, "stderr") else r.output
-    for stage in ["start", "import", "load", "preprocess", "skeletons", "graphs", "doors", "rooms", "total",
+    for stage in ["start", "import", "warmup", "load", "preprocess", "skeletons", "graphs", "doors", "rooms", "total",
                   "room_graph", "travel", "overlay", "write_labels", "write_graphml", "write_json", "write_geojson",
                   "write_overlay", "write", "job"]:
         assert f" {stage} " in err, (stage, err)
