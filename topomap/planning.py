@@ -45,7 +45,7 @@ computed on a coarse grid, so that a room with many doors costs little:
   cell is joined to the pieces around it;
 * Dijkstra (:func:`scipy.sparse.csgraph.dijkstra`) from every door gives
   all pairs at once;
-* pairs closer than :data:`REFINE_CELLS` coarse cells (2.4 m at 0.05 m/px)
+* pairs closer than :data:`REFINE_CELLS` coarse cells (3.2 m at 0.05 m/px)
   are measured again exactly on the map's grid, in a window around the two
   doors large enough to hold every path not much longer than the coarse
   one.
