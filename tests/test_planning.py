@@ -386,7 +386,7 @@ def test_plan_on_example(example):
 TRAVEL_TOLERANCE = 0.06
 
 
-def hall_with_partition():
+def hall_with_partition(partition=True):
     """A 6 m x 9 m hall between two small rooms, a one-cell partition wall
     across most of the hall, doors on either side of the partition and far
     apart: the hall is larger than planning.EXACT_CELLS, so its distances
@@ -396,7 +396,8 @@ def hall_with_partition():
     cells[wall:H - wall, 40:160] = FREE                  # the hall
     cells[wall:40, wall:37] = FREE                       # west room
     cells[wall:40, 163:W - wall] = FREE                  # east room
-    cells[wall:100, 99] = OCCUPIED                       # one-cell partition, open at the bottom
+    if partition:
+        cells[wall:100, 99] = OCCUPIED                   # one-cell partition, open at the bottom
     cells[10:26, 37:40] = FREE                           # door west (top of the hall, left of the partition)
     cells[10:26, 160:163] = FREE                         # door east (right of the partition)
     grid = OccupancyGrid(cells, RES, (0.0, 0.0, 0.0))
@@ -420,6 +421,16 @@ def test_coarse_distance_goes_around_a_thin_partition():
     assert [L for _, _, L in G.nodes[hall]["door_distances"]] == [fast]
     Gx = P.travel_graph(seg, exact=True)
     assert [L for _, _, L in Gx.nodes[hall]["door_distances"]] == [exact]
+
+
+def test_doors_in_sight_get_the_exact_distance():
+    """Without the partition the two doors see each other: the distance is the map-grid geodesic itself."""
+    seg = hall_with_partition(partition=False)
+    (hall,) = set(seg.doors[0].rooms) & set(seg.doors[1].rooms)
+    assert P._RoomSpace(P._Ctx(seg), hall).mask.size > P.EXACT_CELLS
+    (fast,) = P.room_distances(seg, hall).values()
+    (exact,) = P.room_distances(seg, hall, exact=True).values()
+    assert fast == pytest.approx(exact, rel=1e-9)
 
 
 def test_coarse_distances_of_a_real_map_within_tolerance(example):
