@@ -54,8 +54,8 @@ computed on a coarse grid, so that a room with many doors costs little:
   one.
 
 On the 28 images of the ipa benchmark this stays within 5.5 % of the
-map-grid geodesic for every door pair (mean +0.6 %, 95 % of the pairs within
-1.7 %; ``benchmarks/travel_accuracy.py`` measures it) at a small fraction of
+map-grid geodesic for every door pair (mean +0.5 %, 95 % of the pairs within
+1.5 %; ``benchmarks/travel_accuracy.py`` measures it) at a small fraction of
 its cost. ``exact=True`` gives the map-grid geodesic for every pair (one
 search per door over the whole room). The legs from a start or goal point
 to the doors of its room (:func:`plan_path`) are always measured on the
