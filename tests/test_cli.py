@@ -277,8 +277,59 @@ def test_segment_profile_prints_every_stage(tmp_path):
     r = CliRunner().invoke(main, ["segment", str(example_map_path()), "-o", str(tmp_path / "o"), "--profile"])
     assert r.exit_code == 0, r.output
     err = r.stderr if hasattr(r, "stderr") else r.output
-    for stage in ["load", "preprocess", "skeletons", "graphs", "doors", "rooms", "total", "room_graph", "write"]:
-        assert f"{stage} " in err, (stage, err)
+    for stage in ["start", "import", "warmup", "load", "preprocess", "skeletons", "graphs", "doors", "rooms", "total",
+                  "room_graph", "travel", "overlay", "write_labels", "write_graphml", "write_json", "write_geojson",
+                  "write_overlay", "write", "job"]:
+        assert f" {stage} " in err, (stage, err)
+    t = {k: int(v) for k, v in __import__("re").findall(r"(\w+) (\d+) ms", err)}
+    # the map's job is its stages: load, segmentation, room graph, then everything written
+    parts = t["load"] + t["total"] + t["room_graph"] + t["write"]
+    assert abs(t["job"] - parts) <= max(5, 0.05 * t["job"]), t  # ms rounding; nothing unaccounted
+    steps = t["travel"] + t["overlay"] + sum(v for k, v in t.items() if k.startswith("write_"))
+    assert steps <= t["write"] + 7, t
+
+
+def test_profile_start_and_import_once_per_batch(tmp_path):
+    a = png(tmp_path, "a.png", T.gray(T.two_rooms().array))
+    b = png(tmp_path, "b.png", T.gray(T.one_room().array))
+    r = invoke("segment", a, b, "-o", tmp_path / "out", "--profile")
+    assert r.exit_code == 0
+    lines = [ln for ln in stderr_lines(r) if " ms" in ln]
+    assert len(lines) == 2
+    assert " import " in lines[0] and " import " not in lines[1]
+    assert " job " in lines[0] and " job " in lines[1]
+
+
+@pytest.mark.parametrize("flags, absent", [(["--no-overlay"], {"overlay.png"}),
+                                           (["--no-geojson"], {"rooms.geojson"}),
+                                           (["--no-overlay", "--no-geojson"], {"overlay.png", "rooms.geojson"})])
+def test_optional_outputs_can_be_left_out(tmp_path, flags, absent):
+    out = tmp_path / "out"
+    r = invoke("segment", png(tmp_path, "m.png", T.gray(T.two_rooms().array)), "-o", out, *flags)
+    assert r.exit_code == 0, r.stderr
+    from topomap.batch import RECORD
+    from topomap.export import OUTPUT_FILES
+
+    every = set(OUTPUT_FILES.values()) | {RECORD}
+    assert {p.name for p in out.iterdir()} == every - absent
+    assert np.asarray(Image.open(out / "labels.png")).max() == 2
+
+
+def test_no_overlay_does_not_draw(tmp_path, monkeypatch):
+    def broken(seg, **kw):
+        raise OSError("no display")
+
+    monkeypatch.setattr("topomap.plot.overlay_png", broken)
+    r = invoke("segment", png(tmp_path, "m.png", T.gray(T.one_room().array)), "-o", tmp_path / "o", "--no-overlay")
+    assert r.exit_code == 0, r.stderr
+
+
+def test_overlay_is_the_map_size(tmp_path):
+    m = T.two_rooms().array
+    out = tmp_path / "out"
+    assert invoke("segment", png(tmp_path, "m.png", T.gray(m)), "-o", out).exit_code == 0
+    img = Image.open(out / "overlay.png")
+    assert img.size == (m.shape[1], m.shape[0])
 
 
 def test_package_functions_are_not_shadowed_by_submodules():

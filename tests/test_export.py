@@ -213,6 +213,7 @@ def test_failed_write_keeps_the_old_file(graph, tmp_path, monkeypatch, ext):
         raise OSError("disk full")
 
     monkeypatch.setattr(json, "dump", boom)
+    monkeypatch.setattr(json, "dumps", boom)  # the writers encode with json.dumps (the C encoder)
     monkeypatch.setattr(nx, "write_graphml", boom)
     with pytest.raises(OSError, match="disk full"):
         E.save_graph(nx.MultiGraph(), path)

@@ -376,3 +376,70 @@ def test_plan_on_example(example):
             # never shorter than the straight line between the waypoints
             wp = r["waypoints"]
             assert r["length"] >= np.hypot(*np.diff(wp, axis=0).T).sum() - 1e-6
+
+
+# --------------------------------------------------------------------------
+# Travel distances on the coarse grid against the map-grid geodesic
+# --------------------------------------------------------------------------
+
+#: The stated tolerance of the coarse travel distances (docs/graph-attributes.md).
+TRAVEL_TOLERANCE = 0.06
+
+
+def hall_with_partition(partition=True):
+    """A 6 m x 9 m hall between two small rooms, a one-cell partition wall
+    across most of the hall, doors on either side of the partition and far
+    apart: the hall is larger than planning.EXACT_CELLS, so its distances
+    come from the coarse grid."""
+    H, W, wall = 130, 200, 3
+    cells = np.full((H, W), OCCUPIED, np.int8)
+    cells[wall:H - wall, 40:160] = FREE                  # the hall
+    cells[wall:40, wall:37] = FREE                       # west room
+    cells[wall:40, 163:W - wall] = FREE                  # east room
+    if partition:
+        cells[wall:100, 99] = OCCUPIED                   # one-cell partition, open at the bottom
+    cells[10:26, 37:40] = FREE                           # door west (top of the hall, left of the partition)
+    cells[10:26, 160:163] = FREE                         # door east (right of the partition)
+    grid = OccupancyGrid(cells, RES, (0.0, 0.0, 0.0))
+    segs = [((9.0, 38.0), (26.0, 38.0)), ((9.0, 161.0), (26.0, 161.0))]
+    labels, doors, _ = cut_rooms(grid, segs)
+    return Segmentation(grid=grid, labels=labels, doors=doors, method="manual")
+
+
+def test_coarse_distance_goes_around_a_thin_partition():
+    seg = hall_with_partition()
+    (hall,) = set(seg.doors[0].rooms) & set(seg.doors[1].rooms)
+    assert seg.n_rooms == 3
+    ctx = P._Ctx(seg)
+    assert P._RoomSpace(ctx, hall).mask.size > P.EXACT_CELLS  # the coarse grid is used
+    (fast,) = P.room_distances(seg, hall).values()
+    (exact,) = P.room_distances(seg, hall, exact=True).values()
+    (x0, y0), (x1, y1) = seg.doors[0].midpoint, seg.doors[1].midpoint
+    assert exact > np.hypot(x1 - x0, y1 - y0) + 4.0  # the way is down around the partition and back up
+    assert fast == pytest.approx(exact, rel=TRAVEL_TOLERANCE)
+    G = P.travel_graph(seg)
+    assert [L for _, _, L in G.nodes[hall]["door_distances"]] == [fast]
+    Gx = P.travel_graph(seg, exact=True)
+    assert [L for _, _, L in Gx.nodes[hall]["door_distances"]] == [exact]
+
+
+def test_doors_in_sight_get_the_exact_distance():
+    """Without the partition the two doors see each other: the distance is the map-grid geodesic itself."""
+    seg = hall_with_partition(partition=False)
+    (hall,) = set(seg.doors[0].rooms) & set(seg.doors[1].rooms)
+    assert P._RoomSpace(P._Ctx(seg), hall).mask.size > P.EXACT_CELLS
+    (fast,) = P.room_distances(seg, hall).values()
+    (exact,) = P.room_distances(seg, hall, exact=True).values()
+    assert fast == pytest.approx(exact, rel=1e-9)
+
+
+def test_coarse_distances_of_a_real_map_within_tolerance(example):
+    exact_pairs = 0
+    for r in example.room_graph.nodes:
+        fast = P.room_distances(example, r)
+        exact = P.room_distances(example, r, exact=True)
+        assert set(fast) == set(exact)
+        for k, L in exact.items():
+            assert fast[k] == pytest.approx(L, rel=TRAVEL_TOLERANCE), (r, k)
+            exact_pairs += 1
+    assert exact_pairs > 0

@@ -92,8 +92,13 @@ INCOMPLETE, COMPLETE = "incomplete", "complete"
 #: Seconds between two rewrites of ``summary.csv`` while a batch runs.
 SUMMARY_EVERY = 10.0
 
-_STAGES = ("load", "preprocess", "skeletons", "graphs", "doors", "rooms", "segment", "total",
-           "room_graph", "write")
+#: Stages of a map's job in their order (``t_<stage>`` columns, ``--profile``): ``total`` is the
+#: segmentation call (its stages before it); ``write`` is travel distances, overlay and every
+#: ``write_<file>``; ``job`` is the map from loading to the last file; ``start``, ``import`` and
+#: ``warmup`` are the command's own, before the first map.
+_STAGES = ("start", "import", "warmup", "load", "preprocess", "walls", "skeletons", "graphs", "doors", "openings",
+           "rooms", "segment", "total", "room_graph", "travel", "overlay", "write_labels", "write_label_map_pgm",
+           "write_label_map", "write_graphml", "write_json", "write_geojson", "write_overlay", "write", "job")
 
 
 # --------------------------------------------------------------------------

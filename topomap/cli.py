@@ -56,34 +56,108 @@ def main(debug, verbose):
     logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
 
 
-def write_segmentation(seg, outdir, *, overlay: bool = True, skeletons: bool = False) -> dict:
+def write_segmentation(seg, outdir, *, overlay: bool = True, skeletons: bool = False, geojson: bool = True,
+                       timings: dict | None = None) -> dict:
     """The files ``topomap segment`` writes for ``seg`` into ``outdir``.
 
     Computes what is saved — the travel graph
     (:func:`topomap.planning.travel_graph`: the room–door graph with
     in-room door-to-door distances, so ``topomap plan`` works from
-    ``rooms.graphml`` or ``rooms.json`` alone) and the overlay picture
-    (:func:`topomap.plot.overlay_png`) — then writes everything with
-    :func:`topomap.export.write_outputs` (all files or none).
+    ``rooms.graphml`` or ``rooms.json`` alone) and, unless ``overlay`` is
+    False, the overlay picture (:func:`topomap.plot.overlay_png`) — then
+    writes everything with :func:`topomap.export.write_outputs` (all files
+    or none; ``rooms.geojson`` only when ``geojson``).
+
+    ``timings``, when given, receives the seconds of each step: ``travel``,
+    ``overlay`` and ``write_<file>`` per file.
 
     Returns
     -------
     dict
         ``{name: path}`` of the files written.
     """
+    import time
+
     from .export import write_outputs
     from .planning import travel_graph
 
+    t = {} if timings is None else timings
+    t0 = time.perf_counter()
     G = travel_graph(seg)
+    t["travel"] = time.perf_counter() - t0
     png = None
     if overlay:
         from .plot import overlay_png
 
+        t0 = time.perf_counter()
         png = overlay_png(seg, skeletons=skeletons)
-    return write_outputs(seg, outdir, G, overlay_png=png)
+        t["overlay"] = time.perf_counter() - t0
+    return write_outputs(seg, outdir, G, overlay_png=png, geojson=geojson, timings=t)
 
 
-def _segment_one(path, outdir, resolution, method, skeletons, topic=None, at=None, bag=None, previous=None):
+#: Modules the segment command uses, imported up front (their import time is the
+#: ``import`` stage of ``--profile``, not hidden in the first map's stages).
+_PRELOAD = ("numpy", "scipy.ndimage", "scipy.sparse.csgraph", "scipy.spatial", "cv2", "PIL.Image",
+            "PIL.PngImagePlugin", "yaml", "networkx", "shapely", "shapely.geometry", "shapely.ops", "skimage.draw",
+            "skimage.graph", "skimage.morphology", "skimage.segmentation", "topomap.io", "topomap.segmentation",
+            "topomap.roomgraph", "topomap.planning", "topomap.export", "topomap.plot")
+
+
+def _preload() -> float:
+    """Import :data:`_PRELOAD`; returns the seconds it took."""
+    import importlib
+    import time
+
+    t0 = time.perf_counter()
+    for name in _PRELOAD:
+        importlib.import_module(name)
+    return time.perf_counter() - t0
+
+
+def _warm_up(method) -> float:
+    """Run the whole job once on a tiny map in memory (nothing written); returns the seconds.
+
+    First calls pay one-off costs (lazy imports inside libraries, caches,
+    font set-up); paid here they are the ``warmup`` stage of ``--profile``
+    instead of hiding in the first map's stages.
+    """
+    import time
+
+    import numpy as np
+
+    from .io import from_array
+    from .planning import travel_graph
+    from .plot import overlay_png
+    from .segmentation import segment
+
+    t0 = time.perf_counter()
+    free = np.zeros((60, 100), bool)
+    free[4:56, 4:48] = True
+    free[4:56, 52:96] = True
+    free[24:36, 48:52] = True
+    seg = segment(from_array(free, resolution=0.05), method=method)
+    seg.room_graph
+    travel_graph(seg)
+    overlay_png(seg)
+    return time.perf_counter() - t0
+
+
+def _process_age() -> float | None:
+    """Seconds since this process started (Linux ``/proc``), or None."""
+    import os
+
+    try:
+        with open("/proc/self/stat") as fh:
+            start = int(fh.read().rsplit(")", 1)[1].split()[19])
+        with open("/proc/uptime") as fh:
+            up = float(fh.read().split()[0])
+        return max(up - start / os.sysconf("SC_CLK_TCK"), 0.0)
+    except (OSError, ValueError, IndexError):
+        return None
+
+
+def _segment_one(path, outdir, resolution, method, skeletons, topic=None, at=None, bag=None, previous=None,
+                 overlay=True, geojson=True):
     import time
 
     from . import io
@@ -97,9 +171,9 @@ def _segment_one(path, outdir, resolution, method, skeletons, topic=None, at=Non
     grid = io.load_map(path, resolution=resolution, topic=topic, time=at)
     t1 = time.perf_counter()
     seg = segment(grid, method=method, previous=previous)
-    t2 = time.perf_counter()
     seg.room_graph  # built here so its time is its own stage (timings["room_graph"])
-    write_segmentation(seg, outdir, skeletons=skeletons)
+    t2 = time.perf_counter()
+    write_segmentation(seg, outdir, skeletons=skeletons, overlay=overlay, geojson=geojson, timings=seg.timings)
     if bag is not None:
         from .ros import write_bag
 
@@ -110,7 +184,8 @@ def _segment_one(path, outdir, resolution, method, skeletons, topic=None, at=Non
         with io.atomic_write(Path(outdir) / "changes.json", "w") as fh:
             json.dump(seg.changes.as_dict(), fh, indent=1)
     seg.timings["load"] = t1 - t0
-    seg.timings["write"] = time.perf_counter() - t2 - seg.timings.get("room_graph", 0.0)
+    seg.timings["write"] = time.perf_counter() - t2
+    seg.timings["job"] = time.perf_counter() - t0
     return seg
 
 
@@ -137,11 +212,12 @@ def _summary(row) -> str:
 
 
 def _print_profile(path, row):
-    """One line per stage on stderr: where the time of a map went."""
-    from .batch import _columns
+    """One line per stage on stderr (``row``: a summary row, ``t_<stage>`` seconds): where the time of a map went."""
+    from .batch import _STAGES
 
-    stages = [k for k in _columns([row]) if k.startswith("t_") and row.get(k) is not None]
-    click.echo(f"{path}: " + ", ".join(f"{k[2:]} {row[k] * 1000:.0f} ms" for k in stages), err=True)
+    t = {k[2:]: v for k, v in row.items() if k.startswith("t_") and v is not None and v == v}
+    stages = [k for k in _STAGES if k in t] + sorted(k for k in t if k not in _STAGES)
+    click.echo(f"{path}: " + ", ".join(f"{k} {t[k] * 1000:.0f} ms" for k in stages), err=True)
 
 
 def _report_failure(row) -> int:
@@ -170,8 +246,11 @@ def _report_failure(row) -> int:
 @click.option("--method", type=click.Choice(_method_names()), default=None,
               help="Segmentation method (default: the library's default).")
 @click.option("--skeletons", is_flag=True, help="Draw both skeleton graphs in overlay.png.")
+@click.option("--no-overlay", "no_overlay", is_flag=True, help="Do not draw or write overlay.png (batch runs).")
+@click.option("--no-geojson", "no_geojson", is_flag=True, help="Do not write rooms.geojson.")
 @click.option("--profile", is_flag=True,
-              help="Print the time of every stage (load, segmentation stages, room graph, write) on stderr.")
+              help="Print the time of every stage (start, imports, warm-up, load, segmentation stages, room "
+                   "graph, travel distances, overlay, each file written) on stderr.")
 @click.option("--topic", default=None, metavar="TOPIC",
               help="Bag maps: the nav_msgs/OccupancyGrid topic (default: the bag's only one).")
 @click.option("--time", "at", type=float, default=None, metavar="SECONDS",
@@ -190,8 +269,8 @@ def _report_failure(row) -> int:
 @click.option("--previous", type=click.Path(path_type=Path), default=None, metavar="GRAPH",
               help="Room graph of an earlier map of the same place (rooms.graphml, .json or .geojson): "
                    "rooms keep its IDs and names; writes changes.json.")
-def segment_cmd(maps, outdir, resolution, method, skeletons, profile, topic, at, bag, jobs, scheduler, overwrite,
-                previous):
+def segment_cmd(maps, outdir, resolution, method, skeletons, no_overlay, no_geojson, profile, topic, at, bag, jobs,
+                scheduler, overwrite, previous):
     """Segment MAP files (ROS YAML, PGM, PNG or a ROS bag) into rooms and doors.
 
     Writes labels.png (16-bit, 0 = not a room), labels.pgm + labels.yaml
@@ -203,6 +282,15 @@ def segment_cmd(maps, outdir, resolution, method, skeletons, profile, topic, at,
     """
     from .batch import ERROR, FAILED, OK, SKIPPED, segment_many
     from .errors import ParameterError
+
+    start = _process_age()
+    imported = _preload()
+    warm = None
+    if profile:  # one-off first-call costs as a stage of their own, not inside the first map's
+        try:
+            warm = _warm_up(method)
+        except Exception:  # noqa: BLE001 - a failed warm-up only leaves those costs in the first map
+            warm = None
 
     if resolution is not None and not resolution > 0:
         sys.exit(_fail(ParameterError(f"--resolution must be > 0 m/px, got {resolution!r}")))
@@ -228,7 +316,9 @@ def segment_cmd(maps, outdir, resolution, method, skeletons, profile, topic, at,
         batch_log.setLevel(logging.INFO)  # no progress bar: a line per map
     try:
         extra = {k: v for k, v in (("topic", topic), ("at", at), ("bag", None if bag is None else str(bag)),
-                                   ("previous", None if previous is None else str(previous))) if v is not None}
+                                   ("previous", None if previous is None else str(previous)),
+                                   ("overlay", False if no_overlay else None),
+                                   ("geojson", False if no_geojson else None)) if v is not None}
         rows = segment_many(maps, outdir, jobs=jobs, scheduler=scheduler, overwrite=overwrite,
                             resolution=resolution, method=method, skeletons=skeletons, write_options=extra)
     except Exception as exc:  # noqa: BLE001 - nothing ran
@@ -240,6 +330,9 @@ def segment_cmd(maps, outdir, resolution, method, skeletons, profile, topic, at,
             continue
         log.info("%s: %d rooms, %d doors -> %s", row["map"], row["rooms"], row["doors"], row["output"])
         if profile:
+            if imported is not None:  # the process's start and imports: once, with the first map
+                row = dict(row, t_start=start, t_import=imported, t_warmup=warm)
+                imported = None
             _print_profile(row["map"], row)
         if not many:
             done = " (up to date, skipped)" if row["status"] == SKIPPED else ""

@@ -36,6 +36,7 @@ and never clobbers an earlier output.
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -65,7 +66,7 @@ def save_labels(labels: np.ndarray, path) -> Path:
         raise ValueError(f"{path}: {int(labels.max())} rooms do not fit a 16-bit PNG")
     img = Image.fromarray(labels.astype(np.uint16))
     with atomic_write(path) as fh:
-        img.save(fh, format="PNG")
+        img.save(fh, format="PNG", compress_level=1)  # fast zlib level: label images compress well anyway
     return Path(path)
 
 
@@ -75,11 +76,22 @@ def save_labels(labels: np.ndarray, path) -> Path:
 
 def _num(v) -> str:
     """Shortest decimal that reads back as exactly ``v`` (no exponent)."""
-    return np.format_float_positional(float(v), unique=True, trim="-")
+    t = repr(float(v))  # shortest round-trip decimal; positional unless tiny or huge
+    if "e" in t or "n" in t:
+        return np.format_float_positional(float(v), unique=True, trim="-")
+    return t[:-2] if t.endswith(".0") else t
+
+
+_POINT_ZERO = re.compile(r"\.0(?=[ ,)]|$)")
 
 
 def _ring(coords) -> str:
-    return "(" + ", ".join(f"{_num(c[0])} {_num(c[1])}" for c in coords) + ")"
+    vals = np.asarray(coords, float).reshape(-1).tolist()  # 2-D only: geometry with z goes to shapely.to_wkt
+    toks = list(map(repr, vals))
+    if any("e" in t or "n" in t for t in toks):
+        toks = [_num(v) for v in vals]
+    text = ", ".join(map(" ".join, zip(toks[::2], toks[1::2])))
+    return "(" + _POINT_ZERO.sub("", text) + ")"
 
 
 def _poly_wkt(p) -> str:
@@ -347,9 +359,9 @@ def node_link(G: nx.Graph) -> dict:
 
 def save_json(G: nx.Graph, path) -> Path:
     """Write the room graph as node-link JSON (atomically); see :func:`node_link`."""
-    data = node_link(G)
+    text = json.dumps(node_link(G))  # compact: json's C encoder (indent or json.dump would use the Python one)
     with atomic_write(path, "w") as fh:
-        json.dump(data, fh, indent=1)
+        fh.write(text)
     return Path(path)
 
 
@@ -403,15 +415,13 @@ def to_geojson(G: nx.Graph) -> dict:
         ``properties`` say so in ``"coordinate_system"``
         (:data:`GEOJSON_COORDINATES`).
     """
-    from shapely.geometry import mapping
-
     feats = []
     for n, d in G.nodes(data=True):
         geom = d.get("polygon")
         props = {"kind": "room", "room": _plain(n)}
         props.update({k: _plain(v) for k, v in d.items() if k != "polygon"})
         feats.append({"type": "Feature", "id": f"room-{n}",
-                      "geometry": _plain_geom(mapping(geom)) if geom is not None else None,
+                      "geometry": _geom_json(geom) if geom is not None else None,
                       "properties": props})
     edges = G.edges(keys=True, data=True) if G.is_multigraph() else ((u, v, None, d) for u, v, d in G.edges(data=True))
     for u, v, k, d in edges:
@@ -424,6 +434,22 @@ def to_geojson(G: nx.Graph) -> dict:
     props = {"coordinate_system": GEOJSON_COORDINATES}
     props.update({k: _plain(v) for k, v in G.graph.items()})
     return {"type": "FeatureCollection", "properties": props, "features": feats}
+
+
+def _geom_json(geom) -> dict:
+    """GeoJSON geometry of a shapely geometry: plain lists of floats (exact values)."""
+    t = geom.geom_type
+
+    def rings(p):
+        return [np.asarray(r.coords, float).tolist() for r in [p.exterior, *p.interiors]]
+
+    if t == "Polygon" and not geom.is_empty:
+        return {"type": "Polygon", "coordinates": rings(geom)}
+    if t == "MultiPolygon" and not geom.is_empty:
+        return {"type": "MultiPolygon", "coordinates": [rings(p) for p in geom.geoms]}
+    from shapely.geometry import mapping
+
+    return _plain_geom(mapping(geom))
 
 
 def _plain_geom(m):
@@ -480,9 +506,9 @@ def from_geojson(data: dict, name: str = "<geojson>") -> nx.MultiGraph:
 
 def save_geojson(G: nx.Graph, path) -> Path:
     """Write :func:`to_geojson` of ``G`` to ``path`` (atomically)."""
-    data = to_geojson(G)
+    text = json.dumps(to_geojson(G))
     with atomic_write(path, "w") as fh:
-        json.dump(data, fh)
+        fh.write(text)
     return Path(path)
 
 
@@ -702,7 +728,8 @@ OUTPUT_FILES = {"labels": "labels.png", "label_map_pgm": "labels.pgm", "label_ma
                 "overlay": "overlay.png"}
 
 
-def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None) -> dict:
+def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None, geojson: bool = True,
+                  timings: dict | None = None) -> dict:
     """Write ``labels.png``, ``labels.pgm`` + ``labels.yaml``, ``rooms.graphml``, ``rooms.json``,
     ``rooms.geojson`` and ``overlay.png``.
 
@@ -723,6 +750,11 @@ def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None) -> di
     overlay_png : bytes, optional
         PNG content of ``overlay.png`` (:func:`topomap.plot.overlay_png`);
         None writes no overlay.
+    geojson : bool
+        Also write ``rooms.geojson``.
+    timings : dict, optional
+        When given, the seconds each file took are stored in it as
+        ``write_<name>`` (``write_labels``, ``write_graphml``, ...).
 
     Returns
     -------
@@ -736,20 +768,41 @@ def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None) -> di
 
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
+    import time
+
     names = dict(OUTPUT_FILES)
+    if not geojson:
+        del names["geojson"]
     if overlay_png is None:
         del names["overlay"]
+    scalar = {}
+
+    def plain():  # the GraphML scalars, encoded once for both GraphML and JSON (encoding them again is a no-op)
+        if not scalar:
+            scalar["G"] = to_graphml_graph(graph)
+        return scalar["G"]
+
+    label_map = {}
+
+    def map_pair():  # labels.pgm and labels.yaml, made once
+        if not label_map:
+            label_map["pgm"], label_map["yaml"] = label_map_bytes(seg, names["label_map_pgm"],
+                                                                  name=str(outdir / names["label_map"]))
+        return label_map
+
+    writers = {"labels": lambda p: save_labels(seg.labels, p),
+               "label_map_pgm": lambda p: save_bytes(map_pair()["pgm"], p),
+               "label_map": lambda p: save_bytes(map_pair()["yaml"], p),
+               "graphml": lambda p: save_graphml(plain(), p),
+               "json": lambda p: save_json(plain(), p), "geojson": lambda p: save_geojson(graph, p),
+               "overlay": lambda p: save_bytes(overlay_png, p)}
     with ExitStack() as stack:  # on success renames every temporary file; on error removes them all
         tmp = {k: stack.enter_context(atomic_write(outdir / f, None)) for k, f in names.items()}
-        save_labels(seg.labels, tmp["labels"])
-        pgm, yml = label_map_bytes(seg, names["label_map_pgm"], name=str(outdir / names["label_map"]))
-        save_bytes(pgm, tmp["label_map_pgm"])
-        save_bytes(yml, tmp["label_map"])
-        save_graphml(graph, tmp["graphml"])
-        save_json(graph, tmp["json"])
-        save_geojson(graph, tmp["geojson"])
-        if overlay_png is not None:
-            save_bytes(overlay_png, tmp["overlay"])
+        for k in names:
+            t = time.perf_counter()
+            writers[k](tmp[k])
+            if timings is not None:
+                timings[f"write_{k}"] = time.perf_counter() - t
     return {k: outdir / f for k, f in names.items()}
 
 

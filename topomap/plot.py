@@ -1,9 +1,15 @@
 """Pictures: the map with rooms coloured, doors, skeleton graphs, routes.
 
-Each function draws on a matplotlib ``Axes`` (a new figure when ``ax`` is
-None) and returns the ``Axes``, so they combine in a notebook with one call
-each. Images are drawn in map-frame metres (``extent`` from the grid), so
-world coordinates (door midpoints, plans) can be drawn on top directly.
+Each ``plot_*`` function draws on a matplotlib ``Axes`` (a new figure when
+``ax`` is None) and returns the ``Axes``, so they combine in a notebook with
+one call each. Images are drawn in map-frame metres (``extent`` from the
+grid), so world coordinates (door midpoints, plans) can be drawn on top
+directly.
+
+:func:`overlay_image` / :func:`overlay_png` draw the same picture straight
+into a raster at the map's own resolution with OpenCV (one pixel per map
+cell; tens of milliseconds even for large maps): the ``overlay.png`` of
+``topomap segment``.
 """
 
 from __future__ import annotations
@@ -11,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["plot_map", "plot_rooms", "plot_doors", "plot_skeletons", "plot_room_graph",
-           "plot_route", "plot_segmentation", "save_overlay", "room_colors"]
+           "plot_route", "plot_segmentation", "save_overlay", "room_colors", "overlay_image", "overlay_png"]
 
 
 def _ax(ax, figsize=(8, 8)):
@@ -33,11 +39,8 @@ def _extent(grid):
 def room_colors(n: int, seed: int = 7) -> np.ndarray:
     """(n + 1, 4) RGBA colours: index 0 transparent, rooms in distinct pastel hues."""
     rng = np.random.default_rng(seed)
-    import matplotlib.colors as mc
-
     hues = (np.arange(n) * 0.618033988749895 + rng.random()) % 1.0
-    hsv = np.stack([hues, np.full(n, 0.55), np.full(n, 0.95)], 1)
-    rgb = mc.hsv_to_rgb(hsv) if n else np.zeros((0, 3))
+    rgb = _hsv_to_rgb(hues, np.full(n, 0.55), np.full(n, 0.95)) if n else np.zeros((0, 3))
     out = np.zeros((n + 1, 4))
     out[1:, :3] = rgb
     out[1:, 3] = 1.0
@@ -172,10 +175,150 @@ def save_overlay(seg, path, *, skeletons: bool = False, graph: bool = False, dpi
     return path
 
 
-def overlay_png(seg, *, skeletons: bool = False, graph: bool = False, dpi: int = 150) -> bytes:
-    """:func:`save_overlay` as PNG bytes (the ``overlay.png`` of ``topomap segment``)."""
+def _hsv_to_rgb(h, s, v):
+    """HSV in [0, 1] to RGB in [0, 1] (arrays), as matplotlib.colors.hsv_to_rgb."""
+    i = np.floor(h * 6.0).astype(int) % 6
+    f = h * 6.0 - np.floor(h * 6.0)
+    p, q, t = v * (1 - s), v * (1 - s * f), v * (1 - s * (1 - f))
+    r = np.choose(i, [v, q, p, p, t, v])
+    g = np.choose(i, [t, v, v, q, p, p])
+    b = np.choose(i, [p, p, t, v, v, q])
+    return np.stack([r, g, b], -1)
+
+
+#: Palette of the overlay: free, unknown, occupied (walls), door, free skeleton, occupied
+#: skeleton, room graph, number box; then fragments and rooms (RGB).
+_PALETTE = ((255, 255, 255), (191, 191, 191), (0, 0, 0), (255, 0, 0), (50, 205, 50), (255, 0, 255),
+            (0, 0, 128), (235, 235, 235))
+_FREE, _UNKNOWN, _WALL, _DOOR, _FREE_SKEL, _OCC_SKEL, _GRAPH, _BOX = range(8)
+#: Colours available for rooms in the 256-colour overlay; further rooms reuse them in turn.
+_ROOM_COLOURS = 256 - len(_PALETTE) - 1
+
+
+def _overlay_indexed(seg, skeletons=False, graph=False, alpha=0.75):
+    """(M, N) uint8 palette indices and the (K, 3) uint8 RGB palette of the overlay."""
+    import cv2
+
+    grid = seg.grid
+    H, W = grid.shape
+    n, nf = seg.n_rooms, seg.n_fragments
+    k = min(n, _ROOM_COLOURS)
+    first = len(_PALETTE) + 1  # palette index of room 1; fragments just before
+    colours = np.vstack([np.asarray(FRAGMENT_COLOR[:3])[None], room_colors(k)[1:, :3]])
+    palette = np.vstack([np.asarray(_PALETTE, float),
+                         np.rint(255 * (alpha * colours + (1 - alpha)))]).astype(np.uint8)  # rooms over white
+    lut = np.empty(n + nf + 1, np.uint8)
+    lut[0] = _FREE
+    lut[1:n + 1] = first + (np.arange(n) % max(k, 1))
+    lut[n + 1:] = first - 1
+    labels = np.asarray(seg.labels)
+    idx = np.take(lut, np.clip(labels, 0, n + nf))
+    off = labels == 0
+    cells = grid.cells
+    from .io import FREE, OCCUPIED
+
+    idx[off & (cells == OCCUPIED)] = _WALL
+    idx[off & (cells != OCCUPIED) & (cells != FREE)] = _UNKNOWN
+    t = max(1, int(round(min(H, W) / 400)))  # line width in pixels
+    if skeletons:
+        for G, col in ((seg.free_graph, _FREE_SKEL), (seg.occupied_graph, _OCC_SKEL)):
+            if G is None:
+                continue
+            paths = [np.asarray(d["path"])[:, ::-1].astype(np.int32).reshape(-1, 1, 2)
+                     for _, _, d in G.edges(data=True) if len(d["path"])]
+            cv2.polylines(idx, paths, False, col, max(1, t // 2))
+    for d in seg.doors:
+        p = tuple(int(v) for v in np.rint(d.p1[::-1]))
+        q = tuple(int(v) for v in np.rint(d.p2[::-1]))
+        cv2.line(idx, p, q, _DOOR, t + 1)
+    if n == 0:
+        return idx, palette
+    G = seg.room_graph
+    if graph:
+        for a, b, d in G.edges(data=True):
+            pts = [(G.nodes[a]["row"], G.nodes[a]["col"]), tuple(np.mean([d["p1"], d["p2"]], 0)),
+                   (G.nodes[b]["row"], G.nodes[b]["col"])]
+            pts = np.rint(np.asarray(pts)[:, ::-1]).astype(np.int32).reshape(-1, 1, 2)
+            cv2.polylines(idx, [pts], False, _GRAPH, t)
+        for i in G.nodes:
+            if G.degree(i) or G.nodes[i]["area"] >= 1.0:
+                cv2.circle(idx, (int(round(G.nodes[i]["col"])), int(round(G.nodes[i]["row"]))), 2 * t + 1, _GRAPH, -1)
+    scale = max(0.35, min(H, W) / 1600)
+    th = max(1, int(round(scale * 1.5)))
+    font = cv2.FONT_HERSHEY_SIMPLEX
+    for i in G.nodes:
+        if G.nodes[i]["area"] < 1.0:
+            continue
+        text = str(i)
+        (tw, tht), below = cv2.getTextSize(text, font, scale, th)
+        x0 = int(round(G.nodes[i]["col"])) - tw // 2
+        y0 = int(round(G.nodes[i]["row"])) + tht // 2
+        cv2.rectangle(idx, (x0 - 2, y0 - tht - 2), (x0 + tw + 1, y0 + below - 1), _BOX, -1)
+        # the glyphs into their own mask (text may be drawn antialiased), then set in one colour
+        r0, c0 = max(y0 - tht - 2, 0), max(x0 - 2, 0)
+        sub = idx[r0:max(y0 + below, 0), c0:max(x0 + tw + 2, 0)]
+        mask = np.zeros(sub.shape, np.uint8)
+        cv2.putText(mask, text, (x0 - c0, y0 - r0), font, scale, 255, th, cv2.LINE_8)
+        sub[mask > 127] = _WALL
+    return idx, palette
+
+
+def overlay_image(seg, *, skeletons: bool = False, graph: bool = False, alpha: float = 0.75) -> np.ndarray:
+    """The segmentation drawn into an RGB raster at the map's own resolution.
+
+    Rooms coloured (:func:`room_colors`, fragments in
+    :data:`FRAGMENT_COLOR`; beyond 247 rooms colours are reused) over the
+    map (free white, unknown grey, walls black), doors as red lines, room
+    IDs at the centroids of rooms of at least 1 m², optionally both skeleton
+    graphs (free space green, occupied space magenta) and the room graph
+    (centroids joined through door midpoints, navy). Drawn with OpenCV in
+    256 colours: no matplotlib figure.
+
+    Parameters
+    ----------
+    seg : Segmentation
+    skeletons, graph : bool
+        Also draw the skeleton graphs / the room graph.
+    alpha : float
+        Opacity of the room colours over the white of free space.
+
+    Returns
+    -------
+    (M, N, 3) ndarray of uint8
+        RGB, one pixel per map cell, the map image's orientation (row 0 at
+        the top).
+    """
+    idx, palette = _overlay_indexed(seg, skeletons, graph, alpha)
+    return palette[idx]
+
+
+def overlay_png(seg, *, skeletons: bool = False, graph: bool = False, dpi: int | None = None) -> bytes:
+    """PNG bytes of the overlay picture (the ``overlay.png`` of ``topomap segment``).
+
+    Parameters
+    ----------
+    seg : Segmentation
+    skeletons, graph : bool
+        Also draw the skeleton graphs / the room graph.
+    dpi : int, optional
+        None (default): :func:`overlay_image`, one pixel per map cell, drawn
+        with OpenCV, saved as a 256-colour PNG. A number: the matplotlib figure of :func:`save_overlay`
+        at that resolution (axes in metres, title; much slower).
+
+    Returns
+    -------
+    bytes
+    """
     import io
 
     buf = io.BytesIO()
-    save_overlay(seg, buf, skeletons=skeletons, graph=graph, dpi=dpi)
+    if dpi is not None:
+        save_overlay(seg, buf, skeletons=skeletons, graph=graph, dpi=dpi)
+        return buf.getvalue()
+    from PIL import Image
+
+    idx, palette = _overlay_indexed(seg, skeletons, graph)
+    img = Image.fromarray(idx, "P")
+    img.putpalette(palette.ravel().tolist())
+    img.save(buf, format="PNG", compress_level=1)
     return buf.getvalue()

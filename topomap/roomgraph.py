@@ -43,8 +43,8 @@ def room_polygons(labels: np.ndarray, to_world=None) -> dict:
             continue
         r0, c0 = sl[0].start, sl[1].start
         m = (labels[sl] == i).astype(np.uint8)
-        # upsample x2 so contours run along cell edges rather than centres
-        m2 = np.kron(m, np.ones((2, 2), np.uint8))
+        # upsample x2 so contours run along cell edges rather than centres (nearest: each cell 2 x 2)
+        m2 = cv2.resize(m, (2 * m.shape[1], 2 * m.shape[0]), interpolation=cv2.INTER_NEAREST)
         m2 = np.pad(m2, 1)
         contours, hier = cv2.findContours(m2, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_SIMPLE)
         polys = []
@@ -115,11 +115,14 @@ def room_graph(seg) -> nx.MultiGraph:
                       n_fragments=int(seg.n_fragments), fragment_area=float(seg.fragment_area))
     if n == 0:
         return G
-    flat = labels.ravel()
-    cnt = np.bincount(flat, minlength=n + 1).astype(float)
-    rr, cc = np.indices(labels.shape)
-    sr = np.bincount(flat, weights=rr.ravel(), minlength=n + 1)
-    sc = np.bincount(flat, weights=cc.ravel(), minlength=n + 1)
+    # cell counts and row / column sums per room, from each room's bounding box (exact integer sums)
+    cnt, sr, sc = np.zeros(n + 1), np.zeros(n + 1), np.zeros(n + 1)
+    for i, sl in enumerate(ndi.find_objects(labels, max_label=n), start=1):
+        if sl is not None:
+            m = labels[sl] == i
+            cnt[i] = np.count_nonzero(m)
+            sr[i] = float(m.sum(1) @ np.arange(sl[0].start, sl[0].stop))
+            sc[i] = float(m.sum(0) @ np.arange(sl[1].start, sl[1].stop))
     polys = room_polygons(labels, grid.pixel_to_world)
     area_cell = grid.resolution ** 2
     for i in range(1, n + 1):
