@@ -186,7 +186,10 @@ is shipped with topomap. The script runs `topomap.benchmark.run_benchmark`,
 the code behind `topomap benchmark`, saves the per-map rows in `results/`
 and prints this page; `--from-csv` re-renders it from saved rows.) The
 only other figures are other methods' reference figures, quoted from their
-sources and labelled with the protocol they were measured with.
+sources and labelled with the protocol they were measured with, and the
+sections after the real maps' (method changes, speed of the whole job,
+batches, room identities, tours), each written by its own script in
+`benchmarks/` with its command and the commit it measured.
 
 - Code: commit `{meta["commit"]}`{dirty}.
 - Run: {meta["start"]} to {meta["end"]} (UTC); load average before
