@@ -150,6 +150,55 @@ def _face_runs(faces, start, d, n, offsets) -> bool:
     return bool((faces[rr, cc] & inside).any(axis=0).mean() >= 0.7)
 
 
+def _gaps(obstacle, free, segs, back, n_gap, offsets, min_gap_px, max_gap_px, chunk: int = 1024):
+    """The gaps past the ends of the wall segments ``segs``, in the order of
+    the segments (each segment's second end first): ``(end, d, s0, e0)``
+    with the end point, the outward direction and the indices of the first
+    free sample and of the first obstacle sample after it (sample ``i`` at
+    ``end + (i - back) * d``). Only gaps that start within the wall piece's
+    last cells, are ``min_gap_px``-``max_gap_px`` long and free along at
+    least half their line are given. Vectorised over the ends, ``chunk``
+    ends at a time."""
+    segs = np.asarray(segs, float).reshape(-1, 4)
+    a, b = segs[:, :2], segs[:, 2:]
+    L = np.hypot(*(b - a).T)
+    a, b, L = a[L > 0], b[L > 0], L[L > 0]
+    u = (b - a) / L[:, None]
+    ends = np.stack([b, a], 1).reshape(-1, 2)
+    dirs = np.stack([u, -u], 1).reshape(-1, 2)
+    H, W = obstacle.shape
+    t = np.arange(1, n_gap + 1, dtype=float)
+    o = np.asarray(offsets, float)
+    centre = o.size // 2
+    idx = np.arange(n_gap)
+    for k in range(0, ends.shape[0], chunk):
+        E, D = ends[k:k + chunk], dirs[k:k + chunk]
+        start = E - (back + 1) * D
+        perp = np.stack([-D[:, 1], D[:, 0]], 1)
+        pts = (start[:, None, None, :] + t[None, None, :, None] * D[:, None, None, :]
+               + o[None, :, None, None] * perp[:, None, None, :])
+        r = np.rint(pts[..., 0]).astype(int)
+        c = np.rint(pts[..., 1]).astype(int)
+        inside = (r >= 0) & (r < H) & (c >= 0) & (c < W)
+        r, c = np.clip(r, 0, H - 1), np.clip(c, 0, W - 1)
+        hit = (obstacle[r, c] & inside).any(axis=1)
+        clear = ~hit
+        s0 = np.argmax(clear, axis=1)
+        ok = clear.any(axis=1) & (s0 != 0) & (s0 <= back + 2)
+        after = hit & (idx[None, :] >= s0[:, None])
+        e0 = np.argmax(after, axis=1)
+        ok &= after.any(axis=1)
+        gap = e0 - s0 + 1
+        ok &= (gap >= min_gap_px) & (gap <= max_gap_px)
+        lf = free[r[:, centre], c[:, centre]] & inside[:, centre]
+        cs = np.concatenate([np.zeros((lf.shape[0], 1), int), np.cumsum(lf, axis=1)], axis=1)
+        rows = np.arange(lf.shape[0])
+        n_free = cs[rows, e0] - cs[rows, s0]
+        ok &= n_free >= 0.5 * np.maximum(e0 - s0, 1)
+        for i in np.flatnonzero(ok):
+            yield E[i], D[i], int(s0[i]), int(e0[i])
+
+
 def wall_openings(obstacle: np.ndarray, free: np.ndarray, *, min_wall_px: float, min_gap_px: float,
                   max_gap_px: float, side_px: float, depth_px: float = 0.0, band_px: int = 1,
                   faces: np.ndarray | None = None, lines: np.ndarray | None = None,
@@ -214,55 +263,30 @@ def wall_openings(obstacle: np.ndarray, free: np.ndarray, *, min_wall_px: float,
     n_gap = int(np.ceil(max_gap_px)) + back + 1
     n_side = max(int(np.ceil(side_px)), 1)
     offsets = np.arange(-band_px, band_px + 1)
-    centre = offsets.size // 2
     out, seen = [], set()
-    for r1, c1, r2, c2 in segs:
-        a, b = np.array([r1, c1]), np.array([r2, c2])
-        L = np.hypot(*(b - a))
-        if L == 0:
+    for end, d, s0, e0 in _gaps(obstacle, free, segs, back, n_gap, offsets, min_gap_px, max_gap_px):
+        start = end - (back + 1) * d
+        gap = e0 - s0 + 1
+        p = start + s0 * d            # last wall sample before the gap
+        far = start + (e0 + 1) * d    # first wall sample after it
+        perp = np.array([-d[1], d[0]])
+        crossed = [_face_runs(faces, q - perp, perp, n_side, offsets)
+                   and _face_runs(faces, q + perp, -perp, n_side, offsets) for q in (p, far)]
+        if crossed[0]:
+            continue  # the wall piece's end lies on a wall that crosses its line: no wall end
+        if _face_runs(faces, far - d, d, n_side, offsets):
+            if crossed[1]:
+                # the far end lies on a wall face that crosses the line
+                # too: the gap is the width of a passage, not a doorway
+                continue
+        elif not (crossed[1] and gap <= beside_px):
+            continue  # neither does the wall go on, nor does a door-wide gap end on a wall
+        if depth_px > 0 and (not _depth_ok(obstacle, p, far, depth_px)
+                             or _spans_passage(obstacle, p, far, depth_px)):
             continue
-        u = (b - a) / L
-        for end, d in ((b, u), (a, -u)):
-            start = end - (back + 1) * d
-            rr, cc, inside = _samples(obstacle.shape, start, d, n_gap, offsets)
-            hit = (obstacle[rr, cc] & inside).any(axis=0)
-            # the gap: the first run of samples without an obstacle, which
-            # must start within the wall piece's last cells (sample index
-            # ``back`` is Hough's end)
-            clear = np.flatnonzero(~hit)
-            if clear.size == 0 or clear[0] == 0 or clear[0] > back + 2:
-                continue
-            s0 = int(clear[0])
-            rest = np.flatnonzero(hit[s0:])
-            if rest.size == 0:
-                continue
-            e0 = s0 + int(rest[0])  # first obstacle sample after the gap
-            gap = e0 - s0 + 1
-            if not (min_gap_px <= gap <= max_gap_px):
-                continue
-            line_free = free[rr[centre, s0:e0], cc[centre, s0:e0]] & inside[centre, s0:e0]
-            if line_free.mean() < 0.5:
-                continue
-            p = start + s0 * d            # last wall sample before the gap
-            far = start + (e0 + 1) * d    # first wall sample after it
-            perp = np.array([-d[1], d[0]])
-            crossed = [_face_runs(faces, q - perp, perp, n_side, offsets)
-                       and _face_runs(faces, q + perp, -perp, n_side, offsets) for q in (p, far)]
-            if crossed[0]:
-                continue  # the wall piece's end lies on a wall that crosses its line: no wall end
-            if _face_runs(faces, far - d, d, n_side, offsets):
-                if crossed[1]:
-                    # the far end lies on a wall face that crosses the line
-                    # too: the gap is the width of a passage, not a doorway
-                    continue
-            elif not (crossed[1] and gap <= beside_px):
-                continue  # neither does the wall go on, nor does a door-wide gap end on a wall
-            if depth_px > 0 and (not _depth_ok(obstacle, p, far, depth_px)
-                                 or _spans_passage(obstacle, p, far, depth_px)):
-                continue
-            key = tuple(np.rint(np.concatenate([np.minimum(p, far), np.maximum(p, far)])).astype(int))
-            if key in seen:
-                continue
-            seen.add(key)
-            out.append((p, far))
+        key = tuple(np.rint(np.concatenate([np.minimum(p, far), np.maximum(p, far)])).astype(int))
+        if key in seen:
+            continue
+        seen.add(key)
+        out.append((p, far))
     return out
