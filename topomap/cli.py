@@ -236,9 +236,21 @@ def _report_failure(row) -> int:
     return EXIT_INPUT
 
 
+def _check_outdir(outdir):
+    """ParameterError / MapFileError for an ``-o`` that cannot be an output folder (empty, a file)."""
+    from .errors import MapFileError, ParameterError
+
+    if not str(outdir).strip():
+        raise ParameterError(f"-o/--out must name an output folder, got {str(outdir)!r}")
+    outdir = Path(outdir)
+    if outdir.exists() and not outdir.is_dir():
+        raise MapFileError(f"-o {outdir}: exists and is not a folder")
+    return outdir
+
+
 @main.command("segment")
 @click.argument("maps", nargs=-1, required=True, type=click.Path(path_type=Path))
-@click.option("-o", "--out", "outdir", required=True, type=click.Path(path_type=Path),
+@click.option("-o", "--out", "outdir", required=True, type=click.Path(path_type=str),
               help="Output directory (several maps: a folder per map, from its path below the maps' "
                    "common folder, and summary.csv).")
 @click.option("--resolution", type=float, default=None,
@@ -294,6 +306,14 @@ def segment_cmd(maps, outdir, resolution, method, skeletons, no_overlay, no_geoj
 
     if resolution is not None and not resolution > 0:
         sys.exit(_fail(ParameterError(f"--resolution must be > 0 m/px, got {resolution!r}")))
+    try:
+        outdir = _check_outdir(outdir)
+        if resolution is not None:
+            from .io import check_resolution
+
+            check_resolution(resolution, name="--resolution")
+    except Exception as exc:  # noqa: BLE001
+        sys.exit(_fail(exc))
     if bag is not None:
         from .ros import check_bag_path
 

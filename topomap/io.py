@@ -9,6 +9,8 @@ as ROS map_server defines it.
 
 from __future__ import annotations
 
+import difflib
+import logging
 import math
 import os
 import re
@@ -35,6 +37,13 @@ __all__ = [
     "OCCUPIED",
     "UNKNOWN",
     "MAX_CELLS",
+    "MIN_RESOLUTION",
+    "MAX_RESOLUTION",
+    "USUAL_RESOLUTION",
+    "MAX_ORIGIN",
+    "check_resolution",
+    "MAX_YAML_BYTES",
+    "YAML_KEYS",
     "DEFAULT_RESOLUTION",
     "OCCUPIED_THRESH",
     "FREE_THRESH",
@@ -59,6 +68,24 @@ UNKNOWN = -1
 #: :class:`~topomap.errors.MapTooLargeError`. Read at call time, so it can be
 #: changed (``topomap.io.MAX_CELLS = ...``).
 MAX_CELLS = 100_000_000
+
+#: Smallest and largest cell size accepted, metres per cell (1 mm and 10 m).
+#: The methods' options are lengths in metres, so their kernels grow as
+#: ``1 / resolution**2``: below 1 mm a single kernel would outgrow any map.
+#: A resolution outside :data:`USUAL_RESOLUTION` (what indoor maps use) is
+#: accepted with a warning.
+MIN_RESOLUTION = 0.001
+MAX_RESOLUTION = 10.0
+#: Resolutions indoor maps use (metres per cell); outside, :func:`load_map` warns.
+USUAL_RESOLUTION = (0.005, 0.5)
+#: Largest ``|x|`` or ``|y|`` of an origin, metres (10,000 km: UTM northings fit).
+MAX_ORIGIN = 1e7
+#: Largest map YAML read, bytes (a map_server YAML is a few hundred bytes).
+MAX_YAML_BYTES = 1 << 20
+#: The keys of a map_server YAML (anything else is a warning, a near-miss of one of these an error).
+YAML_KEYS = ("image", "resolution", "origin", "negate", "occupied_thresh", "free_thresh", "mode")
+
+log = logging.getLogger(__name__)
 
 #: Cell size in metres per pixel used for bare images when none is given.
 DEFAULT_RESOLUTION = 0.05
@@ -126,12 +153,16 @@ class OccupancyGrid:
             raise MapError(f"{name}: grid must be 2-D, got ndim={cells.ndim}")
         if cells.shape[0] == 0 or cells.shape[1] == 0:
             raise MapError(f"{name}: grid is empty (shape {cells.shape})")
+        if cells.size > MAX_CELLS:
+            raise MapTooLargeError(_msg(name, f"map is {cells.shape[1]} x {cells.shape[0]} cells = {cells.size:,}, "
+                                              f"more than topomap.io.MAX_CELLS = {MAX_CELLS:,}"))
         try:
             res = float(self.resolution)
         except (TypeError, ValueError):
             raise ParameterError(_msg(name, f"resolution must be a number, got {self.resolution!r}")) from None
         if not np.isfinite(res) or res <= 0:
             raise ParameterError(f"{name}: resolution must be > 0 m/px, got {self.resolution!r}")
+        _check_resolution_range(name, res)
         object.__setattr__(self, "resolution", res)
         try:
             origin = tuple(float(v) for v in self.origin)
@@ -139,6 +170,7 @@ class OccupancyGrid:
             raise ParameterError(_msg(name, f"origin must be (x, y[, yaw]) numbers, got {self.origin!r}")) from None
         if not all(math.isfinite(v) for v in origin):
             raise ParameterError(_msg(name, f"origin must be finite, got {self.origin!r}"))
+        _check_origin_range(name, origin)
         if len(origin) == 2:
             origin = origin + (0.0,)
         if len(origin) != 3:
@@ -251,17 +283,50 @@ def _as_mode(name, val) -> str:
     return val.strip().lower()
 
 
-def _as_resolution(name, val) -> float:
-    v = _as_float(name, "resolution", val)
+def _check_resolution_range(name, v: float, key: str = "resolution"):
+    if not MIN_RESOLUTION <= v <= MAX_RESOLUTION:
+        hint = " (metres per cell, not cells per metre)" if v > MAX_RESOLUTION else ""
+        text = f"{key} must be between {MIN_RESOLUTION:g} and {MAX_RESOLUTION:g} m per cell, got {v:g}{hint}"
+        raise ParameterError(_msg(name, text) if name else _one_line(text))
+
+
+def _check_origin_range(name, origin):
+    if any(abs(v) > MAX_ORIGIN for v in origin[:2]):
+        raise ParameterError(_msg(name, f"origin x and y must be within +-{MAX_ORIGIN:g} m, got "
+                                        f"[{', '.join(f'{v:g}' for v in origin)}]"))
+
+
+def _as_resolution(name, val, key: str = "resolution") -> float:
+    """A resolution in [MIN_RESOLUTION, MAX_RESOLUTION] m per cell, else ParameterError naming ``key``."""
+    v = _as_float(name, key, val)
     if v <= 0:
-        raise ParameterError(_msg(name, f"resolution must be > 0 m/px, got {val!r}"))
+        raise ParameterError(_msg(name, f"{key} must be > 0 m/px, got {val!r}"))
+    _check_resolution_range(name, v, key)
     return v
+
+
+def check_resolution(value, *, name: str = "--resolution") -> float:
+    """``value`` as a resolution (m per cell) in the accepted range.
+
+    Raises
+    ------
+    ParameterError
+        Not a number, not > 0, or outside [:data:`MIN_RESOLUTION`,
+        :data:`MAX_RESOLUTION`]; the message begins with ``name``.
+    """
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)) \
+            or not value > 0 or not math.isfinite(value):
+        raise ParameterError(_one_line(f"{name} must be a number > 0 m/px, got {value!r}"))
+    _check_resolution_range(None, float(value), name)
+    return float(value)
 
 
 def _as_origin(name, val) -> tuple:
     if isinstance(val, (str, bytes)) or not hasattr(val, "__len__") or len(val) not in (2, 3):
         raise ParameterError(_msg(name, f"origin must be [x, y, yaw] in metres/radians, got {val!r}"))
-    return tuple(_as_float(name, "origin", v) for v in val) + ((0.0,) if len(val) == 2 else ())
+    org = tuple(_as_float(name, "origin", v) for v in val) + ((0.0,) if len(val) == 2 else ())
+    _check_origin_range(name, org)
+    return org
 
 
 def classify_gray(gray, *, negate: bool = False, occupied_thresh: float = OCCUPIED_THRESH,
@@ -413,7 +478,7 @@ def from_array(array, *, resolution: float = DEFAULT_RESOLUTION, origin=(0.0, 0.
 
 def _check_size(name, rows, cols):
     limit = MAX_CELLS
-    if rows * cols > limit:
+    if int(rows) * int(cols) > limit:
         raise MapTooLargeError(_msg(
             name, f"image is {cols} x {rows} px = {rows * cols:,} cells, more than "
                   f"topomap.io.MAX_CELLS = {limit:,}"))
@@ -555,16 +620,51 @@ def _read_image(path: Path, name: str):
 # Loading
 # --------------------------------------------------------------------------
 
+def _yaml_loader():
+    """A safe YAML loader that refuses aliases (``*name``): nothing expands (no "billion laughs")."""
+    import yaml
+
+    class NoAliasLoader(yaml.SafeLoader):
+        def compose_node(self, parent, index):
+            if self.check_event(yaml.AliasEvent):
+                mark = self.peek_event().start_mark
+                raise yaml.composer.ComposerError(None, None, "aliases (*name) are not allowed in a map YAML",
+                                                  mark)
+            return super().compose_node(parent, index)
+
+    return NoAliasLoader
+
+
+def _check_yaml_keys(name, meta: dict):
+    """ParameterError for a near-miss of a known key (a typo); a warning for any other unknown key."""
+    for key in meta:
+        if key in YAML_KEYS:
+            continue
+        shown = _one_line(repr(key))[:60]
+        close = difflib.get_close_matches(str(key), YAML_KEYS, n=1, cutoff=0.75) if isinstance(key, str) else []
+        if close:
+            raise ParameterError(_msg(name, f"unknown key {shown} (did you mean '{close[0]}'?); a map YAML has "
+                                            f"{', '.join(YAML_KEYS)}"))
+        log.warning("%s", _msg(name, f"unknown key {shown} ignored (a map YAML has {', '.join(YAML_KEYS)})"))
+
+
 def _read_yaml(path: Path, name: str) -> dict:
     import yaml
 
     _check_file(name, path, "map YAML")
     try:
+        size = path.stat().st_size
+    except OSError as exc:
+        raise MapFileError(_msg(name, f"cannot read map YAML: {exc.strerror or exc}")) from None
+    if size > MAX_YAML_BYTES:
+        raise MapError(_msg(name, f"map YAML is {size:,} bytes, more than {MAX_YAML_BYTES:,} (a map_server YAML "
+                                  f"is a few lines; is this the image?)"))
+    try:
         text = path.read_bytes()
     except OSError as exc:
         raise MapFileError(_msg(name, f"cannot read map YAML: {exc.strerror or exc}")) from None
     try:
-        meta = yaml.safe_load(text)
+        meta = yaml.load(text, Loader=_yaml_loader())  # noqa: S506 - a SafeLoader without aliases
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}" if mark is not None else ""
@@ -576,6 +676,7 @@ def _read_yaml(path: Path, name: str) -> dict:
         raise MapError(_msg(name, f"not valid YAML: {_one_line(exc) or type(exc).__name__}")) from None
     if not isinstance(meta, dict):
         raise MapError(_msg(name, f"map YAML must be a mapping (key: value), got {type(meta).__name__}"))
+    _check_yaml_keys(name, meta)
     return meta
 
 
@@ -710,6 +811,10 @@ def load_map(path, *, resolution=None, origin=None, negate=None, occupied_thresh
 
     val, where = pick("resolution", resolution, DEFAULT_RESOLUTION)
     res = _as_resolution(where, val)
+    if not USUAL_RESOLUTION[0] <= res <= USUAL_RESOLUTION[1]:
+        log.warning("%s", _msg(name, f"resolution {res:g} m per cell is outside what indoor maps use "
+                                     f"({USUAL_RESOLUTION[0]:g}-{USUAL_RESOLUTION[1]:g}); rooms and doors "
+                                     f"may be meaningless"))
     val, where = pick("origin", origin, (0.0, 0.0, 0.0))
     org = _as_origin(where, val)
     val, where = pick("negate", negate, False)
