@@ -29,6 +29,11 @@ class _State:
     debug = False
 
 
+def _naming(path, exc) -> str:
+    """``path`` as the prefix of ``exc``'s error line, or "" when the message already names it."""
+    return "" if str(path) in str(exc) else str(path)
+
+
 def _fail(exc, what="") -> int:
     """Print one line for ``exc`` on stderr; return the exit code to use."""
     from .errors import TopomapError
@@ -480,7 +485,7 @@ def plan_cmd(graph, start, goal, robot_width, as_json):
         G = load_graph(graph)
         route = plan_path(G, tuple(start), tuple(goal), robot_width=robot_width)
     except Exception as exc:  # noqa: BLE001
-        sys.exit(_fail(exc))
+        sys.exit(_fail(exc, _naming(graph, exc)))
     if as_json:
         out = dict(route, waypoints=route["waypoints"].tolist())
         click.echo(json.dumps(out))
@@ -530,7 +535,7 @@ def tour_cmd(graph, start, rooms, return_to_start, robot_width, as_json):
         G = load_graph(graph)
         tour = plan_tour(G, tuple(start), rooms=ids, return_to_start=return_to_start, robot_width=robot_width)
     except Exception as exc:  # noqa: BLE001
-        sys.exit(_fail(exc))
+        sys.exit(_fail(exc, _naming(graph, exc)))
     if as_json:
         click.echo(json.dumps(dict(tour, waypoints=tour["waypoints"].tolist())))
         return
@@ -560,7 +565,7 @@ def export_cmd(source, target):
         G = load_graph(source)
         save_graph(G, target)
     except Exception as exc:  # noqa: BLE001
-        sys.exit(_fail(exc))
+        sys.exit(_fail(exc, _naming(source, exc) and _naming(target, exc)))
     click.echo(f"{source} -> {target}: {G.number_of_nodes()} rooms, {G.number_of_edges()} doors")
 
 
