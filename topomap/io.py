@@ -56,6 +56,7 @@ __all__ = [
     "classify_plan",
     "from_array",
     "load_map",
+    "remove_stale_temporaries",
     "save_map",
 ]
 
@@ -868,6 +869,80 @@ def yaml_text(meta: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+#: Temporary files :func:`atomic_write` makes: ``.NAME.pPID.RANDOM.tmp``.
+_TMP_RE = re.compile(r"^\..+\.p(\d+)\.[A-Za-z0-9_]+\.tmp$")
+#: Temporaries of the earlier naming (``.NAME.RANDOM.tmp``, no PID) older than this many seconds are stale.
+_OLD_TMP_AGE = 3600.0
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OverflowError, OSError):
+        return True
+    return True
+
+
+def remove_stale_temporaries(folder) -> int:
+    """Remove the temporary files killed runs of :func:`atomic_write` left in ``folder``.
+
+    A temporary is ours when its name is ``.NAME.pPID.RANDOM.tmp``; it is
+    stale when process ``PID`` no longer runs (files of the earlier naming,
+    without a PID, when older than an hour). Other files are never touched.
+
+    Returns
+    -------
+    int
+        How many files were removed.
+    """
+    import time
+
+    removed = 0
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:
+        return 0
+    now = time.time()
+    for e in entries:
+        name = e.name
+        if not (name.startswith(".") and name.endswith(".tmp")):
+            continue
+        m = _TMP_RE.match(name)
+        try:
+            if not e.is_file(follow_symlinks=False):
+                continue
+            if m is not None:
+                stale = int(m.group(1)) != os.getpid() and not _pid_alive(int(m.group(1)))
+            else:
+                stale = re.match(r"^\..+\.[A-Za-z0-9_]{8}\.tmp$", name) is not None and \
+                    now - e.stat(follow_symlinks=False).st_mtime > _OLD_TMP_AGE
+            if stale:
+                os.unlink(e.path)
+                removed += 1
+        except OSError:
+            continue
+    if removed:
+        log.info("%s: removed %d stale temporary file(s) of killed runs", folder, removed)
+    return removed
+
+
+def _renamed(exc, tmp: str, path: Path):
+    """``exc`` with the final ``path`` in its message instead of the temporary ``tmp``, or None to keep it."""
+    from .errors import TopomapError
+
+    if isinstance(exc, OSError) and not isinstance(exc, TopomapError):
+        return MapFileError(_msg(path, f"cannot write: {exc.strerror or exc}"))
+    text = str(exc)
+    if tmp in text:
+        try:
+            return type(exc)(text.replace(tmp, str(path)))
+        except Exception:  # noqa: BLE001 - an exception type that takes other arguments: keep the original
+            return None
+    return None
+
+
 @contextmanager
 def atomic_write(path, mode: Optional[str] = "wb"):
     """Open a temporary file beside ``path``; rename it to ``path`` on success.
@@ -877,10 +952,23 @@ def atomic_write(path, mode: Optional[str] = "wb"):
     temporary file's path (``mode=None``, for writers that take a file name)
     or a file object open in ``mode``. The file gets the permissions of the
     file it replaces, or the umask's default for a new one.
+
+    The temporary is named ``.NAME.pPID.RANDOM.tmp``; temporaries that killed
+    runs left in the folder are removed first (:func:`remove_stale_temporaries`).
+    Errors name ``path``, never the temporary: a failed write (a full disk)
+    is a :class:`~topomap.errors.MapFileError`. Text modes write UTF-8, file
+    names that are not UTF-8 as their original bytes.
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise MapFileError(_msg(path.parent, f"cannot create the output folder: {exc.strerror or exc}")) from None
+    remove_stale_temporaries(path.parent)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.p{os.getpid()}.", suffix=".tmp", dir=path.parent)
+    except OSError as exc:
+        raise MapFileError(_msg(path, f"cannot write: {exc.strerror or exc}")) from None
     os.close(fd)
     try:
         try:
@@ -893,16 +981,20 @@ def atomic_write(path, mode: Optional[str] = "wb"):
         if mode is None:
             yield tmp
         else:
-            with open(tmp, mode) as fh:
+            text = "b" not in mode
+            with open(tmp, mode, **({"encoding": "utf-8", "errors": "surrogateescape"} if text else {})) as fh:
                 yield fh
                 fh.flush()
                 os.fsync(fh.fileno())
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         try:
             os.unlink(tmp)
         except OSError:
             pass
+        new = _renamed(exc, tmp, path) if isinstance(exc, Exception) else None
+        if new is not None:
+            raise new from None
         raise
 
 
