@@ -136,7 +136,7 @@ def _plain(v):
     if isinstance(v, (int, np.integer)):
         return int(v)
     if isinstance(v, (float, np.floating)):
-        return float(v)
+        return float(v) if np.isfinite(v) else None  # JSON has no NaN or Infinity: null
     if _is_geom(v):
         return geometry_wkt(v)
     if isinstance(v, np.ndarray):
@@ -226,6 +226,9 @@ def _restore(d: dict, table: dict, where: str) -> dict:
         f = table.get(k)
         if f is None:
             out[k] = v
+            continue
+        if v is None and f is float:  # a number JSON could not hold (NaN) was written as null
+            out[k] = float("nan")
             continue
         try:
             out[k] = f(v)
