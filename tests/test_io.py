@@ -726,3 +726,26 @@ def test_cli_plan_names_the_graph_file(tmp_path):
     assert r.exit_code == 1, r.output
     line, = [ln for ln in r.stderr.splitlines() if ln.strip()]
     assert line.startswith(f"error: {p}: ") and "lacks the map frame" in line
+
+
+def test_map_name_not_utf8_segments_in_a_batch(tmp_path):
+    """A file name with a byte that is not UTF-8 (str with a surrogate escape): outputs, summary.csv, messages."""
+    import sys
+
+    from click.testing import CliRunner
+
+    import _testdata as T
+    from topomap.cli import main
+
+    if sys.getfilesystemencoding().lower() != "utf-8":
+        pytest.skip("needs a UTF-8 file system encoding")
+    odd = tmp_path / os.fsdecode(b"caf\xe9.png")
+    try:
+        Image.fromarray(T.gray(T.two_rooms().array)).save(odd, format="PNG")
+    except (OSError, UnicodeError):
+        pytest.skip("the file system refuses a name that is not UTF-8")
+    other = tmp_path / "b.png"
+    Image.fromarray(T.gray(T.two_rooms().array)).save(other)
+    r = CliRunner().invoke(main, ["segment", str(odd), str(other), "-o", str(tmp_path / "o")])
+    assert r.exit_code == 0, r.output
+    assert b"caf\xe9" in (tmp_path / "o" / "summary.csv").read_bytes()
