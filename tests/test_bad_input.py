@@ -441,3 +441,13 @@ def test_thin_corridor_protrusion_does_not_grow_with_its_length():
         sub = np.where(small[a:b, e:f], 0.0, ref[a:b, e:f])
         want.append(sub.max())
     np.testing.assert_allclose(protrusion_at(small, pts, 60, 20), want, atol=1e-6)
+
+
+@pytest.mark.parametrize("res,warns", [(0.05, None), (0.001, "less than a small room"),
+                                       (10, "more than any building")])
+def test_free_area_outside_a_building_warns(tmp_path, caplog, res, warns):
+    p = png(tmp_path, "m.png", G(np.kron(T.two_rooms().array, np.ones((2, 2), bool))))  # 72.7 m² at 0.05
+    with caplog.at_level("WARNING", logger="topomap.io"):
+        load_map(p, resolution=res)
+    hits = [r.getMessage() for r in caplog.records if "free space" in r.getMessage()]
+    assert (hits and warns in hits[0] and str(p) in hits[0]) if warns else not hits

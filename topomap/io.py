@@ -40,6 +40,7 @@ __all__ = [
     "MIN_RESOLUTION",
     "MAX_RESOLUTION",
     "USUAL_RESOLUTION",
+    "USUAL_FREE_AREA",
     "MAX_ORIGIN",
     "check_resolution",
     "MAX_YAML_BYTES",
@@ -839,7 +840,23 @@ def load_map(path, *, resolution=None, origin=None, negate=None, occupied_thresh
                               mode=mod, transparent=transparent)
     else:
         cells = classify_plan(gray, negate=neg, transparent=transparent)
-    return OccupancyGrid(cells, res, org, name, gray=gray)
+    grid = OccupancyGrid(cells, res, org, name, gray=gray)
+    _warn_free_area(name, np.count_nonzero(cells == FREE) * res * res)
+    return grid
+
+
+#: Free area (m²) outside which :func:`load_map` warns: less than a small room, more than any building.
+USUAL_FREE_AREA = (1.0, 1e6)
+
+
+def _warn_free_area(name, area: float):
+    lo, hi = USUAL_FREE_AREA
+    if 0 < area < lo:
+        log.warning("%s", _msg(name, f"free space is only {area:.3g} m², less than a small room; "
+                                     f"is the resolution right?"))
+    elif area > hi:
+        log.warning("%s", _msg(name, f"free space is {area:.3g} m², more than any building; "
+                                     f"is the resolution right (metres per cell)?"))
 
 
 # --------------------------------------------------------------------------
