@@ -155,7 +155,26 @@ CASES = {
     "negate.yaml": (negated, ("ok", 2, 1)),
     "sixteen_bit.pgm": (pgm16, ("ok", 2, 1)),
     "rgba_transparent.png": (rgba_transparent, ("ok", 1, 0)),
+    "billion_laughs.yaml": (lambda d, n: text(d, n, BILLION_LAUGHS), (MapError, "aliases .* not allowed")),
+    "alias_image.yaml": (lambda d, n: yaml_for(d, n, image="&i map.pgm", mode="*i"),
+                         (MapError, "aliases .* not allowed")),
+    "big.yaml": (lambda d, n: text(d, n, "image: map.pgm\n#" + "x" * (tio.MAX_YAML_BYTES + 1) + "\n"),
+                 (MapError, "more than 1,048,576")),
+    "deep.yaml": (lambda d, n: text(d, n, "a: " + "[" * 5000 + "]" * 5000 + "\n"), (MapError, "not valid YAML")),
+    "typo_key.yaml": (lambda d, n: yaml_for(d, n, occupied_tresh="0.7"),
+                      (ParameterError, r"unknown key 'occupied_tresh' \(did you mean 'occupied_thresh'\?\)")),
+    "res_tiny.yaml": (lambda d, n: yaml_for(d, n, resolution="1e-9"),
+                      (ParameterError, "resolution must be between 0.001 and 10 m per cell, got 1e-09")),
+    "res_huge.yaml": (lambda d, n: yaml_for(d, n, resolution="1e200"),
+                      (ParameterError, "resolution must be between 0.001 and 10 m per cell, got 1e\\+200")),
+    "origin_huge.yaml": (lambda d, n: yaml_for(d, n, origin="[1e308, 0, 0]"),
+                         (ParameterError, "origin x and y must be within")),
 }
+
+#: Nested anchors: expanding ``image`` would make 9**9 strings (a "billion laughs").
+BILLION_LAUGHS = ("a: &a [lol, lol, lol, lol, lol, lol, lol, lol, lol]\n"
+                  + "".join(f"{c}: &{c} [{', '.join(['*' + p] * 9)}]\n" for p, c in zip("abcdefgh", "bcdefghi"))
+                  + "image: *i\nresolution: 0.05\norigin: [0, 0, 0]\n")
 
 ERROR_CASES = [k for k, v in CASES.items() if v[1][0] != "ok"]
 OK_CASES = [k for k, v in CASES.items() if v[1][0] == "ok"]
@@ -356,3 +375,79 @@ def test_fuzz_from_array_and_segment(method, a):
         assert "\n" not in str(exc)
         return
     check_valid(seg, grid)
+
+
+# --------------------------------------------------------------------------
+# Round two: hostile and odd input (limits, warnings, outputs)
+# --------------------------------------------------------------------------
+
+def test_unknown_yaml_key_without_a_close_match_warns(tmp_path, caplog):
+    p = yaml_for(tmp_path, "m.yaml", comment_by_tool="slam_toolbox")
+    with caplog.at_level("WARNING", logger="topomap.io"):
+        grid = load_map(p)
+    assert grid.shape == T.two_rooms().array.shape
+    assert any("unknown key 'comment_by_tool' ignored" in r.getMessage() and str(p) in r.getMessage()
+               for r in caplog.records)
+
+
+@pytest.mark.parametrize("res,warns", [(0.05, False), (0.005, False), (0.5, False), (0.002, True), (5, True)])
+def test_unusual_resolution_warns(tmp_path, caplog, res, warns):
+    p = yaml_for(tmp_path, "m.yaml", resolution=str(res))
+    with caplog.at_level("WARNING", logger="topomap.io"):
+        load_map(p)
+    hits = [r for r in caplog.records if "outside what indoor maps use" in r.getMessage()]
+    assert bool(hits) == warns
+
+
+@pytest.mark.parametrize("res", [1e-9, 0.0009, 10.5, 1e200])
+def test_absurd_resolution_refused_for_arrays_and_images(tmp_path, res):
+    with pytest.raises(ParameterError, match="between 0.001 and 10 m per cell"):
+        from_array(T.two_rooms().array, resolution=res)
+    p = png(tmp_path, "m.png", G(T.two_rooms().array))
+    with pytest.raises(ParameterError, match="between 0.001 and 10 m per cell") as ei:
+        load_map(p, resolution=res)
+    assert_one_line(ei.value, "resolution")
+
+
+def test_check_resolution_names_the_option():
+    assert tio.check_resolution(0.05) == 0.05
+    for bad in (0, -1, float("nan"), "x", True, 1e-9):
+        with pytest.raises(ParameterError, match="^--resolution must be"):
+            tio.check_resolution(bad)
+
+
+def test_array_over_the_limit_refused(monkeypatch):
+    monkeypatch.setattr(tio, "MAX_CELLS", 99)
+    with pytest.raises(MapTooLargeError, match=r"<array>: map is 10 x 10 cells = 100, more than .*MAX_CELLS = 99"):
+        from_array(np.ones((10, 10), bool))
+
+
+def test_thin_corridor_protrusion_does_not_grow_with_its_length():
+    """A 3-cell-high corridor: the door-judging kernel is cut to the map (it used to be (2r+1)**2, r ~ length)."""
+    from topomap.doors import protrusion, protrusion_at
+
+    free = np.zeros((3, 4000), bool)
+    free[1, 1:-1] = True
+    posts = [(0, 10), (2, 3990)]
+    got = protrusion_at(free, posts, 1500.0, 700)  # would need (2 * 1500 + 1)**2 floats per window before
+    assert got.shape == (2,) and np.all((got >= 0) & (got <= 1))
+    # the same values as the whole-map filter (small case, where the full kernel fits)
+    small = free[:, :200]
+    ref = protrusion(small, 60)
+    pts = [(0, 5), (2, 190), (0, 100)]
+    want = []
+    for r, c in pts:
+        a, b, e, f = max(r - 20, 0), min(r + 21, 3), max(c - 20, 0), min(c + 21, 200)
+        sub = np.where(small[a:b, e:f], 0.0, ref[a:b, e:f])
+        want.append(sub.max())
+    np.testing.assert_allclose(protrusion_at(small, pts, 60, 20), want, atol=1e-6)
+
+
+@pytest.mark.parametrize("res,warns", [(0.05, None), (0.001, "less than a small room"),
+                                       (10, "more than any building")])
+def test_free_area_outside_a_building_warns(tmp_path, caplog, res, warns):
+    p = png(tmp_path, "m.png", G(np.kron(T.two_rooms().array, np.ones((2, 2), bool))))  # 72.7 m² at 0.05
+    with caplog.at_level("WARNING", logger="topomap.io"):
+        load_map(p, resolution=res)
+    hits = [r.getMessage() for r in caplog.records if "free space" in r.getMessage()]
+    assert (hits and warns in hits[0] and str(p) in hits[0]) if warns else not hits

@@ -553,3 +553,199 @@ def test_messages_name_the_file_in_one_line_even_with_weird_exceptions(tmp_path)
         load_map(p)
     msg = assert_one_line(ei, "x.pgm")
     assert re.match(re.escape(str(p)) + ": ", msg)
+
+
+# --------------------------------------------------------------------------
+# Hostile graph files, outputs and temporaries
+# --------------------------------------------------------------------------
+
+def _saved_graph(tmp_path, name="g.json"):
+    import _testdata as T
+    from topomap.export import save_graph
+    from topomap.planning import travel_graph
+    from topomap.segmentation import segment
+
+    G = travel_graph(segment(from_array(T.two_rooms().array, resolution=T.RES)))
+    return save_graph(G, tmp_path / name), G
+
+
+def _edit_json(path, edit):
+    import json
+
+    d = json.loads(path.read_text())
+    edit(d)
+    path.write_text(json.dumps(d))
+    return path
+
+
+@pytest.mark.parametrize("fmt", ["json", "graphml", "geojson"])
+def test_graph_claiming_a_huge_map_refused_before_planning(tmp_path, fmt):
+    from topomap.errors import MapTooLargeError
+    from topomap.export import load_graph, save_graph
+
+    _, G = _saved_graph(tmp_path)
+    G.graph["shape"] = (1_000_000, 1_000_000)
+    p = save_graph(G, tmp_path / f"big.{fmt}")
+    with pytest.raises(MapTooLargeError, match=r"claims a map of 1,000,000 x 1,000,000 cells .*MAX_CELLS") as ei:
+        load_graph(p)
+    assert str(p) in str(ei.value)
+
+
+def test_deeply_nested_json_graph_is_a_format_error(tmp_path):
+    from topomap.errors import GraphFormatError
+    from topomap.export import load_graph
+
+    p = tmp_path / "deep.json"
+    p.write_text("[" * 200_000 + "]" * 200_000)
+    with pytest.raises(GraphFormatError, match="nested too deeply") as ei:
+        load_graph(p)
+    assert str(p) in str(ei.value)
+
+
+def test_graphml_with_entities_refused(tmp_path):
+    from topomap.errors import GraphFormatError
+    from topomap.export import load_graph
+
+    p = tmp_path / "lol.graphml"
+    p.write_text('<?xml version="1.0"?><!DOCTYPE g [<!ENTITY a "lol"><!ENTITY b "&a;&a;&a;">]>'
+                 '<graphml xmlns="http://graphml.graphdrawing.org/xmlns"><graph edgedefault="undirected">'
+                 '<node id="&b;"/></graph></graphml>')
+    with pytest.raises(GraphFormatError, match="DOCTYPE or entity"):
+        load_graph(p)
+
+
+@pytest.mark.parametrize("bad", [[1, 2], {"type": "FeatureCollection", "features": [[1]]},
+                                 {"type": "FeatureCollection", "features": [{"properties": {"kind": "room"}}]}])
+def test_odd_geojson_is_a_format_error(tmp_path, bad):
+    import json
+
+    from topomap.errors import GraphFormatError
+    from topomap.export import load_graph
+
+    p = tmp_path / "odd.geojson"
+    p.write_text(json.dumps(bad))
+    with pytest.raises(GraphFormatError) as ei:
+        load_graph(p)
+    assert str(p) in str(ei.value)
+
+
+def test_door_without_p1_is_a_planning_error_naming_the_door(tmp_path):
+    from topomap.errors import PlanningError
+    from topomap.export import load_graph
+    from topomap.planning import plan_path
+
+    p, G = _saved_graph(tmp_path)
+    _edit_json(p, lambda d: [e.pop("p1") for e in d["edges"]])
+    H = load_graph(p)
+    with pytest.raises(PlanningError, match=r"door \d+-\d+ lacks the attribute 'p1'"):
+        plan_path(H, (0.3, 0.3), (1.0, 1.0))
+
+
+def test_nan_written_as_null_and_read_back(tmp_path):
+    import json
+    import math
+
+    from topomap.export import load_graph, save_graph
+
+    _, G = _saved_graph(tmp_path)
+    u, v, k = next(iter(G.edges(keys=True)))
+    G.edges[u, v, k]["width"] = float("nan")
+    G.graph["threshold"] = float("inf")
+    p = save_graph(G, tmp_path / "nan.geojson")
+    json.loads(p.read_text(), parse_constant=lambda c: pytest.fail(f"bare {c} in the file"))
+    H = load_graph(p)
+    assert math.isnan(H.edges[u, v, k]["width"]) and H.graph["threshold"] is None
+
+
+def test_atomic_write_names_the_file_not_the_temporary(tmp_path):
+    from topomap.errors import MapFileError
+    from topomap.io import atomic_write
+
+    target = tmp_path / "labels.png"
+    with pytest.raises(ValueError) as ei:
+        with atomic_write(target, None) as tmp:
+            raise ValueError(f"{tmp}: 70000 rooms do not fit a 16-bit PNG")
+    assert str(ei.value) == f"{target}: 70000 rooms do not fit a 16-bit PNG"
+    with pytest.raises(MapFileError, match=r"labels.png: cannot write: No space left on device") as ei:
+        with atomic_write(target) as fh:
+            raise OSError(28, "No space left on device", fh.name)
+    assert ".tmp" not in str(ei.value)
+    assert list(tmp_path.iterdir()) == []
+    (tmp_path / "afile").write_text("x")
+    with pytest.raises(MapFileError, match="cannot create the output folder"):
+        with atomic_write(tmp_path / "afile" / "x.json", "w") as fh:
+            fh.write("{}")
+
+
+def test_stale_temporaries_of_killed_runs_removed(tmp_path):
+    import os
+    import subprocess
+    import sys
+
+    from topomap.io import atomic_write
+
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True,
+                          text=True).stdout.strip()
+    stale = tmp_path / f".labels.png.p{dead}.k2j3h4g5.tmp"
+    live = tmp_path / f".rooms.json.p{os.getppid()}.a1b2c3d4.tmp"  # a running process (our parent)
+    old_style = tmp_path / ".overlay.png.zz9x8c7v.tmp"
+    other = tmp_path / ".notes.tmp"
+    for f in (stale, live, old_style, other):
+        f.write_text("x")
+    os.utime(old_style, (0, 0))  # older than an hour
+    with atomic_write(tmp_path / "out.txt", "w") as fh:
+        fh.write("ok")
+    assert sorted(f.name for f in tmp_path.iterdir()) == sorted([live.name, other.name, "out.txt"])
+
+
+def test_cli_refuses_empty_or_file_output(tmp_path):
+    from click.testing import CliRunner
+
+    import _testdata as T
+    from topomap.cli import main
+
+    m = tmp_path / "m.png"
+    Image.fromarray(T.gray(T.two_rooms().array)).save(m)
+    r = CliRunner().invoke(main, ["segment", str(m), "-o", ""])
+    assert r.exit_code == 1 and "-o/--out must name an output folder" in r.stderr
+    r = CliRunner().invoke(main, ["segment", str(m), "-o", str(m)])
+    assert r.exit_code == 1 and f"-o {m}: exists and is not a folder" in r.stderr
+    r = CliRunner().invoke(main, ["segment", str(m), "-o", str(tmp_path / "o"), "--resolution", "1e-9"])
+    assert r.exit_code == 1 and "--resolution must be between 0.001 and 10" in r.stderr
+    assert not (tmp_path / "o").exists()
+
+
+def test_cli_plan_names_the_graph_file(tmp_path):
+    from click.testing import CliRunner
+
+    from topomap.cli import main
+
+    p, _ = _saved_graph(tmp_path)
+    _edit_json(p, lambda d: [d["graph"].pop(k) for k in ("shape", "resolution", "origin")])
+    r = CliRunner().invoke(main, ["plan", str(p), "--from", "0.3", "0.3", "--to", "1", "1"])
+    assert r.exit_code == 1, r.output
+    line, = [ln for ln in r.stderr.splitlines() if ln.strip()]
+    assert line.startswith(f"error: {p}: ") and "lacks the map frame" in line
+
+
+def test_map_name_not_utf8_segments_in_a_batch(tmp_path):
+    """A file name with a byte that is not UTF-8 (str with a surrogate escape): outputs, summary.csv, messages."""
+    import sys
+
+    from click.testing import CliRunner
+
+    import _testdata as T
+    from topomap.cli import main
+
+    if sys.getfilesystemencoding().lower() != "utf-8":
+        pytest.skip("needs a UTF-8 file system encoding")
+    odd = tmp_path / os.fsdecode(b"caf\xe9.png")
+    try:
+        Image.fromarray(T.gray(T.two_rooms().array)).save(odd, format="PNG")
+    except (OSError, UnicodeError):
+        pytest.skip("the file system refuses a name that is not UTF-8")
+    other = tmp_path / "b.png"
+    Image.fromarray(T.gray(T.two_rooms().array)).save(other)
+    r = CliRunner().invoke(main, ["segment", str(odd), str(other), "-o", str(tmp_path / "o")])
+    assert r.exit_code == 0, r.output
+    assert b"caf\xe9" in (tmp_path / "o" / "summary.csv").read_bytes()

@@ -29,6 +29,11 @@ class _State:
     debug = False
 
 
+def _naming(path, exc) -> str:
+    """``path`` as the prefix of ``exc``'s error line, or "" when the message already names it."""
+    return "" if str(path) in str(exc) else str(path)
+
+
 def _fail(exc, what="") -> int:
     """Print one line for ``exc`` on stderr; return the exit code to use."""
     from .errors import TopomapError
@@ -236,9 +241,21 @@ def _report_failure(row) -> int:
     return EXIT_INPUT
 
 
+def _check_outdir(outdir):
+    """ParameterError / MapFileError for an ``-o`` that cannot be an output folder (empty, a file)."""
+    from .errors import MapFileError, ParameterError
+
+    if not str(outdir).strip():
+        raise ParameterError(f"-o/--out must name an output folder, got {str(outdir)!r}")
+    outdir = Path(outdir)
+    if outdir.exists() and not outdir.is_dir():
+        raise MapFileError(f"-o {outdir}: exists and is not a folder")
+    return outdir
+
+
 @main.command("segment")
 @click.argument("maps", nargs=-1, required=True, type=click.Path(path_type=Path))
-@click.option("-o", "--out", "outdir", required=True, type=click.Path(path_type=Path),
+@click.option("-o", "--out", "outdir", required=True, type=click.Path(path_type=str),
               help="Output directory (several maps: a folder per map, from its path below the maps' "
                    "common folder, and summary.csv).")
 @click.option("--resolution", type=float, default=None,
@@ -294,6 +311,14 @@ def segment_cmd(maps, outdir, resolution, method, skeletons, no_overlay, no_geoj
 
     if resolution is not None and not resolution > 0:
         sys.exit(_fail(ParameterError(f"--resolution must be > 0 m/px, got {resolution!r}")))
+    try:
+        outdir = _check_outdir(outdir)
+        if resolution is not None:
+            from .io import check_resolution
+
+            check_resolution(resolution, name="--resolution")
+    except Exception as exc:  # noqa: BLE001
+        sys.exit(_fail(exc))
     if bag is not None:
         from .ros import check_bag_path
 
@@ -460,7 +485,7 @@ def plan_cmd(graph, start, goal, robot_width, as_json):
         G = load_graph(graph)
         route = plan_path(G, tuple(start), tuple(goal), robot_width=robot_width)
     except Exception as exc:  # noqa: BLE001
-        sys.exit(_fail(exc))
+        sys.exit(_fail(exc, _naming(graph, exc)))
     if as_json:
         out = dict(route, waypoints=route["waypoints"].tolist())
         click.echo(json.dumps(out))
@@ -510,7 +535,7 @@ def tour_cmd(graph, start, rooms, return_to_start, robot_width, as_json):
         G = load_graph(graph)
         tour = plan_tour(G, tuple(start), rooms=ids, return_to_start=return_to_start, robot_width=robot_width)
     except Exception as exc:  # noqa: BLE001
-        sys.exit(_fail(exc))
+        sys.exit(_fail(exc, _naming(graph, exc)))
     if as_json:
         click.echo(json.dumps(dict(tour, waypoints=tour["waypoints"].tolist())))
         return
@@ -540,7 +565,7 @@ def export_cmd(source, target):
         G = load_graph(source)
         save_graph(G, target)
     except Exception as exc:  # noqa: BLE001
-        sys.exit(_fail(exc))
+        sys.exit(_fail(exc, _naming(source, exc) and _naming(target, exc)))
     click.echo(f"{source} -> {target}: {G.number_of_nodes()} rooms, {G.number_of_edges()} doors")
 
 

@@ -393,32 +393,53 @@ def protrusion_at(free: np.ndarray, points, radius_px: float, look_px: int) -> n
     """:func:`protrusion` evaluated only near ``points``: for each point, the
     largest protrusion of an obstacle cell within ``look_px`` (Chebyshev) of
     it, 0 where there is none. Same values as filtering the whole map, at the
-    cost of a small window per point."""
+    cost of a small window per point.
+
+    Kernels are cut to the area they can reach (the map or the window, which
+    lies outside only zeros), so memory stays within the map's size however
+    large ``radius_px`` and ``look_px`` are (a long thin corridor)."""
+    import math
+
     import cv2
 
     H, W = free.shape
     r = max(int(round(radius_px)), 1)
+
+    def kernel(a, b):
+        # disk(r) / its cell count, rows -a..a and columns -b..b only
+        if a >= r and b >= r:
+            k = disk(r, np.float32)
+            k /= k.sum()
+            return k
+        count = sum(2 * math.isqrt(r * r - y * y) + 1 for y in range(-r, r + 1))  # cells of disk(r)
+        y, x = np.ogrid[-a:a + 1, -b:b + 1]
+        return (x * x + y * y <= r * r).astype(np.float32) / np.float32(count)
+
     out = np.zeros(len(points))
     pad = r + look_px
     if len(points) * (2 * pad + 1) ** 2 > free.size:
         # many posts: one filter over the whole map is cheaper than windows
-        fr = protrusion(free, r)
-        fr = cv2.dilate(np.where(free, 0, fr).astype(np.float32),
-                        np.ones((2 * look_px + 1, 2 * look_px + 1), np.uint8))
+        fr = cv2.filter2D(free.astype(np.float32), -1, kernel(min(r, H - 1), min(r, W - 1)),
+                          borderType=cv2.BORDER_CONSTANT)
+        la, lb = min(look_px, H - 1), min(look_px, W - 1)
+        fr = cv2.dilate(np.where(free, 0, fr).astype(np.float32), np.ones((2 * la + 1, 2 * lb + 1), np.uint8))
         for n, p in enumerate(points):
             out[n] = fr[min(max(int(round(float(p[0]))), 0), H - 1), min(max(int(round(float(p[1]))), 0), W - 1)]
         return out
-    k = disk(r, np.float32)
-    k /= k.sum()
+    kernels = {}
     for n, p in enumerate(points):
         pr, pc = int(round(float(p[0]))), int(round(float(p[1])))
         ra, rb = max(pr - pad, 0), min(pr + pad + 1, H)
         ca, cb = max(pc - pad, 0), min(pc + pad + 1, W)
         win = free[ra:rb, ca:cb].astype(np.float32)
+        a, b = min(r, rb - ra - 1), min(r, cb - ca - 1)
+        k = kernels.get((a, b))
+        if k is None:
+            k = kernels[a, b] = kernel(a, b)
         # zero padding outside the map, as the whole-map filter does
-        full = np.zeros((rb - ra + 2 * r, cb - ca + 2 * r), np.float32)
-        full[r:r + rb - ra, r:r + cb - ca] = win
-        fr = cv2.filter2D(full, -1, k, borderType=cv2.BORDER_CONSTANT)[r:r + rb - ra, r:r + cb - ca]
+        full = np.zeros((rb - ra + 2 * a, cb - ca + 2 * b), np.float32)
+        full[a:a + rb - ra, b:b + cb - ca] = win
+        fr = cv2.filter2D(full, -1, k, borderType=cv2.BORDER_CONSTANT)[a:a + rb - ra, b:b + cb - ca]
         # only cells near the post that are obstacles *and* whose disk lies
         # inside the window are exact; the look area is well inside
         la, lb = max(pr - look_px, 0) - ra, min(pr + look_px + 1, H) - ra

@@ -136,7 +136,7 @@ def _plain(v):
     if isinstance(v, (int, np.integer)):
         return int(v)
     if isinstance(v, (float, np.floating)):
-        return float(v)
+        return float(v) if np.isfinite(v) else None  # JSON has no NaN or Infinity: null
     if _is_geom(v):
         return geometry_wkt(v)
     if isinstance(v, np.ndarray):
@@ -226,6 +226,9 @@ def _restore(d: dict, table: dict, where: str) -> dict:
         f = table.get(k)
         if f is None:
             out[k] = v
+            continue
+        if v is None and f is float:  # a number JSON could not hold (NaN) was written as null
+            out[k] = float("nan")
             continue
         try:
             out[k] = f(v)
@@ -325,6 +328,35 @@ def _check_file(path) -> Path:
     return path
 
 
+def _read_json(path: Path):
+    """The JSON value of ``path``; GraphFormatError (naming the file) when it is not JSON or nested too deeply."""
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise _bad(path, "not valid JSON", exc) from None
+    except RecursionError:
+        raise _bad(path, "not valid JSON: nested too deeply") from None
+    except OSError as exc:
+        raise _bad(path, "cannot read file", exc.strerror or exc) from None
+
+
+def _check_frame(G: nx.MultiGraph, path) -> nx.MultiGraph:
+    """``G`` if the map size its ``shape`` claims is within :data:`topomap.io.MAX_CELLS`, else MapTooLargeError."""
+    from . import io
+    from .errors import MapTooLargeError
+
+    shape = G.graph.get("shape")
+    if shape is None:
+        return G
+    if len(shape) != 2 or min(shape) < 0:
+        raise _bad(path, f"graph attribute 'shape' must be [rows, cols], got {list(shape)[:4]!r}")
+    rows, cols = (int(v) for v in shape)
+    if rows * cols > io.MAX_CELLS:
+        raise MapTooLargeError(f"{path}: the graph claims a map of {cols:,} x {rows:,} cells = {rows * cols:,}, "
+                               f"more than topomap.io.MAX_CELLS = {io.MAX_CELLS:,}")
+    return G
+
+
 def load_graphml(path) -> nx.MultiGraph:
     """Read a room graph written by :func:`save_graphml`, with types restored.
 
@@ -345,10 +377,20 @@ def load_graphml(path) -> nx.MultiGraph:
     """
     path = _check_file(path)
     try:
+        with open(path, "rb") as fh:
+            head = fh.read(1 << 16)
+    except OSError as exc:
+        raise _bad(path, "cannot read file", exc.strerror or exc) from None
+    if b"<!DOCTYPE" in head or b"<!ENTITY" in head:
+        # GraphML needs no document type; entity declarations can expand without bound
+        raise _bad(path, "GraphML with a DOCTYPE or entity declarations is refused")
+    try:
         G = nx.read_graphml(path, force_multigraph=True)
+    except RecursionError:
+        raise _bad(path, "not a valid GraphML file: nested too deeply") from None
     except Exception as exc:  # noqa: BLE001 - ParseError, NetworkXError, ...
         raise _bad(path, "not a valid GraphML file", exc) from None
-    return restore_types(G, str(path))
+    return _check_frame(restore_types(G, str(path)), path)
 
 
 def node_link(G: nx.Graph) -> dict:
@@ -377,17 +419,14 @@ def load_json(path) -> nx.MultiGraph:
         Not JSON, or not node-link data of a graph.
     """
     path = _check_file(path)
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (ValueError, UnicodeDecodeError) as exc:
-        raise _bad(path, "not valid JSON", exc) from None
+    data = _read_json(path)
     if not isinstance(data, dict) or "nodes" not in data:
         raise _bad(path, "not node-link graph data (no 'nodes')")
     try:
         G = nx.node_link_graph(data, edges="edges" if "edges" in data else "links")
     except Exception as exc:  # noqa: BLE001
         raise _bad(path, "not node-link graph data", exc) from None
-    return restore_types(G, str(path))
+    return _check_frame(restore_types(G, str(path)), path)
 
 
 # --------------------------------------------------------------------------
@@ -472,6 +511,9 @@ def from_geojson(data: dict, name: str = "<geojson>") -> nx.MultiGraph:
             not isinstance(data.get("features"), list):
         raise GraphFormatError(f"{name}: not a GeoJSON FeatureCollection")
     G = nx.MultiGraph()
+    if not isinstance(data.get("properties") or {}, dict) or \
+            not all(isinstance(f, dict) and isinstance(f.get("properties") or {}, dict) for f in data["features"]):
+        raise GraphFormatError(f"{name}: a feature or 'properties' is not a JSON object")
     gprops = dict(data.get("properties") or {})
     if gprops.get("coordinate_system") == GEOJSON_COORDINATES:
         del gprops["coordinate_system"]  # the note to_geojson adds, not a graph attribute
@@ -481,6 +523,8 @@ def from_geojson(data: dict, name: str = "<geojson>") -> nx.MultiGraph:
         props = dict((f or {}).get("properties") or {})
         kind = props.pop("kind", None)
         if kind == "room":
+            if "room" not in props:
+                raise GraphFormatError(f"{name}: feature {i}: a room needs its ID 'room'")
             n = _node_id(props.pop("room"))
             geom = f.get("geometry")
             if geom is not None:
@@ -515,11 +559,7 @@ def save_geojson(G: nx.Graph, path) -> Path:
 def load_geojson(path) -> nx.MultiGraph:
     """Read a GeoJSON file written by :func:`save_geojson` back into a room graph."""
     path = _check_file(path)
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (ValueError, UnicodeDecodeError) as exc:
-        raise _bad(path, "not valid JSON", exc) from None
-    return from_geojson(data, str(path))
+    return _check_frame(from_geojson(_read_json(path), str(path)), path)
 
 
 # --------------------------------------------------------------------------
@@ -539,16 +579,32 @@ def _format(path) -> str:
 
 
 def load_graph(path) -> nx.MultiGraph:
-    """Load a room graph from ``.graphml``, ``.json`` (node-link) or ``.geojson``."""
+    """Load a room graph from ``.graphml``, ``.json`` (node-link) or ``.geojson``.
+
+    Raises
+    ------
+    GraphFormatError
+        Unknown extension, or the file is not a room graph (the message names the file).
+    MapTooLargeError
+        The graph's ``shape`` claims a map of more than :data:`topomap.io.MAX_CELLS` cells.
+    """
+    from .errors import TopomapError
+
+    try:
+        return _load_graph(path)
+    except (TopomapError, RecursionError, MemoryError):
+        raise
+    except Exception as exc:  # noqa: BLE001 - any other failure on odd content is a format error of the file
+        raise _bad(path, "not a room graph topomap can read", f"{type(exc).__name__}: {exc}") from None
+
+
+def _load_graph(path) -> nx.MultiGraph:
     fmt = _format(path)
     if fmt == "json":
         path = _check_file(path)
-        try:
-            head = json.loads(path.read_text(encoding="utf-8"))
-        except (ValueError, UnicodeDecodeError) as exc:
-            raise _bad(path, "not valid JSON", exc) from None
+        head = _read_json(path)
         if isinstance(head, dict) and head.get("type") == "FeatureCollection":
-            return from_geojson(head, str(path))
+            return _check_frame(from_geojson(head, str(path)), path)
     return {"graphml": load_graphml, "json": load_json, "geojson": load_geojson}[fmt](path)
 
 

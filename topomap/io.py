@@ -9,6 +9,8 @@ as ROS map_server defines it.
 
 from __future__ import annotations
 
+import difflib
+import logging
 import math
 import os
 import re
@@ -35,6 +37,14 @@ __all__ = [
     "OCCUPIED",
     "UNKNOWN",
     "MAX_CELLS",
+    "MIN_RESOLUTION",
+    "MAX_RESOLUTION",
+    "USUAL_RESOLUTION",
+    "USUAL_FREE_AREA",
+    "MAX_ORIGIN",
+    "check_resolution",
+    "MAX_YAML_BYTES",
+    "YAML_KEYS",
     "DEFAULT_RESOLUTION",
     "OCCUPIED_THRESH",
     "FREE_THRESH",
@@ -47,6 +57,7 @@ __all__ = [
     "classify_plan",
     "from_array",
     "load_map",
+    "remove_stale_temporaries",
     "save_map",
 ]
 
@@ -59,6 +70,24 @@ UNKNOWN = -1
 #: :class:`~topomap.errors.MapTooLargeError`. Read at call time, so it can be
 #: changed (``topomap.io.MAX_CELLS = ...``).
 MAX_CELLS = 100_000_000
+
+#: Smallest and largest cell size accepted, metres per cell (1 mm and 10 m).
+#: The methods' options are lengths in metres, so their kernels grow as
+#: ``1 / resolution**2``: below 1 mm a single kernel would outgrow any map.
+#: A resolution outside :data:`USUAL_RESOLUTION` (what indoor maps use) is
+#: accepted with a warning.
+MIN_RESOLUTION = 0.001
+MAX_RESOLUTION = 10.0
+#: Resolutions indoor maps use (metres per cell); outside, :func:`load_map` warns.
+USUAL_RESOLUTION = (0.005, 0.5)
+#: Largest ``|x|`` or ``|y|`` of an origin, metres (10,000 km: UTM northings fit).
+MAX_ORIGIN = 1e7
+#: Largest map YAML read, bytes (a map_server YAML is a few hundred bytes).
+MAX_YAML_BYTES = 1 << 20
+#: The keys of a map_server YAML (anything else is a warning, a near-miss of one of these an error).
+YAML_KEYS = ("image", "resolution", "origin", "negate", "occupied_thresh", "free_thresh", "mode")
+
+log = logging.getLogger(__name__)
 
 #: Cell size in metres per pixel used for bare images when none is given.
 DEFAULT_RESOLUTION = 0.05
@@ -126,12 +155,16 @@ class OccupancyGrid:
             raise MapError(f"{name}: grid must be 2-D, got ndim={cells.ndim}")
         if cells.shape[0] == 0 or cells.shape[1] == 0:
             raise MapError(f"{name}: grid is empty (shape {cells.shape})")
+        if cells.size > MAX_CELLS:
+            raise MapTooLargeError(_msg(name, f"map is {cells.shape[1]} x {cells.shape[0]} cells = {cells.size:,}, "
+                                              f"more than topomap.io.MAX_CELLS = {MAX_CELLS:,}"))
         try:
             res = float(self.resolution)
         except (TypeError, ValueError):
             raise ParameterError(_msg(name, f"resolution must be a number, got {self.resolution!r}")) from None
         if not np.isfinite(res) or res <= 0:
             raise ParameterError(f"{name}: resolution must be > 0 m/px, got {self.resolution!r}")
+        _check_resolution_range(name, res)
         object.__setattr__(self, "resolution", res)
         try:
             origin = tuple(float(v) for v in self.origin)
@@ -139,6 +172,7 @@ class OccupancyGrid:
             raise ParameterError(_msg(name, f"origin must be (x, y[, yaw]) numbers, got {self.origin!r}")) from None
         if not all(math.isfinite(v) for v in origin):
             raise ParameterError(_msg(name, f"origin must be finite, got {self.origin!r}"))
+        _check_origin_range(name, origin)
         if len(origin) == 2:
             origin = origin + (0.0,)
         if len(origin) != 3:
@@ -251,17 +285,50 @@ def _as_mode(name, val) -> str:
     return val.strip().lower()
 
 
-def _as_resolution(name, val) -> float:
-    v = _as_float(name, "resolution", val)
+def _check_resolution_range(name, v: float, key: str = "resolution"):
+    if not MIN_RESOLUTION <= v <= MAX_RESOLUTION:
+        hint = " (metres per cell, not cells per metre)" if v > MAX_RESOLUTION else ""
+        text = f"{key} must be between {MIN_RESOLUTION:g} and {MAX_RESOLUTION:g} m per cell, got {v:g}{hint}"
+        raise ParameterError(_msg(name, text) if name else _one_line(text))
+
+
+def _check_origin_range(name, origin):
+    if any(abs(v) > MAX_ORIGIN for v in origin[:2]):
+        raise ParameterError(_msg(name, f"origin x and y must be within +-{MAX_ORIGIN:g} m, got "
+                                        f"[{', '.join(f'{v:g}' for v in origin)}]"))
+
+
+def _as_resolution(name, val, key: str = "resolution") -> float:
+    """A resolution in [MIN_RESOLUTION, MAX_RESOLUTION] m per cell, else ParameterError naming ``key``."""
+    v = _as_float(name, key, val)
     if v <= 0:
-        raise ParameterError(_msg(name, f"resolution must be > 0 m/px, got {val!r}"))
+        raise ParameterError(_msg(name, f"{key} must be > 0 m/px, got {val!r}"))
+    _check_resolution_range(name, v, key)
     return v
+
+
+def check_resolution(value, *, name: str = "--resolution") -> float:
+    """``value`` as a resolution (m per cell) in the accepted range.
+
+    Raises
+    ------
+    ParameterError
+        Not a number, not > 0, or outside [:data:`MIN_RESOLUTION`,
+        :data:`MAX_RESOLUTION`]; the message begins with ``name``.
+    """
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)) \
+            or not value > 0 or not math.isfinite(value):
+        raise ParameterError(_one_line(f"{name} must be a number > 0 m/px, got {value!r}"))
+    _check_resolution_range(None, float(value), name)
+    return float(value)
 
 
 def _as_origin(name, val) -> tuple:
     if isinstance(val, (str, bytes)) or not hasattr(val, "__len__") or len(val) not in (2, 3):
         raise ParameterError(_msg(name, f"origin must be [x, y, yaw] in metres/radians, got {val!r}"))
-    return tuple(_as_float(name, "origin", v) for v in val) + ((0.0,) if len(val) == 2 else ())
+    org = tuple(_as_float(name, "origin", v) for v in val) + ((0.0,) if len(val) == 2 else ())
+    _check_origin_range(name, org)
+    return org
 
 
 def classify_gray(gray, *, negate: bool = False, occupied_thresh: float = OCCUPIED_THRESH,
@@ -413,7 +480,7 @@ def from_array(array, *, resolution: float = DEFAULT_RESOLUTION, origin=(0.0, 0.
 
 def _check_size(name, rows, cols):
     limit = MAX_CELLS
-    if rows * cols > limit:
+    if int(rows) * int(cols) > limit:
         raise MapTooLargeError(_msg(
             name, f"image is {cols} x {rows} px = {rows * cols:,} cells, more than "
                   f"topomap.io.MAX_CELLS = {limit:,}"))
@@ -555,16 +622,51 @@ def _read_image(path: Path, name: str):
 # Loading
 # --------------------------------------------------------------------------
 
+def _yaml_loader():
+    """A safe YAML loader that refuses aliases (``*name``): nothing expands (no "billion laughs")."""
+    import yaml
+
+    class NoAliasLoader(yaml.SafeLoader):
+        def compose_node(self, parent, index):
+            if self.check_event(yaml.AliasEvent):
+                mark = self.peek_event().start_mark
+                raise yaml.composer.ComposerError(None, None, "aliases (*name) are not allowed in a map YAML",
+                                                  mark)
+            return super().compose_node(parent, index)
+
+    return NoAliasLoader
+
+
+def _check_yaml_keys(name, meta: dict):
+    """ParameterError for a near-miss of a known key (a typo); a warning for any other unknown key."""
+    for key in meta:
+        if key in YAML_KEYS:
+            continue
+        shown = _one_line(repr(key))[:60]
+        close = difflib.get_close_matches(str(key), YAML_KEYS, n=1, cutoff=0.75) if isinstance(key, str) else []
+        if close:
+            raise ParameterError(_msg(name, f"unknown key {shown} (did you mean '{close[0]}'?); a map YAML has "
+                                            f"{', '.join(YAML_KEYS)}"))
+        log.warning("%s", _msg(name, f"unknown key {shown} ignored (a map YAML has {', '.join(YAML_KEYS)})"))
+
+
 def _read_yaml(path: Path, name: str) -> dict:
     import yaml
 
     _check_file(name, path, "map YAML")
     try:
+        size = path.stat().st_size
+    except OSError as exc:
+        raise MapFileError(_msg(name, f"cannot read map YAML: {exc.strerror or exc}")) from None
+    if size > MAX_YAML_BYTES:
+        raise MapError(_msg(name, f"map YAML is {size:,} bytes, more than {MAX_YAML_BYTES:,} (a map_server YAML "
+                                  f"is a few lines; is this the image?)"))
+    try:
         text = path.read_bytes()
     except OSError as exc:
         raise MapFileError(_msg(name, f"cannot read map YAML: {exc.strerror or exc}")) from None
     try:
-        meta = yaml.safe_load(text)
+        meta = yaml.load(text, Loader=_yaml_loader())  # noqa: S506 - a SafeLoader without aliases
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}" if mark is not None else ""
@@ -576,6 +678,7 @@ def _read_yaml(path: Path, name: str) -> dict:
         raise MapError(_msg(name, f"not valid YAML: {_one_line(exc) or type(exc).__name__}")) from None
     if not isinstance(meta, dict):
         raise MapError(_msg(name, f"map YAML must be a mapping (key: value), got {type(meta).__name__}"))
+    _check_yaml_keys(name, meta)
     return meta
 
 
@@ -710,6 +813,10 @@ def load_map(path, *, resolution=None, origin=None, negate=None, occupied_thresh
 
     val, where = pick("resolution", resolution, DEFAULT_RESOLUTION)
     res = _as_resolution(where, val)
+    if not USUAL_RESOLUTION[0] <= res <= USUAL_RESOLUTION[1]:
+        log.warning("%s", _msg(name, f"resolution {res:g} m per cell is outside what indoor maps use "
+                                     f"({USUAL_RESOLUTION[0]:g}-{USUAL_RESOLUTION[1]:g}); rooms and doors "
+                                     f"may be meaningless"))
     val, where = pick("origin", origin, (0.0, 0.0, 0.0))
     org = _as_origin(where, val)
     val, where = pick("negate", negate, False)
@@ -733,7 +840,23 @@ def load_map(path, *, resolution=None, origin=None, negate=None, occupied_thresh
                               mode=mod, transparent=transparent)
     else:
         cells = classify_plan(gray, negate=neg, transparent=transparent)
-    return OccupancyGrid(cells, res, org, name, gray=gray)
+    grid = OccupancyGrid(cells, res, org, name, gray=gray)
+    _warn_free_area(name, np.count_nonzero(cells == FREE) * res * res)
+    return grid
+
+
+#: Free area (m²) outside which :func:`load_map` warns: less than a small room, more than any building.
+USUAL_FREE_AREA = (1.0, 1e6)
+
+
+def _warn_free_area(name, area: float):
+    lo, hi = USUAL_FREE_AREA
+    if 0 < area < lo:
+        log.warning("%s", _msg(name, f"free space is only {area:.3g} m², less than a small room; "
+                                     f"is the resolution right?"))
+    elif area > hi:
+        log.warning("%s", _msg(name, f"free space is {area:.3g} m², more than any building; "
+                                     f"is the resolution right (metres per cell)?"))
 
 
 # --------------------------------------------------------------------------
@@ -763,6 +886,80 @@ def yaml_text(meta: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+#: Temporary files :func:`atomic_write` makes: ``.NAME.pPID.RANDOM.tmp``.
+_TMP_RE = re.compile(r"^\..+\.p(\d+)\.[A-Za-z0-9_]+\.tmp$")
+#: Temporaries of the earlier naming (``.NAME.RANDOM.tmp``, no PID) older than this many seconds are stale.
+_OLD_TMP_AGE = 3600.0
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OverflowError, OSError):
+        return True
+    return True
+
+
+def remove_stale_temporaries(folder) -> int:
+    """Remove the temporary files killed runs of :func:`atomic_write` left in ``folder``.
+
+    A temporary is ours when its name is ``.NAME.pPID.RANDOM.tmp``; it is
+    stale when process ``PID`` no longer runs (files of the earlier naming,
+    without a PID, when older than an hour). Other files are never touched.
+
+    Returns
+    -------
+    int
+        How many files were removed.
+    """
+    import time
+
+    removed = 0
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:
+        return 0
+    now = time.time()
+    for e in entries:
+        name = e.name
+        if not (name.startswith(".") and name.endswith(".tmp")):
+            continue
+        m = _TMP_RE.match(name)
+        try:
+            if not e.is_file(follow_symlinks=False):
+                continue
+            if m is not None:
+                stale = int(m.group(1)) != os.getpid() and not _pid_alive(int(m.group(1)))
+            else:
+                stale = re.match(r"^\..+\.[A-Za-z0-9_]{8}\.tmp$", name) is not None and \
+                    now - e.stat(follow_symlinks=False).st_mtime > _OLD_TMP_AGE
+            if stale:
+                os.unlink(e.path)
+                removed += 1
+        except OSError:
+            continue
+    if removed:
+        log.info("%s: removed %d stale temporary file(s) of killed runs", folder, removed)
+    return removed
+
+
+def _renamed(exc, tmp: str, path: Path):
+    """``exc`` with the final ``path`` in its message instead of the temporary ``tmp``, or None to keep it."""
+    from .errors import TopomapError
+
+    if isinstance(exc, OSError) and not isinstance(exc, TopomapError):
+        return MapFileError(_msg(path, f"cannot write: {exc.strerror or exc}"))
+    text = str(exc)
+    if tmp in text:
+        try:
+            return type(exc)(text.replace(tmp, str(path)))
+        except Exception:  # noqa: BLE001 - an exception type that takes other arguments: keep the original
+            return None
+    return None
+
+
 @contextmanager
 def atomic_write(path, mode: Optional[str] = "wb"):
     """Open a temporary file beside ``path``; rename it to ``path`` on success.
@@ -772,10 +969,23 @@ def atomic_write(path, mode: Optional[str] = "wb"):
     temporary file's path (``mode=None``, for writers that take a file name)
     or a file object open in ``mode``. The file gets the permissions of the
     file it replaces, or the umask's default for a new one.
+
+    The temporary is named ``.NAME.pPID.RANDOM.tmp``; temporaries that killed
+    runs left in the folder are removed first (:func:`remove_stale_temporaries`).
+    Errors name ``path``, never the temporary: a failed write (a full disk)
+    is a :class:`~topomap.errors.MapFileError`. Text modes write UTF-8, file
+    names that are not UTF-8 as their original bytes.
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise MapFileError(_msg(path.parent, f"cannot create the output folder: {exc.strerror or exc}")) from None
+    remove_stale_temporaries(path.parent)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.p{os.getpid()}.", suffix=".tmp", dir=path.parent)
+    except OSError as exc:
+        raise MapFileError(_msg(path, f"cannot write: {exc.strerror or exc}")) from None
     os.close(fd)
     try:
         try:
@@ -788,16 +998,20 @@ def atomic_write(path, mode: Optional[str] = "wb"):
         if mode is None:
             yield tmp
         else:
-            with open(tmp, mode) as fh:
+            text = "b" not in mode
+            with open(tmp, mode, **({"encoding": "utf-8", "errors": "surrogateescape"} if text else {})) as fh:
                 yield fh
                 fh.flush()
                 os.fsync(fh.fileno())
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         try:
             os.unlink(tmp)
         except OSError:
             pass
+        new = _renamed(exc, tmp, path) if isinstance(exc, Exception) else None
+        if new is not None:
+            raise new from None
         raise
 
 

@@ -128,10 +128,18 @@ class _Ctx:
         self.res = self.grid.resolution
         self.doors = {}  # id -> (a, b, p1, p2, width, (x, y))
         for a, b, k, d in G.edges(keys=True, data=True):
-            did = int(d.get("door", k))
-            p1 = tuple(float(v) for v in d["p1"])
-            p2 = tuple(float(v) for v in d["p2"])
-            self.doors[did] = (int(a), int(b), p1, p2, float(d["width"]), (float(d["x"]), float(d["y"])))
+            try:
+                did = int(d.get("door", k))
+                p1 = tuple(float(v) for v in d["p1"])
+                p2 = tuple(float(v) for v in d["p2"])
+                self.doors[did] = (int(a), int(b), p1, p2, float(d["width"]), (float(d["x"]), float(d["y"])))
+                if len(p1) != 2 or len(p2) != 2:
+                    raise ValueError("p1 and p2 must be (row, col)")
+            except KeyError as exc:
+                raise PlanningError(f"room graph: door {a}-{b} lacks the attribute {exc.args[0]!r} (doors need "
+                                    "p1, p2, width, x, y)") from None
+            except (TypeError, ValueError) as exc:
+                raise PlanningError(f"room graph: door {a}-{b} has a bad attribute: {exc}") from None
         self._of = {}  # room -> its door IDs, ascending
         for did in sorted(self.doors):
             a, b = self.doors[did][:2]
