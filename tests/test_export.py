@@ -214,7 +214,7 @@ def test_failed_write_keeps_the_old_file(graph, tmp_path, monkeypatch, ext):
 
     monkeypatch.setattr(json, "dump", boom)
     monkeypatch.setattr(json, "dumps", boom)  # the writers encode with json.dumps (the C encoder)
-    monkeypatch.setattr(nx, "write_graphml", boom)
+    monkeypatch.setattr(E, "graphml_bytes", boom)  # the GraphML text, made before the file is written
     with pytest.raises(OSError, match="disk full"):
         E.save_graph(nx.MultiGraph(), path)
     assert path.read_bytes() == before

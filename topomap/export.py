@@ -48,8 +48,8 @@ from .io import atomic_write  # noqa: F401  (re-exported: topomap.export.atomic_
 __all__ = ["atomic_write", "save_labels", "save_graphml", "save_json", "to_graphml_graph",
            "node_link", "write_outputs", "save_bytes", "geometry_wkt", "restore_types", "load_graphml", "load_json",
            "to_geojson", "from_geojson", "save_geojson", "load_geojson", "save_label_map", "load_label_map",
-           "save_graph", "load_graph", "label_map_bytes", "GRAPH_TYPES", "NODE_TYPES", "EDGE_TYPES", "FORMATS",
-           "GEOJSON_COORDINATES"]
+           "save_graph", "load_graph", "label_map_bytes", "graphml_bytes", "GRAPH_TYPES", "NODE_TYPES",
+           "EDGE_TYPES", "FORMATS", "GEOJSON_COORDINATES"]
 
 #: What the coordinates of topomap's GeoJSON are, written into every file's
 #: collection ``properties`` as ``"coordinate_system"``.
@@ -59,14 +59,39 @@ GEOJSON_COORDINATES = ("x, y in metres in the map frame (the frame of the map's 
 
 
 def save_labels(labels: np.ndarray, path) -> Path:
-    """Write the label image as a 16-bit PNG (0 = not a room), same size as the map."""
+    """Write the label image as a 16-bit PNG (0 = not a room), same size as the map.
+
+    ``path``: a file name (written atomically) or a binary file object
+    (written as it is; the caller owns the file, as :func:`write_outputs`).
+    """
     from PIL import Image
 
     if labels.max(initial=0) > 65535:
-        raise ValueError(f"{path}: {int(labels.max())} rooms do not fit a 16-bit PNG")
+        raise ValueError(f"{_name(path)}: {int(labels.max())} rooms do not fit a 16-bit PNG")
     img = Image.fromarray(labels.astype(np.uint16))
+    if _is_file(path):
+        img.save(path, format="PNG", compress_level=1)
+        return Path(_name(path))
     with atomic_write(path) as fh:
         img.save(fh, format="PNG", compress_level=1)  # fast zlib level: label images compress well anyway
+    return Path(path)
+
+
+def _is_file(path) -> bool:
+    return hasattr(path, "write")
+
+
+def _name(path) -> str:
+    return str(getattr(path, "name", path)) if _is_file(path) else str(path)
+
+
+def _write(data: bytes, path) -> Path:
+    """``data`` into ``path``: a file name (written atomically) or a binary file object (written as it is)."""
+    if _is_file(path):
+        path.write(data)
+        return Path(_name(path))
+    with atomic_write(path) as fh:
+        fh.write(data)
     return Path(path)
 
 
@@ -86,11 +111,13 @@ _POINT_ZERO = re.compile(r"\.0(?=[ ,)]|$)")
 
 
 def _ring(coords) -> str:
-    vals = np.asarray(coords, float).reshape(-1).tolist()  # 2-D only: geometry with z goes to shapely.to_wkt
-    toks = list(map(repr, vals))
-    if any("e" in t or "n" in t for t in toks):
+    xy = np.asarray(coords, float).reshape(-1, 2)  # 2-D only: geometry with z goes to shapely.to_wkt
+    # json's C encoder writes every float as repr() does: "[[x y] [x y]]" -> "x y, x y"
+    text = json.dumps(xy.tolist(), separators=(" ", ":"))[2:-2].replace("] [", ", ")
+    if "e" in text or "N" in text or "I" in text:  # an exponent, NaN or Infinity: token by token
+        vals = xy.reshape(-1).tolist()
         toks = [_num(v) for v in vals]
-    text = ", ".join(map(" ".join, zip(toks[::2], toks[1::2])))
+        text = ", ".join(map(" ".join, zip(toks[::2], toks[1::2])))
     return "(" + _POINT_ZERO.sub("", text) + ")"
 
 
@@ -296,17 +323,92 @@ def save_graphml(G: nx.Graph, path) -> Path:
     ----------
     G : networkx.Graph
         Room–door graph.
-    path : str or os.PathLike
-        Output file, written atomically.
+    path : str, os.PathLike or binary file object
+        Output file, written atomically (a file object: written as it is).
 
     Returns
     -------
     pathlib.Path
     """
-    H = to_graphml_graph(G)
-    with atomic_write(path) as fh:
-        nx.write_graphml(H, fh)
-    return Path(path)
+    return _write(graphml_bytes(to_graphml_graph(G)), path)
+
+
+_XML_TYPES = {bool: "boolean", int: "long", float: "double", str: "string"}
+_XML_HEAD = ("<?xml version='1.0' encoding='utf-8'?>\n<graphml xmlns=\"http://graphml.graphdrawing.org/xmlns\" "
+             "xmlns:xsi=\"http://www.w3.org/2001/XMLSchema-instance\" xsi:schemaLocation=\"http://graphml.graphdrawing"
+             ".org/xmlns http://graphml.graphdrawing.org/xmlns/1.0/graphml.xsd\">")
+
+
+def _xml_text(v: str) -> str:
+    return v.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+
+
+def _xml_attr(v: str) -> str:
+    return (_xml_text(v).replace("\"", "&quot;").replace("\r", "&#13;").replace("\n", "&#10;")
+            .replace("\t", "&#09;"))
+
+
+def graphml_bytes(G: nx.Graph) -> bytes:
+    """GraphML document of ``G`` as ``networkx.write_graphml`` (its ElementTree writer) writes it.
+
+    Written directly as text for graphs whose attributes are all str, int,
+    float or bool (as :func:`to_graphml_graph` makes them): the same
+    document, key ids, attribute types and layout, so ``networkx.read_graphml``
+    reads back the same graph. Other graphs go through networkx.
+    """
+    gdata = {k: v for k, v in G.graph.items()}
+    if any(k in gdata for k in ("id", "node_default", "edge_default")):
+        return _nx_graphml_bytes(G)
+    keys, key_lines = {}, []
+
+    def data(items, scope, pad):
+        out = []
+        for k, v in items:
+            t = type(v)
+            xt = _XML_TYPES.get(t)
+            if xt is None:
+                raise TypeError(t)
+            name = str(k)
+            kid = keys.get((name, t, scope))
+            if kid is None:
+                kid = keys[(name, t, scope)] = f"d{len(keys)}"
+                key_lines.append(f'  <key id="{kid}" for="{scope}" attr.name="{_xml_attr(name)}" '
+                                 f'attr.type="{xt}" />')
+            text = str(v)
+            out.append(f'{pad}<data key="{kid}">{_xml_text(text)}</data>' if text else f'{pad}<data key="{kid}" />')
+        return out
+
+    try:
+        graph_lines = data(gdata.items(), "graph", "    ")  # keys numbered graph first, as networkx does
+        body = []
+        for n, d in G.nodes(data=True):
+            tag = f'    <node id="{_xml_attr(str(n))}"'
+            lines = data(d.items(), "node", "      ")
+            body += [tag + ">", *lines, "    </node>"] if lines else [tag + " />"]
+        if G.is_multigraph():
+            edges = ((u, v, f' id="{_xml_attr(str(k))}"', d) for u, v, k, d in G.edges(keys=True, data=True))
+        else:
+            edges = ((u, v, "", d) for u, v, d in G.edges(data=True))
+        for u, v, eid, d in edges:
+            tag = f'    <edge source="{_xml_attr(str(u))}" target="{_xml_attr(str(v))}"{eid}'
+            lines = data(d.items(), "edge", "      ")
+            body += [tag + ">", *lines, "    </edge>"] if lines else [tag + " />"]
+    except TypeError:
+        return _nx_graphml_bytes(G)
+    body += graph_lines
+    graph = f'  <graph edgedefault="{"directed" if G.is_directed() else "undirected"}"'
+    parts = [_XML_HEAD, *key_lines[::-1]]  # networkx inserts every new key first
+    parts += [graph + ">", *body, "  </graph>"] if body else [graph + " />"]
+    parts.append("</graphml>\n")
+    return "\n".join(parts).encode("utf-8", "xmlcharrefreplace")
+
+
+def _nx_graphml_bytes(G) -> bytes:
+    import io
+
+    buf = io.BytesIO()
+    nx.write_graphml_xml(G.copy(), buf)  # a copy: the writer takes "id" out of the graph's attributes
+    return buf.getvalue()
 
 
 def _bad(path, what, exc=None) -> GraphFormatError:
@@ -358,11 +460,9 @@ def node_link(G: nx.Graph) -> dict:
 
 
 def save_json(G: nx.Graph, path) -> Path:
-    """Write the room graph as node-link JSON (atomically); see :func:`node_link`."""
+    """Write the room graph as node-link JSON (atomically; or into a binary file object); see :func:`node_link`."""
     text = json.dumps(node_link(G))  # compact: json's C encoder (indent or json.dump would use the Python one)
-    with atomic_write(path, "w") as fh:
-        fh.write(text)
-    return Path(path)
+    return _write(text.encode("utf-8"), path)
 
 
 def load_json(path) -> nx.MultiGraph:
@@ -505,11 +605,8 @@ def from_geojson(data: dict, name: str = "<geojson>") -> nx.MultiGraph:
 
 
 def save_geojson(G: nx.Graph, path) -> Path:
-    """Write :func:`to_geojson` of ``G`` to ``path`` (atomically)."""
-    text = json.dumps(to_geojson(G))
-    with atomic_write(path, "w") as fh:
-        fh.write(text)
-    return Path(path)
+    """Write :func:`to_geojson` of ``G`` to ``path`` (atomically; or into a binary file object)."""
+    return _write(json.dumps(to_geojson(G)).encode("utf-8"), path)
 
 
 def load_geojson(path) -> nx.MultiGraph:
@@ -796,18 +893,26 @@ def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None, geojs
                "graphml": lambda p: save_graphml(plain(), p),
                "json": lambda p: save_json(plain(), p), "geojson": lambda p: save_geojson(graph, p),
                "overlay": lambda p: save_bytes(overlay_png, p)}
+    to_file = ("labels", "graphml", "json", "geojson")  # writers given the open temporary file
     with ExitStack() as stack:  # on success renames every temporary file; on error removes them all
         tmp = {k: stack.enter_context(atomic_write(outdir / f, None)) for k, f in names.items()}
         for k in names:
             t = time.perf_counter()
-            writers[k](tmp[k])
+            if k in to_file:  # into the temporary file itself (renamed into place at the end)
+                with open(tmp[k], "wb") as fh:
+                    writers[k](fh)
+            else:
+                writers[k](tmp[k])
             if timings is not None:
                 timings[f"write_{k}"] = time.perf_counter() - t
     return {k: outdir / f for k, f in names.items()}
 
 
 def save_bytes(data: bytes, path) -> Path:
-    """Write ``data`` to ``path`` as it is."""
+    """Write ``data`` to ``path`` (a file name or a binary file object) as it is."""
+    if _is_file(path):
+        path.write(data)
+        return Path(_name(path))
     path = Path(path)
     path.write_bytes(data)
     return path
