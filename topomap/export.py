@@ -35,6 +35,7 @@ and never clobbers an earlier output.
 
 from __future__ import annotations
 
+import contextvars
 import json
 import re
 from pathlib import Path
@@ -111,18 +112,54 @@ _POINT_ZERO = re.compile(r"\.0(?=[ ,)]|$)")
 
 
 def _ring(coords) -> str:
-    xy = np.asarray(coords, float).reshape(-1, 2)  # 2-D only: geometry with z goes to shapely.to_wkt
-    # json's C encoder writes every float as repr() does: "[[x y] [x y]]" -> "x y, x y"
-    text = json.dumps(xy.tolist(), separators=(" ", ":"))[2:-2].replace("] [", ", ")
-    if "e" in text or "N" in text or "I" in text:  # an exponent, NaN or Infinity: token by token
-        vals = xy.reshape(-1).tolist()
-        toks = [_num(v) for v in vals]
-        text = ", ".join(map(" ".join, zip(toks[::2], toks[1::2])))
-    return "(" + _POINT_ZERO.sub("", text) + ")"
+    return _wkt_ring(_ring_json(coords))
+
+
+def _ring_json(coords) -> str:
+    """The GeoJSON text of a 2-D ring, ``[[x, y], ...]`` (json's C encoder: every float as ``repr``)."""
+    return json.dumps(np.asarray(coords, float).reshape(-1, 2).tolist())
+
+
+def _wkt_ring(text: str) -> str:
+    """WKT ``(x y, x y, ...)`` of a ring's :func:`_ring_json` text (exact decimals, no exponent)."""
+    wkt = text[2:-2].replace("], [", "|").replace(", ", " ").replace("|", ", ")
+    if "e" in wkt or "N" in wkt or "I" in wkt:  # an exponent, NaN or Infinity: token by token
+        toks = [_num(v) for v in np.asarray(json.loads(text), float).reshape(-1).tolist()]
+        wkt = ", ".join(map(" ".join, zip(toks[::2], toks[1::2])))
+    return "(" + _POINT_ZERO.sub("", wkt) + ")"
+
+
+#: Inside :func:`write_outputs`: ``{id(geometry): (geometry, ring texts)}``, so the GraphML / JSON
+#: WKT and the GeoJSON coordinates of a room's outline encode its floats once.
+_RING_MEMO = contextvars.ContextVar("topomap_ring_memo", default=None)
+
+
+def _poly_rings(p) -> list:
+    """:func:`_ring_json` texts of a 2-D Polygon's exterior and interiors (memoised in write_outputs)."""
+    memo = _RING_MEMO.get()
+    if memo is not None:
+        hit = memo.get(id(p))
+        if hit is not None and hit[0] is p:
+            return hit[1]
+    rings = [_ring_json(r.coords) for r in [p.exterior, *p.interiors]]
+    if memo is not None:
+        memo[id(p)] = (p, rings)
+    return rings
+
+
+def _parts(geom) -> list:
+    """A 2-D Polygon's or MultiPolygon's polygons; kept (so memo ids stay valid) while a write runs."""
+    memo = _RING_MEMO.get()
+    if memo is None:
+        return list(geom.geoms)
+    hit = memo.get(id(geom))
+    if hit is None or hit[0] is not geom:
+        hit = memo[id(geom)] = (geom, list(geom.geoms))
+    return hit[1]
 
 
 def _poly_wkt(p) -> str:
-    return "(" + ", ".join(_ring(r.coords) for r in [p.exterior, *p.interiors]) + ")"
+    return "(" + ", ".join(map(_wkt_ring, _poly_rings(p))) + ")"
 
 
 def geometry_wkt(geom) -> str:
@@ -148,7 +185,7 @@ def geometry_wkt(geom) -> str:
     if t == "Polygon":
         return "POLYGON " + _poly_wkt(geom)
     if t == "MultiPolygon":
-        return "MULTIPOLYGON (" + ", ".join(_poly_wkt(p) for p in geom.geoms) + ")"
+        return "MULTIPOLYGON (" + ", ".join(_poly_wkt(p) for p in _parts(geom)) + ")"
     return shapely.to_wkt(geom, rounding_precision=-1)
 
 
@@ -515,25 +552,57 @@ def to_geojson(G: nx.Graph) -> dict:
         ``properties`` say so in ``"coordinate_system"``
         (:data:`GEOJSON_COORDINATES`).
     """
+    props, feats = _geojson_parts(G)
+    for f, geom in feats:
+        if geom is not None:
+            f["geometry"] = _geom_json(geom)
+    return {"type": "FeatureCollection", "properties": props, "features": [f for f, _ in feats]}
+
+
+def _geojson_parts(G):
+    """The collection's properties and ``(feature, room outline)`` pairs, geometry left None for rooms."""
     feats = []
     for n, d in G.nodes(data=True):
-        geom = d.get("polygon")
         props = {"kind": "room", "room": _plain(n)}
         props.update({k: _plain(v) for k, v in d.items() if k != "polygon"})
-        feats.append({"type": "Feature", "id": f"room-{n}",
-                      "geometry": _geom_json(geom) if geom is not None else None,
-                      "properties": props})
+        feats.append(({"type": "Feature", "id": f"room-{n}", "geometry": None, "properties": props},
+                      d.get("polygon")))
     edges = G.edges(keys=True, data=True) if G.is_multigraph() else ((u, v, None, d) for u, v, d in G.edges(data=True))
     for u, v, k, d in edges:
         did = d.get("door", k)
         props = {"kind": "door", "door": _plain(did), "rooms": [_plain(u), _plain(v)]}
         props.update({a: _plain(b) for a, b in d.items() if a not in ("door", "rooms")})
         line = [[float(d["x1"]), float(d["y1"])], [float(d["x2"]), float(d["y2"])]]
-        feats.append({"type": "Feature", "id": f"door-{did}",
-                      "geometry": {"type": "LineString", "coordinates": line}, "properties": props})
+        feats.append(({"type": "Feature", "id": f"door-{did}",
+                       "geometry": {"type": "LineString", "coordinates": line}, "properties": props}, None))
     props = {"coordinate_system": GEOJSON_COORDINATES}
     props.update({k: _plain(v) for k, v in G.graph.items()})
-    return {"type": "FeatureCollection", "properties": props, "features": feats}
+    return props, feats
+
+
+def _geojson_text(G) -> str:
+    """``json.dumps(to_geojson(G))``, the rooms' outlines from their ring texts (:func:`_poly_rings`)."""
+    props, feats = _geojson_parts(G)
+    texts = []
+    for f, geom in feats:
+        text = json.dumps(f)
+        if geom is not None:
+            # inside a JSON string every quote is escaped: the first '"geometry": null' is the key's
+            text = text.replace('"geometry": null', '"geometry": ' + _geom_json_text(geom), 1)
+        texts.append(text)
+    return ('{"type": "FeatureCollection", "properties": ' + json.dumps(props) + ', "features": ['
+            + ", ".join(texts) + "]}")
+
+
+def _geom_json_text(geom) -> str:
+    """``json.dumps(_geom_json(geom))``; 2-D polygons from their memoised ring texts."""
+    t = geom.geom_type
+    if t in ("Polygon", "MultiPolygon") and not geom.is_empty and not geom.has_z:
+        if t == "Polygon":
+            return '{"type": "Polygon", "coordinates": [' + ", ".join(_poly_rings(geom)) + "]}"
+        return ('{"type": "MultiPolygon", "coordinates": ['
+                + ", ".join("[" + ", ".join(_poly_rings(p)) + "]" for p in _parts(geom)) + "]}")
+    return json.dumps(_geom_json(geom))
 
 
 def _geom_json(geom) -> dict:
@@ -606,7 +675,7 @@ def from_geojson(data: dict, name: str = "<geojson>") -> nx.MultiGraph:
 
 def save_geojson(G: nx.Graph, path) -> Path:
     """Write :func:`to_geojson` of ``G`` to ``path`` (atomically; or into a binary file object)."""
-    return _write(json.dumps(to_geojson(G)).encode("utf-8"), path)
+    return _write(_geojson_text(G).encode("utf-8"), path)
 
 
 def load_geojson(path) -> nx.MultiGraph:
@@ -894,17 +963,21 @@ def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None, geojs
                "json": lambda p: save_json(plain(), p), "geojson": lambda p: save_geojson(graph, p),
                "overlay": lambda p: save_bytes(overlay_png, p)}
     to_file = ("labels", "graphml", "json", "geojson")  # writers given the open temporary file
-    with ExitStack() as stack:  # on success renames every temporary file; on error removes them all
-        tmp = {k: stack.enter_context(atomic_write(outdir / f, None)) for k, f in names.items()}
-        for k in names:
-            t = time.perf_counter()
-            if k in to_file:  # into the temporary file itself (renamed into place at the end)
-                with open(tmp[k], "wb") as fh:
-                    writers[k](fh)
-            else:
-                writers[k](tmp[k])
-            if timings is not None:
-                timings[f"write_{k}"] = time.perf_counter() - t
+    memo = _RING_MEMO.set({})  # outlines' floats encoded once, for the WKT and the GeoJSON
+    try:
+        with ExitStack() as stack:  # on success renames every temporary file; on error removes them all
+            tmp = {k: stack.enter_context(atomic_write(outdir / f, None)) for k, f in names.items()}
+            for k in names:
+                t = time.perf_counter()
+                if k in to_file:  # into the temporary file itself (renamed into place at the end)
+                    with open(tmp[k], "wb") as fh:
+                        writers[k](fh)
+                else:
+                    writers[k](tmp[k])
+                if timings is not None:
+                    timings[f"write_{k}"] = time.perf_counter() - t
+    finally:
+        _RING_MEMO.reset(memo)
     return {k: outdir / f for k, f in names.items()}
 
 
