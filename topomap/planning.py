@@ -168,7 +168,12 @@ class _Ctx:
         r0, r1, c0, c1 = win
         if self.seg is not None:
             L = self.seg.labels[r0:r1, c0:c1]
-            return np.where(np.isin(L, list(rooms)), L, 0).astype(np.int32)
+            if L.size == 0 or L.min() < 0:
+                return np.where(np.isin(L, list(rooms)), L, 0).astype(np.int32)
+            keep = np.zeros(int(L.max()) + 1, np.int32)  # label -> itself for the rooms kept, else 0
+            idx = np.array([r for r in rooms if 0 <= r < len(keep)], np.intp)
+            keep[idx] = idx
+            return keep[L]
         import shapely
 
         out = np.zeros((r1 - r0, c1 - c0), np.int32)
@@ -395,8 +400,9 @@ def _coarse_door_distances(mask, pts, f):
     pr = np.concatenate([cr, pts[:, 0]])
     pc = np.concatenate([ccol, pts[:, 1]])
     A.data = (_octile(pr[u] - pr[v], pc[u] - pc[v]) + 1e-9).astype(float)
-    dist = dijkstra(A, directed=False, indices=np.arange(n + 1, n + 1 + k))
-    return dist[:, n + 1:]
+    # from every point but the last: only the pairs i < j are used (the last row is the last column)
+    dist = dijkstra(A, directed=False, indices=np.arange(n + 1, n + k))[:, n + 1:]
+    return np.vstack([dist, np.append(dist[:, -1], 0.0)])
 
 
 #: Slack of the refinement windows: a path up to this factor (plus two coarse cells) longer
