@@ -190,7 +190,8 @@ def geometry_wkt(geom) -> str:
 
 
 def _is_geom(v) -> bool:
-    return hasattr(v, "geom_type") and hasattr(v, "wkt")
+    t = type(v)  # the class's attributes: hasattr(v, "wkt") would compute the WKT
+    return hasattr(t, "geom_type") and hasattr(t, "wkt")
 
 
 def _plain(v):
@@ -226,7 +227,22 @@ def _scalar(v):
         return bool(v)
     if _is_geom(v):
         return geometry_wkt(v)
+    if isinstance(v, (list, tuple)):
+        text = _json_as_is(v)
+        if text is not None:
+            return text
     return json.dumps(_plain(v))
+
+
+def _json_as_is(v):
+    """``json.dumps(v)`` when that is ``json.dumps(_plain(v))`` (lists and tuples of Python
+    numbers, strings, bools and None, as ``door_distances``), else None."""
+    try:
+        text = json.dumps(v)
+    except (TypeError, ValueError):  # numpy scalars, geometry, ...: through _plain
+        return None
+    # a dict inside: its keys are str() in _plain, json writes True / None keys as true / null
+    return None if "{" in text else text
 
 
 def _none(v):
@@ -559,12 +575,13 @@ def to_geojson(G: nx.Graph) -> dict:
     return {"type": "FeatureCollection", "properties": props, "features": [f for f, _ in feats]}
 
 
-def _geojson_parts(G):
-    """The collection's properties and ``(feature, room outline)`` pairs, geometry left None for rooms."""
+def _geojson_parts(G, plain=_plain):
+    """The collection's properties and ``(feature, room outline)`` pairs, geometry left None for rooms
+    (``plain``: how node attributes are made plain JSON)."""
     feats = []
     for n, d in G.nodes(data=True):
         props = {"kind": "room", "room": _plain(n)}
-        props.update({k: _plain(v) for k, v in d.items() if k != "polygon"})
+        props.update({k: plain(v) for k, v in d.items() if k != "polygon"})
         feats.append(({"type": "Feature", "id": f"room-{n}", "geometry": None, "properties": props},
                       d.get("polygon")))
     edges = G.edges(keys=True, data=True) if G.is_multigraph() else ((u, v, None, d) for u, v, d in G.edges(data=True))
@@ -582,7 +599,7 @@ def _geojson_parts(G):
 
 def _geojson_text(G) -> str:
     """``json.dumps(to_geojson(G))``, the rooms' outlines from their ring texts (:func:`_poly_rings`)."""
-    props, feats = _geojson_parts(G)
+    props, feats = _geojson_parts(G, _plain_for_dumps)
     texts = []
     for f, geom in feats:
         text = json.dumps(f)
@@ -592,6 +609,14 @@ def _geojson_text(G) -> str:
         texts.append(text)
     return ('{"type": "FeatureCollection", "properties": ' + json.dumps(props) + ', "features": ['
             + ", ".join(texts) + "]}")
+
+
+def _plain_for_dumps(v):
+    """What json.dumps writes as it writes :func:`_plain` of ``v``: lists and tuples of plain
+    values as they are (``door_distances``: no copy as lists), anything else :func:`_plain`."""
+    if isinstance(v, (list, tuple)) and _json_as_is(v) is not None:
+        return v
+    return _plain(v)
 
 
 def _geom_json_text(geom) -> str:
