@@ -285,8 +285,11 @@ class _RoomSpace:
             return out
         f = 1 if self.mask.size <= EXACT_CELLS else _coarse_factor(self.ctx.res)
         pts = np.array([self.door_px[d] for d in ids], float)
-        D = _coarse_door_distances(self.mask, pts, f)
-        seen = _in_sight(self.mask, pts) if f > 1 else np.zeros(D.shape, bool)
+        k = len(ids)
+        seen = _in_sight(self.mask, pts) if f > 1 else np.zeros((k, k), bool)
+        # the coarse search only from the doors with a pair i < j out of sight (none: no search)
+        sources = [i for i in range(k - 1) if not seen[i, i + 1:].all()]
+        D = _coarse_door_distances(self.mask, pts, f, sources)
         D[seen] = _octile(*(pts[:, None, :] - pts[None, :, :]).transpose(2, 0, 1))[seen]
         short = REFINE_CELLS * f if f > 1 else 0
         for i in range(len(ids)):
@@ -362,9 +365,10 @@ def _touching(a, b):
     return out
 
 
-def _coarse_door_distances(mask, pts, f):
+def _coarse_door_distances(mask, pts, f, sources=None):
     """(k, k) travel distances (map cells) between the points ``pts`` (local ``(row, col)``
-    cells of ``mask``) on the coarse grid of ``f`` x ``f`` blocks of ``mask``.
+    cells of ``mask``) on the coarse grid of ``f`` x ``f`` blocks of ``mask``; only the rows
+    ``sources`` (point indices; default all) are searched, the others are inf.
 
     A node is a connected piece of the mask inside one block (so walls and
     furniture within a block are never crossed), placed at the piece's
@@ -378,13 +382,17 @@ def _coarse_door_distances(mask, pts, f):
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import dijkstra
 
+    k = len(pts)
+    sources = np.arange(k) if sources is None else np.asarray(sources, int)
+    out = np.full((k, k), np.inf)
+    if len(sources) == 0:
+        return out
     lab, n, cen = _block_components(mask, f)
     cr, ccol = cen[:, 0], cen[:, 1]
     nb = len(lab[f::f])
     pairs = _touching(lab[f - 1::f][:nb], lab[f::f])
     nb = len(lab.T[f::f])
     pairs += [p[:, ::-1] for p in _touching(lab.T[f - 1::f][:nb], lab.T[f::f])]
-    k = len(pts)
     su, sv = [], []
     for i, (pr, pc) in enumerate(pts):
         r, c = int(pr), int(pc)
@@ -400,9 +408,8 @@ def _coarse_door_distances(mask, pts, f):
     pr = np.concatenate([cr, pts[:, 0]])
     pc = np.concatenate([ccol, pts[:, 1]])
     A.data = (_octile(pr[u] - pr[v], pc[u] - pc[v]) + 1e-9).astype(float)
-    # from every point but the last: only the pairs i < j are used (the last row is the last column)
-    dist = dijkstra(A, directed=False, indices=np.arange(n + 1, n + k))[:, n + 1:]
-    return np.vstack([dist, np.append(dist[:, -1], 0.0)])
+    out[sources] = dijkstra(A, directed=False, indices=n + 1 + sources)[:, n + 1:]
+    return out
 
 
 #: Slack of the refinement windows: a path up to this factor (plus two coarse cells) longer
