@@ -43,8 +43,9 @@ computed on a coarse grid, so that a room with many doors costs little:
   the piece's centroid; two pieces are joined when any of their cells are
   8-neighbours, with the octile distance between their centroids; each door
   cell is joined to the pieces around it;
-* Dijkstra (:func:`scipy.sparse.csgraph.dijkstra`) from every door gives
-  all pairs at once;
+* Dijkstra (:func:`scipy.sparse.csgraph.dijkstra`) from every door that
+  has a pair out of sight (below) gives those pairs at once; a room whose
+  doors all see each other needs no search;
 * two doors in sight of each other (the digital straight line between
   their cells runs on the room's cells only) get their octile distance,
   which is then exactly the map-grid geodesic;
@@ -377,7 +378,7 @@ def _coarse_door_distances(mask, pts, f, sources=None):
     metric of the map-grid geodesic) between their centroids; each point
     is joined to the pieces of its 3 x 3 neighbourhood by the octile distance
     to their centroids. Shortest paths: Dijkstra
-    (:func:`scipy.sparse.csgraph.dijkstra`) from every point.
+    (:func:`scipy.sparse.csgraph.dijkstra`) from every point of ``sources``.
     """
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import dijkstra
