@@ -145,9 +145,14 @@ class _Ctx:
         """(r0, r1, c0, c1) half-open pixel box of room ``r``'s cells."""
         if self.seg is not None:
             if self._bbox is None:
-                from scipy import ndimage as ndi
+                # the boxes room_graph found for these labels (rooms 1..N: the same as the labels' own)
+                labels, boxes = getattr(self.G, "_room_boxes", (None, None))
+                if labels is self.seg.labels:
+                    self._bbox = boxes
+                else:
+                    from scipy import ndimage as ndi
 
-                self._bbox = ndi.find_objects(self.seg.labels)
+                    self._bbox = ndi.find_objects(self.seg.labels)
             sl = self._bbox[r - 1] if 0 < r <= len(self._bbox) else None
             if sl is None:
                 return None

@@ -136,6 +136,8 @@ def room_graph(seg) -> nx.MultiGraph:
             sr[i] = float(m.sum(1) @ np.arange(sl[0].start, sl[0].stop))
             sc[i] = float(m.sum(0) @ np.arange(sl[1].start, sl[1].stop))
     polys = _room_polygons(labels, objs, grid.pixel_to_world)
+    # the rooms' boxes, for topomap.planning's room windows (not a graph attribute: never saved)
+    G._room_boxes = (seg.labels, objs)
     area_cell = grid.resolution ** 2
     for i in range(1, n + 1):
         if cnt[i] == 0:
