@@ -145,9 +145,11 @@ class _Ctx:
         """(r0, r1, c0, c1) half-open pixel box of room ``r``'s cells."""
         if self.seg is not None:
             if self._bbox is None:
+                from .roomgraph import _BOXES
+
                 # the boxes room_graph found for these labels (rooms 1..N: the same as the labels' own)
-                labels, boxes = getattr(self.G, "_room_boxes", (None, None))
-                if labels is self.seg.labels:
+                ref, boxes = _BOXES.get(self.G, (lambda: None, None))
+                if ref() is self.seg.labels:
                     self._bbox = boxes
                 else:
                     from scipy import ndimage as ndi

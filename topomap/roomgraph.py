@@ -8,11 +8,17 @@ edge, keyed by the door id). Every attribute, with its unit, is listed on the
 
 from __future__ import annotations
 
+import weakref
+
 import numpy as np
 import networkx as nx
 from scipy import ndimage as ndi
 
 __all__ = ["room_graph", "room_polygons"]
+
+#: graph -> (weak reference to the labels, their rooms' boxes) of the graphs room_graph built, for
+#: topomap.planning's room windows (beside the graph, not in it: never saved, copied or pickled)
+_BOXES = weakref.WeakKeyDictionary()
 
 
 def room_polygons(labels: np.ndarray, to_world=None) -> dict:
@@ -136,8 +142,7 @@ def room_graph(seg) -> nx.MultiGraph:
             sr[i] = float(m.sum(1) @ np.arange(sl[0].start, sl[0].stop))
             sc[i] = float(m.sum(0) @ np.arange(sl[1].start, sl[1].stop))
     polys = _room_polygons(labels, objs, grid.pixel_to_world)
-    # the rooms' boxes, for topomap.planning's room windows (not a graph attribute: never saved)
-    G._room_boxes = (seg.labels, objs)
+    _BOXES[G] = (weakref.ref(seg.labels), objs)
     area_cell = grid.resolution ** 2
     for i in range(1, n + 1):
         if cnt[i] == 0:
