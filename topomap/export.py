@@ -10,7 +10,9 @@ GraphML (:func:`save_graphml`, :func:`load_graphml`)
     bit for bit), tuples and lists are JSON strings, ``None`` is ``""``.
     :func:`load_graphml` restores the types from :data:`GRAPH_TYPES`,
     :data:`NODE_TYPES` and :data:`EDGE_TYPES` (floats, int room IDs and door
-    keys, tuples, shapely geometry), osmnx style.
+    keys, tuples, shapely geometry), osmnx style. The document is written as
+    text (:func:`graphml_bytes`): the one networkx's own writer makes, byte
+    for byte.
 JSON (:func:`save_json`, :func:`load_json`)
     networkx node-link data (``"edges"`` key) with the same scalar encoding;
     loading gives a graph equal to the original.
