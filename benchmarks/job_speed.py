@@ -197,9 +197,11 @@ def _load():
 # the report
 # --------------------------------------------------------------------------
 
-TOPO_STAGES = ["start", "import", "warmup", "load", "preprocess", "skeletons", "graphs", "doors", "rooms",
-               "room_graph", "travel", "overlay", "write_labels", "write_graphml", "write_json", "write_geojson",
-               "write_overlay"]
+#: Every stage --profile reports (topomap.batch's list), but the sums (segment/total, write, job).
+WRITES = ["write_labels", "write_label_map_pgm", "write_label_map", "write_graphml", "write_json", "write_geojson",
+          "write_overlay"]
+TOPO_STAGES = ["start", "import", "warmup", "load", "preprocess", "walls", "skeletons", "graphs", "doors",
+               "openings", "rooms", "room_graph", "travel", "overlay"] + WRITES
 
 
 def main(argv=None):
@@ -274,11 +276,9 @@ def main(argv=None):
         groups = [("start, imports, warm-up (once)", ["start", "import", "warmup"]), ("load", ["load"]),
                   ("segmentation (`segment()`)", ["total"]), ("room graph", ["room_graph"]),
                   ("travel distances", ["travel"]), ("overlay drawn", ["overlay"]),
-                  ("files written", ["write_labels", "write_graphml", "write_json", "write_geojson",
-                                     "write_overlay"])]
+                  ("files written", WRITES)]
         wsum = {k: sum(d.get(k, 0.0) for d in prof.values()) for k in
-                ["start", "import", "warmup", "load", "total", "room_graph", "travel", "overlay", "write_labels",
-                 "write_graphml", "write_json", "write_geojson", "write_overlay", "job"]}
+                ["start", "import", "warmup", "load", "total", "room_graph", "travel", "overlay", *WRITES, "job"]}
         wsh = {k: sum(d.get(k, 0.0) for d in ws_last.values()) for k in ["import", "load", "distance", "segment",
                                                                           "write", "job"]}
         lines += ["Where the time goes, summed over the maps (last round; the watershed job's own stages beside "

@@ -214,7 +214,7 @@ def test_failed_write_keeps_the_old_file(graph, tmp_path, monkeypatch, ext):
 
     monkeypatch.setattr(json, "dump", boom)
     monkeypatch.setattr(json, "dumps", boom)  # the writers encode with json.dumps (the C encoder)
-    monkeypatch.setattr(nx, "write_graphml", boom)
+    monkeypatch.setattr(E, "graphml_bytes", boom)  # the GraphML text, made before the file is written
     with pytest.raises(OSError, match="disk full"):
         E.save_graph(nx.MultiGraph(), path)
     assert path.read_bytes() == before
@@ -354,3 +354,66 @@ def test_cli_export(saved, tmp_path):
     bad.write_text("[]")
     r = _run("export", bad, tmp_path / "y.graphml")
     assert r.exit_code == 1 and _stderr(r).startswith("error: ")
+
+
+# --------------------------------------------------------------------------
+# The direct writers give the documents of the generic ones
+# --------------------------------------------------------------------------
+
+def _odd_graph():
+    """Attributes a GraphML writer must escape or type: markup, quotes, newlines, empty strings,
+    bools, a key whose type changes between nodes, a MultiPolygon, a 3-D polygon, no polygon."""
+    from shapely.geometry import MultiPolygon, Polygon
+
+    G = nx.MultiGraph(name='a&<b>"q"', flag=True, f=1.5, empty="")
+    square = Polygon([(0, 0), (1e-7, 0), (1, 1), (0, 1)], [[(0.2, 0.2), (0.4, 0.2), (0.4, 0.4)]])
+    G.add_node('x"\n\t&<1>', text="a<&>\"'\r\n\tb", ok=False, i=3, polygon=square)
+    G.add_node(2, i=2.5, polygon=MultiPolygon([square, Polygon([(5, 5), (6.25, 5), (6, 6e20)])]))
+    G.add_node(3, polygon=Polygon([(0, 0, 1), (1, 0, 2), (1, 1, 3)]))
+    G.add_node(4, polygon=None, note="é")
+    G.add_node(5)
+    G.add_edge('x"\n\t&<1>', 2, key='k"1', door=1, x1=0.0, y1=1.0, x2=2.0, y2=3.5)
+    G.add_edge(2, 3, key=7, w=1, x1=-0.0, y1=1e-9, x2=2.0, y2=3.0)
+    return G
+
+
+@pytest.mark.parametrize("which", ["odd", "hand", "example", "empty", "directed"])
+def test_graphml_bytes_is_networkx_document(which, hand, example):
+    import io
+
+    G = {"odd": _odd_graph, "hand": lambda: P.travel_graph(hand), "example": lambda: P.travel_graph(example),
+         "empty": nx.MultiGraph, "directed": lambda: nx.DiGraph([(1, 2, {"w": 1}), (2, 3, {})])}[which]()
+    H = E.to_graphml_graph(G)
+    buf = io.BytesIO()
+    nx.write_graphml_xml(H.copy(), buf)
+    assert E.graphml_bytes(H) == buf.getvalue()
+    back = nx.read_graphml(io.BytesIO(E.graphml_bytes(H)))
+    assert back.number_of_nodes() == G.number_of_nodes() and back.number_of_edges() == G.number_of_edges()
+
+
+@pytest.mark.parametrize("which", ["odd", "hand", "example"])
+def test_geojson_file_is_json_of_to_geojson(which, hand, example, tmp_path):
+    G = {"odd": _odd_graph, "hand": lambda: P.travel_graph(hand), "example": lambda: P.travel_graph(example)}[which]()
+    path = E.save_geojson(G, tmp_path / "g.geojson")
+    assert path.read_text() == json.dumps(E.to_geojson(G))
+
+
+def test_write_outputs_files_as_the_single_writers(hand, tmp_path):
+    """The outline texts shared by GraphML, JSON and GeoJSON in write_outputs give the files the
+    single writers give."""
+    G = P.travel_graph(hand)
+    files = E.write_outputs(hand, tmp_path / "all", G)
+    for kind, save in (("graphml", E.save_graphml), ("json", E.save_json), ("geojson", E.save_geojson)):
+        alone = save(G, tmp_path / f"alone.{kind}")
+        assert files[kind].read_bytes() == alone.read_bytes(), kind
+
+
+def test_wkt_of_odd_coordinates_reads_back_exactly():
+    from shapely import wkt
+
+    G = _odd_graph()
+    for n in (2, 'x"\n\t&<1>'):
+        g = G.nodes[n]["polygon"]
+        text = E.geometry_wkt(g)
+        assert "e" not in text.replace("POLYGON", "").replace("MULTI", "")
+        assert wkt.loads(text).equals_exact(g, 0)

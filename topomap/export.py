@@ -10,7 +10,9 @@ GraphML (:func:`save_graphml`, :func:`load_graphml`)
     bit for bit), tuples and lists are JSON strings, ``None`` is ``""``.
     :func:`load_graphml` restores the types from :data:`GRAPH_TYPES`,
     :data:`NODE_TYPES` and :data:`EDGE_TYPES` (floats, int room IDs and door
-    keys, tuples, shapely geometry), osmnx style.
+    keys, tuples, shapely geometry), osmnx style. The document is written as
+    text (:func:`graphml_bytes`): the one networkx's own writer makes, byte
+    for byte.
 JSON (:func:`save_json`, :func:`load_json`)
     networkx node-link data (``"edges"`` key) with the same scalar encoding;
     loading gives a graph equal to the original.
@@ -35,6 +37,7 @@ and never clobbers an earlier output.
 
 from __future__ import annotations
 
+import contextvars
 import json
 import re
 from pathlib import Path
@@ -48,8 +51,8 @@ from .io import atomic_write  # noqa: F401  (re-exported: topomap.export.atomic_
 __all__ = ["atomic_write", "save_labels", "save_graphml", "save_json", "to_graphml_graph",
            "node_link", "write_outputs", "save_bytes", "geometry_wkt", "restore_types", "load_graphml", "load_json",
            "to_geojson", "from_geojson", "save_geojson", "load_geojson", "save_label_map", "load_label_map",
-           "save_graph", "load_graph", "label_map_bytes", "GRAPH_TYPES", "NODE_TYPES", "EDGE_TYPES", "FORMATS",
-           "GEOJSON_COORDINATES"]
+           "save_graph", "load_graph", "label_map_bytes", "graphml_bytes", "GRAPH_TYPES", "NODE_TYPES",
+           "EDGE_TYPES", "FORMATS", "GEOJSON_COORDINATES"]
 
 #: What the coordinates of topomap's GeoJSON are, written into every file's
 #: collection ``properties`` as ``"coordinate_system"``.
@@ -59,14 +62,39 @@ GEOJSON_COORDINATES = ("x, y in metres in the map frame (the frame of the map's 
 
 
 def save_labels(labels: np.ndarray, path) -> Path:
-    """Write the label image as a 16-bit PNG (0 = not a room), same size as the map."""
+    """Write the label image as a 16-bit PNG (0 = not a room), same size as the map.
+
+    ``path``: a file name (written atomically) or a binary file object
+    (written as it is; the caller owns the file, as :func:`write_outputs`).
+    """
     from PIL import Image
 
     if labels.max(initial=0) > 65535:
-        raise ValueError(f"{path}: {int(labels.max())} rooms do not fit a 16-bit PNG")
+        raise ValueError(f"{_name(path)}: {int(labels.max())} rooms do not fit a 16-bit PNG")
     img = Image.fromarray(labels.astype(np.uint16))
+    if _is_file(path):
+        img.save(path, format="PNG", compress_level=1)
+        return Path(_name(path))
     with atomic_write(path) as fh:
         img.save(fh, format="PNG", compress_level=1)  # fast zlib level: label images compress well anyway
+    return Path(path)
+
+
+def _is_file(path) -> bool:
+    return hasattr(path, "write")
+
+
+def _name(path) -> str:
+    return str(getattr(path, "name", path)) if _is_file(path) else str(path)
+
+
+def _write(data: bytes, path) -> Path:
+    """``data`` into ``path``: a file name (written atomically) or a binary file object (written as it is)."""
+    if _is_file(path):
+        path.write(data)
+        return Path(_name(path))
+    with atomic_write(path) as fh:
+        fh.write(data)
     return Path(path)
 
 
@@ -86,16 +114,54 @@ _POINT_ZERO = re.compile(r"\.0(?=[ ,)]|$)")
 
 
 def _ring(coords) -> str:
-    vals = np.asarray(coords, float).reshape(-1).tolist()  # 2-D only: geometry with z goes to shapely.to_wkt
-    toks = list(map(repr, vals))
-    if any("e" in t or "n" in t for t in toks):
-        toks = [_num(v) for v in vals]
-    text = ", ".join(map(" ".join, zip(toks[::2], toks[1::2])))
-    return "(" + _POINT_ZERO.sub("", text) + ")"
+    return _wkt_ring(_ring_json(coords))
+
+
+def _ring_json(coords) -> str:
+    """The GeoJSON text of a 2-D ring, ``[[x, y], ...]`` (json's C encoder: every float as ``repr``)."""
+    return json.dumps(np.asarray(coords, float).reshape(-1, 2).tolist())
+
+
+def _wkt_ring(text: str) -> str:
+    """WKT ``(x y, x y, ...)`` of a ring's :func:`_ring_json` text (exact decimals, no exponent)."""
+    wkt = text[2:-2].replace("], [", "|").replace(", ", " ").replace("|", ", ")
+    if "e" in wkt or "N" in wkt or "I" in wkt:  # an exponent, NaN or Infinity: token by token
+        toks = [_num(v) for v in np.asarray(json.loads(text), float).reshape(-1).tolist()]
+        wkt = ", ".join(map(" ".join, zip(toks[::2], toks[1::2])))
+    return "(" + _POINT_ZERO.sub("", wkt) + ")"
+
+
+#: Inside :func:`write_outputs`: ``{id(geometry): (geometry, ring texts)}``, so the GraphML / JSON
+#: WKT and the GeoJSON coordinates of a room's outline encode its floats once.
+_RING_MEMO = contextvars.ContextVar("topomap_ring_memo", default=None)
+
+
+def _poly_rings(p) -> list:
+    """:func:`_ring_json` texts of a 2-D Polygon's exterior and interiors (memoised in write_outputs)."""
+    memo = _RING_MEMO.get()
+    if memo is not None:
+        hit = memo.get(id(p))
+        if hit is not None and hit[0] is p:
+            return hit[1]
+    rings = [_ring_json(r.coords) for r in [p.exterior, *p.interiors]]
+    if memo is not None:
+        memo[id(p)] = (p, rings)
+    return rings
+
+
+def _parts(geom) -> list:
+    """A 2-D Polygon's or MultiPolygon's polygons; kept (so memo ids stay valid) while a write runs."""
+    memo = _RING_MEMO.get()
+    if memo is None:
+        return list(geom.geoms)
+    hit = memo.get(id(geom))
+    if hit is None or hit[0] is not geom:
+        hit = memo[id(geom)] = (geom, list(geom.geoms))
+    return hit[1]
 
 
 def _poly_wkt(p) -> str:
-    return "(" + ", ".join(_ring(r.coords) for r in [p.exterior, *p.interiors]) + ")"
+    return "(" + ", ".join(map(_wkt_ring, _poly_rings(p))) + ")"
 
 
 def geometry_wkt(geom) -> str:
@@ -121,12 +187,13 @@ def geometry_wkt(geom) -> str:
     if t == "Polygon":
         return "POLYGON " + _poly_wkt(geom)
     if t == "MultiPolygon":
-        return "MULTIPOLYGON (" + ", ".join(_poly_wkt(p) for p in geom.geoms) + ")"
+        return "MULTIPOLYGON (" + ", ".join(_poly_wkt(p) for p in _parts(geom)) + ")"
     return shapely.to_wkt(geom, rounding_precision=-1)
 
 
 def _is_geom(v) -> bool:
-    return hasattr(v, "geom_type") and hasattr(v, "wkt")
+    t = type(v)  # the class's attributes: hasattr(v, "wkt") would compute the WKT
+    return hasattr(t, "geom_type") and hasattr(t, "wkt")
 
 
 def _plain(v):
@@ -162,7 +229,22 @@ def _scalar(v):
         return bool(v)
     if _is_geom(v):
         return geometry_wkt(v)
+    if isinstance(v, (list, tuple)):
+        text = _json_as_is(v)
+        if text is not None:
+            return text
     return json.dumps(_plain(v))
+
+
+def _json_as_is(v):
+    """``json.dumps(v)`` when that is ``json.dumps(_plain(v))`` (lists and tuples of Python
+    numbers, strings, bools and None, as ``door_distances``), else None."""
+    try:
+        text = json.dumps(v)
+    except (TypeError, ValueError):  # numpy scalars, geometry, ...: through _plain
+        return None
+    # a dict inside: its keys are str() in _plain, json writes True / None keys as true / null
+    return None if "{" in text else text
 
 
 def _none(v):
@@ -299,17 +381,92 @@ def save_graphml(G: nx.Graph, path) -> Path:
     ----------
     G : networkx.Graph
         Room–door graph.
-    path : str or os.PathLike
-        Output file, written atomically.
+    path : str, os.PathLike or binary file object
+        Output file, written atomically (a file object: written as it is).
 
     Returns
     -------
     pathlib.Path
     """
-    H = to_graphml_graph(G)
-    with atomic_write(path) as fh:
-        nx.write_graphml(H, fh)
-    return Path(path)
+    return _write(graphml_bytes(to_graphml_graph(G)), path)
+
+
+_XML_TYPES = {bool: "boolean", int: "long", float: "double", str: "string"}
+_XML_HEAD = ("<?xml version='1.0' encoding='utf-8'?>\n<graphml xmlns=\"http://graphml.graphdrawing.org/xmlns\" "
+             "xmlns:xsi=\"http://www.w3.org/2001/XMLSchema-instance\" xsi:schemaLocation=\"http://graphml.graphdrawing"
+             ".org/xmlns http://graphml.graphdrawing.org/xmlns/1.0/graphml.xsd\">")
+
+
+def _xml_text(v: str) -> str:
+    return v.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+
+
+def _xml_attr(v: str) -> str:
+    return (_xml_text(v).replace("\"", "&quot;").replace("\r", "&#13;").replace("\n", "&#10;")
+            .replace("\t", "&#09;"))
+
+
+def graphml_bytes(G: nx.Graph) -> bytes:
+    """GraphML document of ``G`` as ``networkx.write_graphml`` (its ElementTree writer) writes it.
+
+    Written directly as text for graphs whose attributes are all str, int,
+    float or bool (as :func:`to_graphml_graph` makes them): the same
+    document, key ids, attribute types and layout, so ``networkx.read_graphml``
+    reads back the same graph. Other graphs go through networkx.
+    """
+    gdata = {k: v for k, v in G.graph.items()}
+    if any(k in gdata for k in ("id", "node_default", "edge_default")):
+        return _nx_graphml_bytes(G)
+    keys, key_lines = {}, []
+
+    def data(items, scope, pad):
+        out = []
+        for k, v in items:
+            t = type(v)
+            xt = _XML_TYPES.get(t)
+            if xt is None:
+                raise TypeError(t)
+            name = str(k)
+            kid = keys.get((name, t, scope))
+            if kid is None:
+                kid = keys[(name, t, scope)] = f"d{len(keys)}"
+                key_lines.append(f'  <key id="{kid}" for="{scope}" attr.name="{_xml_attr(name)}" '
+                                 f'attr.type="{xt}" />')
+            text = str(v)
+            out.append(f'{pad}<data key="{kid}">{_xml_text(text)}</data>' if text else f'{pad}<data key="{kid}" />')
+        return out
+
+    try:
+        graph_lines = data(gdata.items(), "graph", "    ")  # keys numbered graph first, as networkx does
+        body = []
+        for n, d in G.nodes(data=True):
+            tag = f'    <node id="{_xml_attr(str(n))}"'
+            lines = data(d.items(), "node", "      ")
+            body += [tag + ">", *lines, "    </node>"] if lines else [tag + " />"]
+        if G.is_multigraph():
+            edges = ((u, v, f' id="{_xml_attr(str(k))}"', d) for u, v, k, d in G.edges(keys=True, data=True))
+        else:
+            edges = ((u, v, "", d) for u, v, d in G.edges(data=True))
+        for u, v, eid, d in edges:
+            tag = f'    <edge source="{_xml_attr(str(u))}" target="{_xml_attr(str(v))}"{eid}'
+            lines = data(d.items(), "edge", "      ")
+            body += [tag + ">", *lines, "    </edge>"] if lines else [tag + " />"]
+    except TypeError:
+        return _nx_graphml_bytes(G)
+    body += graph_lines
+    graph = f'  <graph edgedefault="{"directed" if G.is_directed() else "undirected"}"'
+    parts = [_XML_HEAD, *key_lines[::-1]]  # networkx inserts every new key first
+    parts += [graph + ">", *body, "  </graph>"] if body else [graph + " />"]
+    parts.append("</graphml>\n")
+    return "\n".join(parts).encode("utf-8", "xmlcharrefreplace")
+
+
+def _nx_graphml_bytes(G) -> bytes:
+    import io
+
+    buf = io.BytesIO()
+    nx.write_graphml_xml(G.copy(), buf)  # a copy: the writer takes "id" out of the graph's attributes
+    return buf.getvalue()
 
 
 def _bad(path, what, exc=None) -> GraphFormatError:
@@ -400,11 +557,9 @@ def node_link(G: nx.Graph) -> dict:
 
 
 def save_json(G: nx.Graph, path) -> Path:
-    """Write the room graph as node-link JSON (atomically); see :func:`node_link`."""
+    """Write the room graph as node-link JSON (atomically; or into a binary file object); see :func:`node_link`."""
     text = json.dumps(node_link(G))  # compact: json's C encoder (indent or json.dump would use the Python one)
-    with atomic_write(path, "w") as fh:
-        fh.write(text)
-    return Path(path)
+    return _write(text.encode("utf-8"), path)
 
 
 def load_json(path) -> nx.MultiGraph:
@@ -454,25 +609,66 @@ def to_geojson(G: nx.Graph) -> dict:
         ``properties`` say so in ``"coordinate_system"``
         (:data:`GEOJSON_COORDINATES`).
     """
+    props, feats = _geojson_parts(G)
+    for f, geom in feats:
+        if geom is not None:
+            f["geometry"] = _geom_json(geom)
+    return {"type": "FeatureCollection", "properties": props, "features": [f for f, _ in feats]}
+
+
+def _geojson_parts(G, plain=_plain):
+    """The collection's properties and ``(feature, room outline)`` pairs, geometry left None for rooms
+    (``plain``: how node attributes are made plain JSON)."""
     feats = []
     for n, d in G.nodes(data=True):
-        geom = d.get("polygon")
         props = {"kind": "room", "room": _plain(n)}
-        props.update({k: _plain(v) for k, v in d.items() if k != "polygon"})
-        feats.append({"type": "Feature", "id": f"room-{n}",
-                      "geometry": _geom_json(geom) if geom is not None else None,
-                      "properties": props})
+        props.update({k: plain(v) for k, v in d.items() if k != "polygon"})
+        feats.append(({"type": "Feature", "id": f"room-{n}", "geometry": None, "properties": props},
+                      d.get("polygon")))
     edges = G.edges(keys=True, data=True) if G.is_multigraph() else ((u, v, None, d) for u, v, d in G.edges(data=True))
     for u, v, k, d in edges:
         did = d.get("door", k)
         props = {"kind": "door", "door": _plain(did), "rooms": [_plain(u), _plain(v)]}
         props.update({a: _plain(b) for a, b in d.items() if a not in ("door", "rooms")})
         line = [[float(d["x1"]), float(d["y1"])], [float(d["x2"]), float(d["y2"])]]
-        feats.append({"type": "Feature", "id": f"door-{did}",
-                      "geometry": {"type": "LineString", "coordinates": line}, "properties": props})
+        feats.append(({"type": "Feature", "id": f"door-{did}",
+                       "geometry": {"type": "LineString", "coordinates": line}, "properties": props}, None))
     props = {"coordinate_system": GEOJSON_COORDINATES}
     props.update({k: _plain(v) for k, v in G.graph.items()})
-    return {"type": "FeatureCollection", "properties": props, "features": feats}
+    return props, feats
+
+
+def _geojson_text(G) -> str:
+    """``json.dumps(to_geojson(G))``, the rooms' outlines from their ring texts (:func:`_poly_rings`)."""
+    props, feats = _geojson_parts(G, _plain_for_dumps)
+    texts = []
+    for f, geom in feats:
+        text = json.dumps(f)
+        if geom is not None:
+            # inside a JSON string every quote is escaped: the first '"geometry": null' is the key's
+            text = text.replace('"geometry": null', '"geometry": ' + _geom_json_text(geom), 1)
+        texts.append(text)
+    return ('{"type": "FeatureCollection", "properties": ' + json.dumps(props) + ', "features": ['
+            + ", ".join(texts) + "]}")
+
+
+def _plain_for_dumps(v):
+    """What json.dumps writes as it writes :func:`_plain` of ``v``: lists and tuples of plain
+    values as they are (``door_distances``: no copy as lists), anything else :func:`_plain`."""
+    if isinstance(v, (list, tuple)) and _json_as_is(v) is not None:
+        return v
+    return _plain(v)
+
+
+def _geom_json_text(geom) -> str:
+    """``json.dumps(_geom_json(geom))``; 2-D polygons from their memoised ring texts."""
+    t = geom.geom_type
+    if t in ("Polygon", "MultiPolygon") and not geom.is_empty and not geom.has_z:
+        if t == "Polygon":
+            return '{"type": "Polygon", "coordinates": [' + ", ".join(_poly_rings(geom)) + "]}"
+        return ('{"type": "MultiPolygon", "coordinates": ['
+                + ", ".join("[" + ", ".join(_poly_rings(p)) + "]" for p in _parts(geom)) + "]}")
+    return json.dumps(_geom_json(geom))
 
 
 def _geom_json(geom) -> dict:
@@ -549,11 +745,8 @@ def from_geojson(data: dict, name: str = "<geojson>") -> nx.MultiGraph:
 
 
 def save_geojson(G: nx.Graph, path) -> Path:
-    """Write :func:`to_geojson` of ``G`` to ``path`` (atomically)."""
-    text = json.dumps(to_geojson(G))
-    with atomic_write(path, "w") as fh:
-        fh.write(text)
-    return Path(path)
+    """Write :func:`to_geojson` of ``G`` to ``path`` (atomically; or into a binary file object)."""
+    return _write(_geojson_text(G).encode("utf-8"), path)
 
 
 def load_geojson(path) -> nx.MultiGraph:
@@ -852,18 +1045,30 @@ def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None, geojs
                "graphml": lambda p: save_graphml(plain(), p),
                "json": lambda p: save_json(plain(), p), "geojson": lambda p: save_geojson(graph, p),
                "overlay": lambda p: save_bytes(overlay_png, p)}
-    with ExitStack() as stack:  # on success renames every temporary file; on error removes them all
-        tmp = {k: stack.enter_context(atomic_write(outdir / f, None)) for k, f in names.items()}
-        for k in names:
-            t = time.perf_counter()
-            writers[k](tmp[k])
-            if timings is not None:
-                timings[f"write_{k}"] = time.perf_counter() - t
+    to_file = ("labels", "graphml", "json", "geojson")  # writers given the open temporary file
+    memo = _RING_MEMO.set({})  # outlines' floats encoded once, for the WKT and the GeoJSON
+    try:
+        with ExitStack() as stack:  # on success renames every temporary file; on error removes them all
+            tmp = {k: stack.enter_context(atomic_write(outdir / f, None)) for k, f in names.items()}
+            for k in names:
+                t = time.perf_counter()
+                if k in to_file:  # into the temporary file itself (renamed into place at the end)
+                    with open(tmp[k], "wb") as fh:
+                        writers[k](fh)
+                else:
+                    writers[k](tmp[k])
+                if timings is not None:
+                    timings[f"write_{k}"] = time.perf_counter() - t
+    finally:
+        _RING_MEMO.reset(memo)
     return {k: outdir / f for k, f in names.items()}
 
 
 def save_bytes(data: bytes, path) -> Path:
-    """Write ``data`` to ``path`` as it is."""
+    """Write ``data`` to ``path`` (a file name or a binary file object) as it is."""
+    if _is_file(path):
+        path.write(data)
+        return Path(_name(path))
     path = Path(path)
     path.write_bytes(data)
     return path

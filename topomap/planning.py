@@ -43,8 +43,9 @@ computed on a coarse grid, so that a room with many doors costs little:
   the piece's centroid; two pieces are joined when any of their cells are
   8-neighbours, with the octile distance between their centroids; each door
   cell is joined to the pieces around it;
-* Dijkstra (:func:`scipy.sparse.csgraph.dijkstra`) from every door gives
-  all pairs at once;
+* Dijkstra (:func:`scipy.sparse.csgraph.dijkstra`) from every door that
+  has a pair out of sight (below) gives those pairs at once; a room whose
+  doors all see each other needs no search;
 * two doors in sight of each other (the digital straight line between
   their cells runs on the room's cells only) get their octile distance,
   which is then exactly the map-grid geodesic;
@@ -152,9 +153,16 @@ class _Ctx:
         """(r0, r1, c0, c1) half-open pixel box of room ``r``'s cells."""
         if self.seg is not None:
             if self._bbox is None:
-                from scipy import ndimage as ndi
+                from .roomgraph import _BOXES
 
-                self._bbox = ndi.find_objects(self.seg.labels)
+                # the boxes room_graph found for these labels (rooms 1..N: the same as the labels' own)
+                ref, boxes = _BOXES.get(self.G, (lambda: None, None))
+                if ref() is self.seg.labels:
+                    self._bbox = boxes
+                else:
+                    from scipy import ndimage as ndi
+
+                    self._bbox = ndi.find_objects(self.seg.labels)
             sl = self._bbox[r - 1] if 0 < r <= len(self._bbox) else None
             if sl is None:
                 return None
@@ -176,7 +184,12 @@ class _Ctx:
         r0, r1, c0, c1 = win
         if self.seg is not None:
             L = self.seg.labels[r0:r1, c0:c1]
-            return np.where(np.isin(L, list(rooms)), L, 0).astype(np.int32)
+            if L.size == 0 or L.min() < 0:
+                return np.where(np.isin(L, list(rooms)), L, 0).astype(np.int32)
+            keep = np.zeros(int(L.max()) + 1, np.int32)  # label -> itself for the rooms kept, else 0
+            idx = np.array([r for r in rooms if 0 <= r < len(keep)], np.intp)
+            keep[idx] = idx
+            return keep[L]
         import shapely
 
         out = np.zeros((r1 - r0, c1 - c0), np.int32)
@@ -288,8 +301,11 @@ class _RoomSpace:
             return out
         f = 1 if self.mask.size <= EXACT_CELLS else _coarse_factor(self.ctx.res)
         pts = np.array([self.door_px[d] for d in ids], float)
-        D = _coarse_door_distances(self.mask, pts, f)
-        seen = _in_sight(self.mask, pts) if f > 1 else np.zeros(D.shape, bool)
+        k = len(ids)
+        seen = _in_sight(self.mask, pts) if f > 1 else np.zeros((k, k), bool)
+        # the coarse search only from the doors with a pair i < j out of sight (none: no search)
+        sources = [i for i in range(k - 1) if not seen[i, i + 1:].all()]
+        D = _coarse_door_distances(self.mask, pts, f, sources)
         D[seen] = _octile(*(pts[:, None, :] - pts[None, :, :]).transpose(2, 0, 1))[seen]
         short = REFINE_CELLS * f if f > 1 else 0
         for i in range(len(ids)):
@@ -365,9 +381,10 @@ def _touching(a, b):
     return out
 
 
-def _coarse_door_distances(mask, pts, f):
+def _coarse_door_distances(mask, pts, f, sources=None):
     """(k, k) travel distances (map cells) between the points ``pts`` (local ``(row, col)``
-    cells of ``mask``) on the coarse grid of ``f`` x ``f`` blocks of ``mask``.
+    cells of ``mask``) on the coarse grid of ``f`` x ``f`` blocks of ``mask``; only the rows
+    ``sources`` (point indices; default all) are searched, the others are inf.
 
     A node is a connected piece of the mask inside one block (so walls and
     furniture within a block are never crossed), placed at the piece's
@@ -376,18 +393,22 @@ def _coarse_door_distances(mask, pts, f):
     metric of the map-grid geodesic) between their centroids; each point
     is joined to the pieces of its 3 x 3 neighbourhood by the octile distance
     to their centroids. Shortest paths: Dijkstra
-    (:func:`scipy.sparse.csgraph.dijkstra`) from every point.
+    (:func:`scipy.sparse.csgraph.dijkstra`) from every point of ``sources``.
     """
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import dijkstra
 
+    k = len(pts)
+    sources = np.arange(k) if sources is None else np.asarray(sources, int)
+    out = np.full((k, k), np.inf)
+    if len(sources) == 0:
+        return out
     lab, n, cen = _block_components(mask, f)
     cr, ccol = cen[:, 0], cen[:, 1]
     nb = len(lab[f::f])
     pairs = _touching(lab[f - 1::f][:nb], lab[f::f])
     nb = len(lab.T[f::f])
     pairs += [p[:, ::-1] for p in _touching(lab.T[f - 1::f][:nb], lab.T[f::f])]
-    k = len(pts)
     su, sv = [], []
     for i, (pr, pc) in enumerate(pts):
         r, c = int(pr), int(pc)
@@ -403,8 +424,8 @@ def _coarse_door_distances(mask, pts, f):
     pr = np.concatenate([cr, pts[:, 0]])
     pc = np.concatenate([ccol, pts[:, 1]])
     A.data = (_octile(pr[u] - pr[v], pc[u] - pc[v]) + 1e-9).astype(float)
-    dist = dijkstra(A, directed=False, indices=np.arange(n + 1, n + 1 + k))
-    return dist[:, n + 1:]
+    out[sources] = dijkstra(A, directed=False, indices=n + 1 + sources)[:, n + 1:]
+    return out
 
 
 #: Slack of the refinement windows: a path up to this factor (plus two coarse cells) longer

@@ -8,11 +8,17 @@ edge, keyed by the door id). Every attribute, with its unit, is listed on the
 
 from __future__ import annotations
 
+import weakref
+
 import numpy as np
 import networkx as nx
 from scipy import ndimage as ndi
 
 __all__ = ["room_graph", "room_polygons"]
+
+#: graph -> (weak reference to the labels, their rooms' boxes) of the graphs room_graph built, for
+#: topomap.planning's room windows (beside the graph, not in it: never saved, copied or pickled)
+_BOXES = weakref.WeakKeyDictionary()
 
 
 def room_polygons(labels: np.ndarray, to_world=None) -> dict:
@@ -32,41 +38,52 @@ def room_polygons(labels: np.ndarray, to_world=None) -> dict:
         ``label -> shapely geometry``. The outline follows the outer edges of
         the room's cells (a cell is a unit square centred on its pixel).
     """
+    return _room_polygons(labels, ndi.find_objects(labels), to_world)
+
+
+def _room_polygons(labels, objs, to_world):
+    """:func:`room_polygons` with the rooms' bounding boxes (``ndi.find_objects(labels)``) given."""
     import cv2
+    import shapely
     from shapely.geometry import MultiPolygon, Polygon
-    from shapely.ops import unary_union
 
     out = {}
-    objs = ndi.find_objects(labels)
+    q = 0.25 * (abs(to_world(0, 1)[0] - to_world(0, 0)[0]) + abs(to_world(0, 1)[1] - to_world(0, 0)[1])
+                if to_world is not None else 1.0)
     for i, sl in enumerate(objs, start=1):
         if sl is None:
             continue
         r0, c0 = sl[0].start, sl[1].start
         m = (labels[sl] == i).astype(np.uint8)
         # upsample x2 so contours run along cell edges rather than centres (nearest: each cell 2 x 2)
-        m2 = cv2.resize(m, (2 * m.shape[1], 2 * m.shape[0]), interpolation=cv2.INTER_NEAREST)
-        m2 = np.pad(m2, 1)
+        m2 = np.zeros((2 * m.shape[0] + 2, 2 * m.shape[1] + 2), np.uint8)  # padded by one sub-cell
+        m2[1:-1, 1:-1] = cv2.resize(m, (2 * m.shape[1], 2 * m.shape[0]), interpolation=cv2.INTER_NEAREST)
         contours, hier = cv2.findContours(m2, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_SIMPLE)
         polys = []
         if hier is not None:
             hier = hier[0]
-            for k, cnt in enumerate(contours):
+            xy = _to_coords(np.concatenate(contours), r0, c0, to_world)  # every contour's points at once
+            ends = np.cumsum([len(c) for c in contours])
+            rings = np.split(xy, ends[:-1])
+            for k in range(len(contours)):
                 if hier[k][3] != -1:
                     continue  # a hole, handled with its parent
-                shell = _to_coords(cnt, r0, c0, to_world)
                 holes = []
                 child = hier[k][2]
                 while child != -1:
-                    holes.append(_to_coords(contours[child], r0, c0, to_world))
+                    if len(rings[child]) >= 3:
+                        holes.append(shapely.linearrings(rings[child]))
                     child = hier[child][0]
-                if len(shell) >= 3:
-                    polys.append(Polygon(shell, [h for h in holes if len(h) >= 3]))
-        geom = unary_union([p.buffer(0) for p in polys]) if polys else Polygon()
+                if len(rings[k]) >= 3:
+                    polys.append(shapely.polygons(rings[k], holes=holes or None))
+        if polys:
+            geom = shapely.union_all(shapely.buffer(polys, 0)) if len(polys) > 1 else \
+                shapely.union_all([polys[0].buffer(0)])
+        else:
+            geom = Polygon()
         if not geom.is_empty:
             # the outline ran through sub-cell centres a quarter cell inside
             # the cells' edges: offset it out by that quarter cell
-            q = 0.25 * (abs(to_world(0, 1)[0] - to_world(0, 0)[0]) + abs(to_world(0, 1)[1] - to_world(0, 0)[1])
-                        if to_world is not None else 1.0)
             geom = geom.buffer(q, join_style="mitre", mitre_limit=2.0)
         if geom.geom_type == "GeometryCollection":
             geom = MultiPolygon([g for g in geom.geoms if g.geom_type == "Polygon"])
@@ -83,8 +100,8 @@ def _to_coords(cnt, r0, c0, to_world):
     rows = pts[:, 1] / 2.0 - 0.25 + r0
     if to_world is not None:
         x, y = to_world(rows, cols)
-        return list(zip(np.asarray(x).tolist(), np.asarray(y).tolist()))
-    return list(zip(cols.tolist(), rows.tolist()))
+        return np.stack([np.asarray(x, float), np.asarray(y, float)], 1)
+    return np.stack([cols, rows], 1)
 
 
 def room_graph(seg) -> nx.MultiGraph:
@@ -117,13 +134,15 @@ def room_graph(seg) -> nx.MultiGraph:
         return G
     # cell counts and row / column sums per room, from each room's bounding box (exact integer sums)
     cnt, sr, sc = np.zeros(n + 1), np.zeros(n + 1), np.zeros(n + 1)
-    for i, sl in enumerate(ndi.find_objects(labels, max_label=n), start=1):
+    objs = ndi.find_objects(labels, max_label=n)  # once: the sums below and the outlines
+    for i, sl in enumerate(objs, start=1):
         if sl is not None:
             m = labels[sl] == i
             cnt[i] = np.count_nonzero(m)
             sr[i] = float(m.sum(1) @ np.arange(sl[0].start, sl[0].stop))
             sc[i] = float(m.sum(0) @ np.arange(sl[1].start, sl[1].stop))
-    polys = room_polygons(labels, grid.pixel_to_world)
+    polys = _room_polygons(labels, objs, grid.pixel_to_world)
+    _BOXES[G] = (weakref.ref(seg.labels), objs)
     area_cell = grid.resolution ** 2
     for i in range(1, n + 1):
         if cnt[i] == 0:
