@@ -417,3 +417,21 @@ def test_wkt_of_odd_coordinates_reads_back_exactly():
         text = E.geometry_wkt(g)
         assert "e" not in text.replace("POLYGON", "").replace("MULTI", "")
         assert wkt.loads(text).equals_exact(g, 0)
+
+
+def test_json_writes_non_finite_numbers_as_null(tmp_path):
+    """rooms.json stays valid JSON (no bare NaN / Infinity) and reads back as NaN."""
+    import json
+    import math
+
+    import topomap
+    from topomap.export import load_json, save_json
+
+    G = topomap.segment(topomap.load_map(topomap.example_map_path())).room_graph.copy()
+    n = next(iter(G.nodes))
+    G.nodes[n]["area"] = float("nan")
+    p = tmp_path / "g.json"
+    save_json(G, p)
+    text = p.read_text()
+    json.loads(text, parse_constant=lambda c: pytest.fail(f"bare {c} in rooms.json"))
+    assert math.isnan(load_json(p).nodes[n]["area"])

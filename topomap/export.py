@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import contextvars
 import json
+import math
 import re
 from pathlib import Path
 
@@ -558,8 +559,23 @@ def node_link(G: nx.Graph) -> dict:
 
 def save_json(G: nx.Graph, path) -> Path:
     """Write the room graph as node-link JSON (atomically; or into a binary file object); see :func:`node_link`."""
-    text = json.dumps(node_link(G))  # compact: json's C encoder (indent or json.dump would use the Python one)
+    data = node_link(G)
+    try:  # compact: json's C encoder (indent or json.dump would use the Python one)
+        text = json.dumps(data, allow_nan=False)
+    except ValueError:  # a NaN or infinity: written as null (valid JSON), read back as NaN
+        text = json.dumps(_finite_or_null(data), allow_nan=False)
     return _write(text.encode("utf-8"), path)
+
+
+def _finite_or_null(v):
+    """``v`` with every non-finite float (NaN, infinities) replaced by None."""
+    if isinstance(v, float):
+        return v if math.isfinite(v) else None
+    if isinstance(v, dict):
+        return {k: _finite_or_null(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_finite_or_null(x) for x in v]
+    return v
 
 
 def load_json(path) -> nx.MultiGraph:
