@@ -108,6 +108,14 @@ class RoomChanges:
                 "merged": {str(k): list(v) for k, v in self.merged.items()},
                 "next_room_id": int(self.next_room_id)}
 
+    @classmethod
+    def from_dict(cls, d: dict) -> "RoomChanges":
+        """The record of :meth:`as_dict` (``changes.json``) back as a :class:`RoomChanges`."""
+        return cls(kept=tuple(d["kept"]), new=tuple(d["new"]), vanished=tuple(d["vanished"]),
+                   split={int(k): tuple(v) for k, v in d["split"].items()},
+                   merged={int(k): tuple(v) for k, v in d["merged"].items()},
+                   next_room_id=int(d["next_room_id"]))
+
     def summary(self) -> str:
         """One line, e.g. ``"9 kept, 1 new, 0 vanished, 1 split, 0 merged"``."""
         return (f"{len(self.kept)} kept, {len(self.new)} new, {len(self.vanished)} vanished, "
@@ -150,24 +158,6 @@ class TrackedSegmentation(Segmentation):
     def top_room_id(self) -> int:
         """The largest room ID (0 without rooms): labels above it are fragments."""
         return max(self.room_ids, default=0)
-
-    @property
-    def n_fragments(self) -> int:
-        """Number of fragments: the labels above :attr:`top_room_id`."""
-        top = int(self.labels.max()) if self.labels.size else 0
-        return max(top - self.top_room_id, 0)
-
-    @property
-    def room_labels(self) -> np.ndarray:
-        """``labels`` with the fragments set to 0: rooms only."""
-        if self.n_fragments == 0:
-            return self.labels
-        return np.where(self.labels <= self.top_room_id, self.labels, 0)
-
-    @property
-    def fragment_area(self) -> float:
-        """Total area of the fragments, m²."""
-        return float((self.labels > self.top_room_id).sum()) * self.grid.resolution ** 2
 
     @property
     def room_graph(self):

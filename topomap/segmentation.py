@@ -164,23 +164,28 @@ class Segmentation:
         return int(self.labels.max()) if self.labels.size else 0
 
     @property
+    def top_room_id(self) -> int:
+        """The largest room label (``n_rooms``; 0 without rooms): labels above it are fragments."""
+        return self.n_rooms
+
+    @property
     def n_fragments(self) -> int:
-        """Number of fragments: the labels after ``n_rooms`` (free regions too
-        small to be a room, see ``TopomapOptions.min_room_area``)."""
+        """Number of fragments: the labels above :attr:`top_room_id` (free
+        regions too small to be a room, see ``TopomapOptions.min_room_area``)."""
         top = int(self.labels.max()) if self.labels.size else 0
-        return top - self.n_rooms
+        return max(top - self.top_room_id, 0)
 
     @property
     def room_labels(self) -> np.ndarray:
         """``labels`` with the fragments set to 0: rooms only."""
         if self.n_fragments == 0:
             return self.labels
-        return np.where(self.labels <= self.n_rooms, self.labels, 0)
+        return np.where(self.labels <= self.top_room_id, self.labels, 0)
 
     @property
     def fragment_area(self) -> float:
         """Total area of the fragments, m²."""
-        return float((self.labels > self.n_rooms).sum()) * self.grid.resolution ** 2
+        return float((self.labels > self.top_room_id).sum()) * self.grid.resolution ** 2
 
     @property
     def room_graph(self):
