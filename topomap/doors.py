@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .geometry import disk, point_segment_distances
+from .walls import wall_faces
 
 __all__ = ["Candidate", "Door", "passage_candidates", "intersection_points",
            "wall_threshold", "select_doors", "segment_crosses", "passage_minima",
@@ -555,9 +556,7 @@ def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, dept
         # surface: only cells with a free 4-neighbour are paired (keeps the
         # pairing linear in the window's side, not in its area)
         win = obstacle[ra:rb, ca:cb]
-        pad = np.pad(win, 1, constant_values=True)
-        surface = win & ~(pad[:-2, 1:-1] & pad[2:, 1:-1] & pad[1:-1, :-2] & pad[1:-1, 2:])
-        on_surface = surface[rr, cc]
+        on_surface = wall_faces(win, ~win)[rr, cc]
         a = q[(~opp) & (d <= d[i] + depth_px) & on_surface]
         b = q[opp & (d <= d[j] + depth_px) & on_surface]
         if depth_px > 0 and a.size and b.size and c.status != MOUTH:

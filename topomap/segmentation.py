@@ -627,8 +627,9 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
         search, closed = close_wall_gaps(looked, opts.wall_gap)
         space = search.free if clutter is None else search.free & ~clutter
         f, d_free, occ = preprocess_masks(search, opts)
+    walls = ~search.free  # what bounds free space: door posts and wall faces lie on these cells
     with T("walls"):
-        faces = W.wall_faces(~search.free, search.free)
+        faces = W.wall_faces(walls, search.free)
         lines = W.wall_lines(faces, min_length_px=opts.min_wall_length / res)
         straight = W.straight_share(faces, lines)
         opts = opts.resolved(res, straight)  # rise measured on the map
@@ -639,13 +640,13 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
         Gf, Go, d_occ = topomap_graphs(fs, os_, factor, d_free, occ, search, opts.min_occupied_branch)
     with T("doors"):
         thr_px = D.wall_threshold(d_occ, S.graph_pixels(Go))
-        cands = D.find_bottlenecks(Gf, ~search.free, opts, res, thr_px)
+        cands = D.find_bottlenecks(Gf, walls, opts, res, thr_px)
         accepted = D.judge_doors(cands, search.free, S.graph_endpoints(Go), thr_px, opts, res)
         segs = D.suppress_duplicates(accepted, res)
     if opts.openings:
         with T("openings"):
             ops = D.opening_candidates(W.wall_openings(
-                ~search.free, search.free, min_wall_px=opts.min_wall_length / res,
+                walls, search.free, min_wall_px=opts.min_wall_length / res,
                 min_gap_px=opts.min_door_width / res, max_gap_px=opts.max_door_width / res,
                 side_px=opts.min_door_width / res, depth_px=opts.alcove_depth / res, faces=faces, lines=lines,
                 beside_px=opts.beside_wall / res),

@@ -79,18 +79,27 @@ def straight_share(faces: np.ndarray, lines: np.ndarray) -> float:
     return float((faces & (on > 0)).sum()) / n
 
 
-def _samples(shape, start, d, n, offsets):
-    """Cells ``start + t d + o n_perp`` for ``t = 1..n``, each offset: ``(len(offsets), n)`` rows and cols
-    (clipped), plus a mask of samples inside the map."""
+def _sample_cells(shape, starts, dirs, n, offsets):
+    """Cells ``start + t d + o n_perp`` for ``t = 1..n`` and each offset ``o``,
+    for every row of ``starts`` / ``dirs`` (``(E, 2)``): ``(E, len(offsets), n)``
+    rows and cols (clipped to the map), and a mask of samples inside it."""
     H, W = shape
+    starts, dirs = np.asarray(starts, float), np.asarray(dirs, float)
     t = np.arange(1, n + 1, dtype=float)
-    perp = np.array([-d[1], d[0]])
-    pts = start[None, None, :] + t[None, :, None] * d[None, None, :] + \
-        np.asarray(offsets, float)[:, None, None] * perp[None, None, :]
+    o = np.asarray(offsets, float)
+    perp = np.stack([-dirs[:, 1], dirs[:, 0]], 1)
+    pts = (starts[:, None, None, :] + t[None, None, :, None] * dirs[:, None, None, :]
+           + o[None, :, None, None] * perp[:, None, None, :])
     r = np.rint(pts[..., 0]).astype(int)
     c = np.rint(pts[..., 1]).astype(int)
     inside = (r >= 0) & (r < H) & (c >= 0) & (c < W)
     return np.clip(r, 0, H - 1), np.clip(c, 0, W - 1), inside
+
+
+def _samples(shape, start, d, n, offsets):
+    """:func:`_sample_cells` from one ``start`` along one ``d``: ``(len(offsets), n)``."""
+    r, c, inside = _sample_cells(shape, np.asarray(start, float)[None], np.asarray(d, float)[None], n, offsets)
+    return r[0], c[0], inside[0]
 
 
 def _depth_ok(obstacle, p, q, depth_px) -> bool:
@@ -100,16 +109,8 @@ def _depth_ok(obstacle, p, q, depth_px) -> bool:
     d = (q - p) / max(np.hypot(*(q - p)), 1e-9)
     n = np.array([-d[1], d[0]])
     k = max(int(np.ceil(depth_px)), 1)
-    for side in (n, -n):
-        reached = False
-        for f in (0.25, 0.5, 0.75):
-            rr, cc, inside = _samples(obstacle.shape, p + f * (q - p), side, k, [0])
-            if inside[0].all() and not obstacle[rr[0], cc[0]].any():
-                reached = True
-                break
-        if not reached:
-            return False
-    return True
+    return all(any(_free_run(obstacle, p + f * (q - p), side, k) == k for f in (0.25, 0.5, 0.75))
+               for side in (n, -n))
 
 
 def _free_run(obstacle, start, d, n) -> int:
@@ -166,21 +167,11 @@ def _gaps(obstacle, free, segs, back, n_gap, offsets, min_gap_px, max_gap_px, ch
     u = (b - a) / L[:, None]
     ends = np.stack([b, a], 1).reshape(-1, 2)
     dirs = np.stack([u, -u], 1).reshape(-1, 2)
-    H, W = obstacle.shape
-    t = np.arange(1, n_gap + 1, dtype=float)
-    o = np.asarray(offsets, float)
-    centre = o.size // 2
+    centre = len(offsets) // 2
     idx = np.arange(n_gap)
     for k in range(0, ends.shape[0], chunk):
         E, D = ends[k:k + chunk], dirs[k:k + chunk]
-        start = E - (back + 1) * D
-        perp = np.stack([-D[:, 1], D[:, 0]], 1)
-        pts = (start[:, None, None, :] + t[None, None, :, None] * D[:, None, None, :]
-               + o[None, :, None, None] * perp[:, None, None, :])
-        r = np.rint(pts[..., 0]).astype(int)
-        c = np.rint(pts[..., 1]).astype(int)
-        inside = (r >= 0) & (r < H) & (c >= 0) & (c < W)
-        r, c = np.clip(r, 0, H - 1), np.clip(c, 0, W - 1)
+        r, c, inside = _sample_cells(obstacle.shape, E - (back + 1) * D, D, n_gap, offsets)
         hit = (obstacle[r, c] & inside).any(axis=1)
         clear = ~hit
         s0 = np.argmax(clear, axis=1)
