@@ -103,7 +103,7 @@ def write_segmentation(seg, outdir, *, overlay: bool = True, skeletons: bool = F
 #: Modules the segment command uses, imported up front (their import time is the
 #: ``import`` stage of ``--profile``, not hidden in the first map's stages).
 _PRELOAD = ("numpy", "scipy.ndimage", "scipy.sparse.csgraph", "scipy.spatial", "cv2", "PIL.Image",
-            "PIL.PngImagePlugin", "yaml", "networkx", "shapely", "shapely.geometry", "shapely.ops", "skimage.draw",
+            "PIL.PngImagePlugin", "yaml", "networkx", "shapely", "shapely.geometry", "skimage.draw",
             "skimage.graph", "skimage.morphology", "skimage.segmentation", "topomap.io", "topomap.segmentation",
             "topomap.roomgraph", "topomap.planning", "topomap.export", "topomap.plot")
 
@@ -200,9 +200,7 @@ def _id_changes(path) -> str:
 
     from .identity import RoomChanges
 
-    d = json.loads(Path(path).read_text(encoding="utf-8"))
-    return RoomChanges(kept=tuple(d["kept"]), new=tuple(d["new"]), vanished=tuple(d["vanished"]),
-                       split=d["split"], merged=d["merged"], next_room_id=d["next_room_id"]).summary()
+    return RoomChanges.from_dict(json.loads(Path(path).read_text(encoding="utf-8"))).summary()
 
 
 def _summary(row) -> str:
@@ -309,8 +307,6 @@ def segment_cmd(maps, outdir, resolution, method, skeletons, no_overlay, no_geoj
         except Exception:  # noqa: BLE001 - a failed warm-up only leaves those costs in the first map
             warm = None
 
-    if resolution is not None and not resolution > 0:
-        sys.exit(_fail(ParameterError(f"--resolution must be > 0 m/px, got {resolution!r}")))
     try:
         outdir = _check_outdir(outdir)
         if resolution is not None:

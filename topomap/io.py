@@ -318,7 +318,7 @@ def check_resolution(value, *, name: str = "--resolution") -> float:
     """
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)) \
             or not value > 0 or not math.isfinite(value):
-        raise ParameterError(_one_line(f"{name} must be a number > 0 m/px, got {value!r}"))
+        raise ParameterError(_one_line(f"{name} must be > 0 m/px (a number), got {value!r}"))
     _check_resolution_range(None, float(value), name)
     return float(value)
 
