@@ -65,7 +65,7 @@ from pathlib import Path
 from typing import Optional, Sequence
 
 from . import export as _export
-from .errors import MissingDependencyError, OutputExistsError, ParameterError, TopomapError
+from .errors import MissingDependencyError, OutputExistsError, ParameterError, TopomapError, first_line
 
 __all__ = ["segment_many", "output_dirs", "read_summary", "RECORD", "SUMMARY", "SUMMARY_COLUMNS",
            "OUTPUT_NAMES", "STATUSES", "OK", "SKIPPED", "FAILED", "ERROR", "PENDING", "INCOMPLETE", "COMPLETE",
@@ -240,18 +240,6 @@ def _plan(paths, dirs, settings, overwrite):
 # One map (runs on a worker)
 # --------------------------------------------------------------------------
 
-def _remove_temporaries(folder: Path):
-    """Temporary files a killed run left beside the outputs (names of :func:`topomap.io.atomic_write`)."""
-    if not folder.is_dir():
-        return
-    for name in (*OUTPUT_NAMES, "changes.json", RECORD):
-        for tmp in folder.glob(f".{name}.*.tmp"):
-            try:
-                tmp.unlink()
-            except OSError:
-                pass
-
-
 def _restore_record(folder: Path, previous: Optional[str], existed: bool):
     from .io import atomic_write
 
@@ -267,11 +255,6 @@ def _restore_record(folder: Path, previous: Optional[str], existed: bool):
         pass
 
 
-def _first_line(exc) -> str:
-    text = str(exc).splitlines()[0] if str(exc) else ""
-    return text or type(exc).__name__
-
-
 def _run_one(task: dict) -> dict:
     """Segment one map into its folder; the summary row (never raises for a bad map)."""
     t0 = time.perf_counter()
@@ -281,10 +264,10 @@ def _run_one(task: dict) -> dict:
     existed = folder.exists()
     previous = claimed = None
     try:
-        _remove_temporaries(folder)
         inputs = _fingerprint(Path(task["path"]))
         record = {"topomap": _version(), "input": task["input"], "inputs": inputs, "settings": s}
         folder.mkdir(parents=True, exist_ok=True)
+        # writing the record removes the temporaries a killed run left here (io.atomic_write)
         if (folder / RECORD).exists():
             previous = (folder / RECORD).read_text()
         _write_record(folder, dict(record, status=INCOMPLETE))  # a kill from here on: the map runs again
@@ -307,7 +290,7 @@ def _run_one(task: dict) -> dict:
         bad_input = isinstance(exc, (TopomapError, OSError, ValueError))
         row = {"map": task["map"], "output": task["output"], "status": FAILED if bad_input else ERROR,
                "seconds": time.perf_counter() - t0,
-               "error": _first_line(exc) if bad_input else f"{type(exc).__name__}: {_first_line(exc)}",
+               "error": first_line(exc) if bad_input else f"{type(exc).__name__}: {first_line(exc)}",
                "traceback": "".join(traceback.format_exception(exc))}
         if claimed:  # the outputs are as they were (all files or none are replaced): so is the record
             _restore_record(folder, previous, existed)
@@ -327,7 +310,7 @@ def _pool_init():
 
 def _crashed(task, exc) -> dict:
     return {"map": task["map"], "output": task["output"], "status": ERROR,
-            "error": f"worker lost: {type(exc).__name__}: {_first_line(exc)}",
+            "error": f"worker lost: {type(exc).__name__}: {first_line(exc)}",
             "traceback": "".join(traceback.format_exception(exc))}
 
 
@@ -345,7 +328,7 @@ def _client(scheduler):
     try:
         return Client(scheduler, timeout="20s"), True
     except (OSError, TimeoutError) as exc:
-        raise ParameterError(f"scheduler {scheduler}: cannot reach it: {_first_line(exc)}") from None
+        raise ParameterError(f"scheduler {scheduler}: cannot reach it: {first_line(exc)}") from None
 
 
 def _execute(tasks, jobs, scheduler):

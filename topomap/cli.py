@@ -36,14 +36,13 @@ def _naming(path, exc) -> str:
 
 def _fail(exc, what="") -> int:
     """Print one line for ``exc`` on stderr; return the exit code to use."""
-    from .errors import TopomapError
+    from .errors import TopomapError, first_line
 
     if _State.debug:
         traceback.print_exception(exc)
     prefix = f"{what}: " if what else ""
     if isinstance(exc, (TopomapError, OSError, ValueError)):
-        msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        click.echo(f"error: {prefix}{msg}", err=True)
+        click.echo(f"error: {prefix}{first_line(exc)}", err=True)
         return EXIT_INPUT
     click.echo(f"internal error: {prefix}{type(exc).__name__}: {exc} (rerun with --debug for the traceback)",
                err=True)

@@ -25,7 +25,15 @@ __all__ = [
     "BagError",
     "OutputExistsError",
     "MissingDependencyError",
+    "first_line",
 ]
+
+
+def first_line(exc) -> str:
+    """The first line of ``exc``'s message, or its type's name when that is empty:
+    what a one-line error report says of an exception."""
+    text = str(exc).splitlines()[0] if str(exc) else ""
+    return text or type(exc).__name__
 
 
 class TopomapError(Exception):

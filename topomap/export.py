@@ -46,7 +46,7 @@ from pathlib import Path
 import numpy as np
 import networkx as nx
 
-from .errors import GraphFormatError
+from .errors import GraphFormatError, first_line
 from .io import atomic_write  # noqa: F401  (re-exported: topomap.export.atomic_write)
 
 __all__ = ["atomic_write", "save_labels", "save_graphml", "save_json", "to_graphml_graph",
@@ -473,7 +473,7 @@ def _nx_graphml_bytes(G) -> bytes:
 def _bad(path, what, exc=None) -> GraphFormatError:
     msg = f"{path}: {what}"
     if exc is not None:
-        msg += f": {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}"
+        msg += f": {first_line(exc)}"
     return GraphFormatError(msg)
 
 

@@ -39,7 +39,7 @@ import numpy as np
 
 from .errors import BagError, MapError, MapFileError, MapFileNotFoundError, MapTooLargeError, \
     MissingDependencyError, ParameterError, TopomapError
-from .io import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
+from .io import FREE, OCCUPIED, UNKNOWN, OccupancyGrid, _one_line
 
 __all__ = [
     "MAP_TYPE",
@@ -85,11 +85,6 @@ BAG_SUFFIXES = (".bag", ".mcap", ".db3")
 _PLANAR_TOL = 1e-6  # rad: largest roll/pitch of a map origin taken as planar
 _LINE_Z = 0.02      # m: outlines and doors drawn just above the map plane in RViz
 _TEXT_Z = 0.05
-
-
-def _one_line(text) -> str:
-    text = " ".join(str(text).split())
-    return text if len(text) <= 300 else text[:297] + "..."
 
 
 # --------------------------------------------------------------------------
