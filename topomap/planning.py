@@ -707,6 +707,23 @@ def _endpoint(ctx, G, v, what):
     return r, (x, y), (row, col)
 
 
+def _attach_to_doors(ctx, H, node, room, px):
+    """Join ``node`` (at pixel ``px`` of ``room``) to the room's doors of ``H`` by in-room legs.
+
+    Returns the room space (to measure more legs in the same room), or None
+    when the pixel is not on the room's traversable cells."""
+    doors = [d for d in ctx.doors_of(room) if d in H]
+    space = _RoomSpace(ctx, room, doors=doors)
+    src = space.local(*px)
+    if src is None:
+        return None
+    reach = [d for d in doors if d in space.door_px]
+    for d, L in zip(reach, space.distances(src, [space.door_px[d] for d in reach])):
+        if np.isfinite(L):
+            H.add_edge(node, d, length=L, room=room)
+    return space
+
+
 def plan_path(seg_or_G, start, goal, *, robot_width: float = 0.0) -> dict:
     """Plan a route from ``start`` to ``goal`` through rooms and doors.
 
@@ -762,18 +779,11 @@ def plan_path(seg_or_G, start, goal, *, robot_width: float = 0.0) -> dict:
     H.add_node(T)
     same = rs == rg
     for r, p, node in ((rs, pxs, S), (rg, pxg, T)):
-        usable = [d for d in ctx.doors_of(r) if d in H]
-        space = _RoomSpace(ctx, r, doors=usable)
-        src = space.local(*p)
-        targets = [d for d in usable if d in space.door_px]
-        dist = space.distances(src, [space.door_px[d] for d in targets]) if src else []
-        for d, L in zip(targets, dist):
-            if np.isfinite(L):
-                H.add_edge(node, d, length=L, room=r)
-        if same and node is S and src:
+        space = _attach_to_doors(ctx, H, node, r, p)
+        if same and node is S and space is not None:
             q = space.local(*pxg)
             if q is not None:
-                (L,) = space.distances(src, [q])
+                (L,) = space.distances(space.local(*p), [q])
                 if np.isfinite(L):
                     H.add_edge(S, T, length=L, room=r)
     try:

@@ -237,25 +237,6 @@ def tour_lower_bound(D: np.ndarray) -> float:
 # Stops on the room graph
 # --------------------------------------------------------------------------
 
-def _attach(ctx, H, node, room, px):
-    """Join ``node`` (at pixel ``px`` of ``room``) to the room's doors of ``H`` by in-room legs.
-
-    Returns the room space (to measure more legs in the same room), or None
-    when the pixel is not on the room's traversable cells."""
-    from .planning import _RoomSpace
-
-    doors = [d for d in ctx.doors_of(room) if d in H]
-    space = _RoomSpace(ctx, room, doors=doors)
-    src = space.local(*px)
-    if src is None:
-        return None
-    reach = [d for d in doors if d in space.door_px]
-    for d, L in zip(reach, space.distances(src, [space.door_px[d] for d in reach])):
-        if math.isfinite(L):
-            H.add_edge(node, d, length=L, room=room)
-    return space
-
-
 def stop_distances(seg_or_G, start, rooms=None, *, robot_width: float = 0.0):
     """Travel distances between a start and the rooms to visit.
 
@@ -277,7 +258,7 @@ def stop_distances(seg_or_G, start, rooms=None, *, robot_width: float = 0.0):
         points), ``paths`` (``(i, j) -> list of door IDs`` along the shortest
         route), ``start_room``, ``graph`` (the door graph with the stops).
     """
-    from .planning import _Ctx, _annotated, _endpoint, door_graph
+    from .planning import _attach_to_doors, _Ctx, _annotated, _endpoint, door_graph
 
     from .options import check_length
 
@@ -307,7 +288,7 @@ def stop_distances(seg_or_G, start, rooms=None, *, robot_width: float = 0.0):
     spaces = {}
     for name, room, px in zip(names, [rs] + stops, pixels):
         H.add_node(name)
-        space = _attach(ctx, H, name, room, px)
+        space = _attach_to_doors(ctx, H, name, room, px)
         if room == rs and space is not None:
             spaces[name] = (space, px)
     # the start and the stops in the start room's free space: direct legs
