@@ -39,7 +39,6 @@ from __future__ import annotations
 
 import contextvars
 import json
-import math
 import re
 from pathlib import Path
 
@@ -563,19 +562,8 @@ def save_json(G: nx.Graph, path) -> Path:
     try:  # compact: json's C encoder (indent or json.dump would use the Python one)
         text = json.dumps(data, allow_nan=False)
     except ValueError:  # a NaN or infinity: written as null (valid JSON), read back as NaN
-        text = json.dumps(_finite_or_null(data), allow_nan=False)
+        text = json.dumps(_plain(data), allow_nan=False)
     return _write(text.encode("utf-8"), path)
-
-
-def _finite_or_null(v):
-    """``v`` with every non-finite float (NaN, infinities) replaced by None."""
-    if isinstance(v, float):
-        return v if math.isfinite(v) else None
-    if isinstance(v, dict):
-        return {k: _finite_or_null(x) for k, x in v.items()}
-    if isinstance(v, (list, tuple)):
-        return [_finite_or_null(x) for x in v]
-    return v
 
 
 def load_json(path) -> nx.MultiGraph:
