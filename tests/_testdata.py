@@ -319,6 +319,20 @@ def specks_outside_building() -> TestMap:
     return TestMap("specks_outside_building", g, 2, doors, base.door_widths)
 
 
+
+def free_strip_at_edge() -> TestMap:
+    """:func:`specks_outside_building` with a strip of free cells two cells
+    (0.1 m) wide along the top and left edges of the image (about 640
+    cells, 1.6 m²: more than the smallest room), as a map's frame or a
+    sensor artefact leaves it. No robot fits in it: a fragment, not a room;
+    2 rooms, 1 door. 130 x 194 px.
+    """
+    base = specks_outside_building()
+    g = base.array.copy()
+    g[:2, :] = GRAY_FREE
+    g[:, :2] = GRAY_FREE
+    return TestMap("free_strip_at_edge", g, 2, base.doors, base.door_widths)
+
 def noisy_corridor_with_pillars(seed: int = 13) -> TestMap:
     """:func:`corridor_with_pillars` with laser-style noise (seeded): 2 rooms, 1 door.
 
@@ -371,4 +385,4 @@ def noisy_corridor_with_pillars(seed: int = 13) -> TestMap:
 
 
 REAL_WORLD = [corridor_with_pillars, corridor_with_niches, room_with_desks,
-              specks_outside_building, noisy_corridor_with_pillars]
+              specks_outside_building, free_strip_at_edge, noisy_corridor_with_pillars]

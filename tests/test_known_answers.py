@@ -38,6 +38,7 @@ CASES = [
     pytest.param(T.corridor_with_niches, 3, 2, id="corridor_with_niches"),
     pytest.param(T.room_with_desks, 2, 1, id="room_with_desks"),
     pytest.param(T.specks_outside_building, 2, 1, id="specks_outside_building"),
+    pytest.param(T.free_strip_at_edge, 2, 1, id="free_strip_at_edge"),
     pytest.param(T.noisy_corridor_with_pillars, 2, 1, id="noisy_corridor_with_pillars",
                  marks=pytest.mark.xfail(strict=True, reason=NOISY_REASON)),
 ]

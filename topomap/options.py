@@ -238,6 +238,9 @@ class TopomapOptions(_Options):
         *fragment*, not a room: it keeps a label (after the rooms) but is
         not in the room graph. A piece smaller than this cut off by a door
         is not a room of its own either: it joins the room it was cut from.
+        The same holds for a region with no place a robot fits: nowhere
+        ``wall_gap`` (0.5 m) wide — a strip of free cells along the map's
+        edge, a single scan ray, however long.
         0 makes every region a room.
     openings : bool
         Also cut at openings in straight walls (:func:`topomap.walls.wall_openings`):

@@ -134,7 +134,7 @@ def _grow(seeds: np.ndarray, todo: np.ndarray, max_steps: int = 8) -> np.ndarray
     return out.astype(np.int32)
 
 
-def cut_rooms(grid: OccupancyGrid, segments, *, space=None, min_room_cells: int = 0):
+def cut_rooms(grid: OccupancyGrid, segments, *, space=None, min_room_cells: int = 0, wide=None):
     """Cut free space along door segments and label the rooms (and fragments).
 
     Parameters
@@ -153,6 +153,11 @@ def cut_rooms(grid: OccupancyGrid, segments, *, space=None, min_room_cells: int 
         region smaller than this that no room reaches is a *fragment* (a
         free speck, a patch of scan rays). 0 (default): every region is a
         room.
+    wide : (M, N) ndarray of bool, optional
+        Cells where a robot fits (the default method: free cells at least
+        half of ``wall_gap`` from every obstacle). With it, a piece or region
+        without such a cell — a strip of free cells along the map's edge, a
+        single scan ray — is treated like one smaller than ``min_room_cells``.
 
     Returns
     -------
@@ -182,6 +187,8 @@ def cut_rooms(grid: OccupancyGrid, segments, *, space=None, min_room_cells: int 
             # a piece smaller than a room is never a room of its own: its
             # cells join the room they are connected to, or become a fragment
             small = area < min_room_cells
+            if wide is not None:
+                small |= np.bincount(pieces[wide], minlength=n + 1) == 0
             small[0] = False
             pieces = np.where(small[pieces], 0, pieces)
             area[small] = 0
@@ -192,21 +199,24 @@ def cut_rooms(grid: OccupancyGrid, segments, *, space=None, min_room_cells: int 
         rank = np.empty(n + 1, np.int32)
         rank[np.argsort(area, kind="stable")] = np.arange(n + 1, dtype=np.int32)
         pieces = rank[pieces]
-    labels, n_rooms = _rooms_first(fill_unlabeled(pieces, free), min_room_cells)
+    labels, n_rooms = _rooms_first(fill_unlabeled(pieces, free), min_room_cells, wide)
     doors = [d for d in doors_between_rooms(grid, labels, segments) if max(d.rooms) <= n_rooms]
     for k, d in enumerate(doors):
         d.id = k
     return labels, doors, n_rooms
 
 
-def _rooms_first(labels: np.ndarray, min_cells: int):
-    """``(labels, n_rooms)``: labels of at least ``min_cells`` cells (rooms)
-    renumbered ``1..n_rooms`` and the smaller ones (fragments) after them,
-    each group keeping its order (of first appearance)."""
+def _rooms_first(labels: np.ndarray, min_cells: int, wide=None):
+    """``(labels, n_rooms)``: labels of at least ``min_cells`` cells (rooms;
+    with a ``wide`` mask, only those with a cell in it) renumbered
+    ``1..n_rooms`` and the others (fragments) after them, each group keeping
+    its order (of first appearance)."""
     top = int(labels.max()) if labels.size else 0
     if min_cells <= 0 or top == 0:
         return labels, top
     is_room = np.bincount(labels.ravel(), minlength=top + 1) >= min_cells
+    if wide is not None:
+        is_room &= np.bincount(labels[wide], minlength=top + 1) > 0
     is_room[0] = False
     n_rooms = int(is_room.sum())
     if n_rooms < top:
