@@ -106,3 +106,63 @@ def test_straight_share_counts_face_cells_on_lines():
     assert W.straight_share(faces, lines) > 0.9
     assert W.straight_share(faces, np.zeros((0, 4))) == 0.0
     assert W.straight_share(np.zeros((5, 5), bool), lines) == 1.0
+
+
+def _long_wall_with_doorway(speck: bool):
+    """Two rooms (rows 5..44 and 50..89, 2 m deep) either side of a 7 m wall
+    (rows 45..49) with a 1 m doorway (cols 70..89), optionally with a
+    one-cell speck in the doorway (an open door leaf, a person)."""
+    free = np.zeros((95, 150), bool)
+    free[5:45, 5:145] = True
+    free[50:90, 5:145] = True
+    free[45:50, 70:90] = True
+    if speck:
+        free[47, 80] = False
+    return free
+
+
+@pytest.mark.parametrize("speck", [False, True])
+def test_gap_in_a_long_wall_is_an_opening_even_with_a_speck(speck):
+    free = _long_wall_with_doorway(speck)
+    faces = W.wall_faces(~free, free)
+    lines = W.wall_lines(faces, min_length_px=20)
+    walls = W.long_walls(lines, max_gap_px=60, offset_px=4, min_span_px=80)
+    assert walls, "no long wall found"
+    ops = W.long_wall_gaps(~free, free, walls, min_gap_px=10, max_gap_px=60, depth_px=24)
+    assert ops, "the doorway was not found"
+    for p, q in ops:
+        assert 44 <= p[0] <= 51 and 44 <= q[0] <= 51          # on the wall
+        assert 66 <= min(p[1], q[1]) <= 71 and 88 <= max(p[1], q[1]) <= 93  # across the doorway
+
+
+def test_long_wall_gap_in_front_of_a_niche_is_no_opening():
+    free = _long_wall_with_doorway(False)
+    free[50:90, 5:145] = False
+    free[50:60, 65:95] = True  # a 0.5 m deep niche behind the gap
+    faces = W.wall_faces(~free, free)
+    walls = W.long_walls(W.wall_lines(faces, min_length_px=20), max_gap_px=60, offset_px=4, min_span_px=80)
+    assert W.long_wall_gaps(~free, free, walls, min_gap_px=10, max_gap_px=60, depth_px=24) == []
+
+
+def test_segment_between_the_side_walls_of_a_corridor_is_across_them():
+    # a corridor 2 m wide (rows 20..59) between two 8 m walls
+    free = np.zeros((80, 170), bool)
+    free[20:60, 5:165] = True
+    faces = W.wall_faces(~free, free)
+    walls = W.long_walls(W.wall_lines(faces, min_length_px=20), max_gap_px=60, offset_px=4, min_span_px=80)
+    assert len(walls) >= 2
+    assert W.across_walls((19.5, 80), (60.5, 80), walls, tol_px=4)       # across the corridor
+    assert not W.across_walls((19.5, 80), (40, 80), walls, tol_px=4)     # from a wall into the corridor
+    assert not W.across_walls((40, 30), (40, 70), walls, tol_px=4)       # along it
+
+
+def test_wall_directions_follow_a_rotated_building():
+    free = np.zeros((200, 200), bool)
+    import cv2
+    box = cv2.boxPoints(((100, 100), (120, 80), 20.0)).astype(np.int32)
+    m = np.zeros((200, 200), np.uint8)
+    cv2.fillPoly(m, [box], 1)
+    free = m > 0
+    lines = W.wall_lines(W.wall_faces(~free, free), min_length_px=20)
+    th = np.degrees(W.wall_directions(lines))
+    assert min(abs(th - 20), abs(th - 70)) <= 2.5

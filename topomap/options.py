@@ -263,6 +263,22 @@ class TopomapOptions(_Options):
         room (a WC). A shallower space behind a gap in a wall — a niche, an
         alcove, a recess for a radiator or a cupboard — belongs to the room
         or corridor it opens onto.
+    long_wall : float
+        With ``openings``, a straight wall at least this long (m) whose
+        pieces cover at least half of it is a structural wall — a
+        corridor's side, a façade: 4.0 m, longer than any piece of furniture
+        and than the wall of a small room. Pieces are found along the
+        building's two main directions (:func:`topomap.walls.long_walls`).
+        Every gap of ``min_door_width`` to ``max_door_width`` in such a wall,
+        with space ``alcove_depth`` deep on both sides, is an opening, even
+        with specks in it (an open door leaf, a person the laser saw); and an
+        opening whose two ends lie on two such walls that it crosses spans
+        the corridor between them and is no door. 0 turns both off.
+    wall_wander : float
+        Pieces of one long wall lie within this distance (m) of its line:
+        0.2 m. A laser SLAM map draws a straight wall a few cells off its
+        line over tens of metres (odometry drift, scan noise); two different
+        walls are at least a wall's thickness plus a room apart.
     furniture_size : float
         Free-standing obstacles less than this (m) across that are thicker
         than ``wall_thickness`` are furniture — desks, cupboards, a table
@@ -306,6 +322,8 @@ class TopomapOptions(_Options):
     openings: bool = _opt(True, "bool")
     beside_wall: float = _opt(1.0, "length")
     alcove_depth: float = _opt(1.2, "length")
+    long_wall: float = _opt(4.0, "length")
+    wall_wander: float = _opt(0.2, "length")
     furniture_size: float = _opt(0.0, "length")
     wall_thickness: float = _opt(0.5, "length")
 

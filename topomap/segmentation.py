@@ -651,6 +651,15 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
                 side_px=opts.min_door_width / res, depth_px=opts.alcove_depth / res, faces=faces, lines=lines,
                 beside_px=opts.beside_wall / res),
                 res)
+            if opts.long_wall > 0:
+                # long straight walls: the gaps in them are openings, and an
+                # opening from one of them to another spans a corridor
+                lw = W.long_walls(lines, max_gap_px=opts.max_door_width / res, offset_px=opts.wall_wander / res,
+                                  min_span_px=opts.long_wall / res)
+                ops = ops + D.opening_candidates(W.long_wall_gaps(
+                    walls, search.free, lw, min_gap_px=opts.min_door_width / res,
+                    max_gap_px=opts.max_door_width / res, depth_px=opts.alcove_depth / res), res)
+                ops = [(w, c) for w, c in ops if not W.across_walls(c.ip1, c.ip2, lw, tol_px=opts.wall_wander / res)]
             segs = segs + D.suppress_duplicates(ops, res, kept=segs)
             cands = cands + [c for _, c in ops]
     with T("rooms"):

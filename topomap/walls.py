@@ -18,7 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["wall_faces", "wall_lines", "straight_share", "wall_openings"]
+__all__ = ["wall_faces", "wall_lines", "straight_share", "wall_openings", "wall_directions", "long_walls",
+           "across_walls", "long_wall_gaps"]
 
 
 def wall_faces(obstacle: np.ndarray, free: np.ndarray) -> np.ndarray:
@@ -280,4 +281,149 @@ def wall_openings(obstacle: np.ndarray, free: np.ndarray, *, min_wall_px: float,
             continue
         seen.add(key)
         out.append((p, far))
+    return out
+
+
+
+def wall_directions(lines: np.ndarray) -> float:
+    """The building's main wall direction (radians, in [0, pi/2)): the peak
+    of the segments' directions modulo a right angle, weighted by length
+    (most buildings are built on two perpendicular directions)."""
+    segs = np.asarray(lines, float).reshape(-1, 4)
+    if segs.shape[0] == 0:
+        return 0.0
+    v = segs[:, 2:] - segs[:, :2]
+    L = np.hypot(*v.T)
+    th = np.mod(np.arctan2(v[:, 0], v[:, 1]), np.pi / 2)
+    bins = np.arange(90)
+    h = np.bincount(np.floor(np.degrees(th)).astype(int) % 90, weights=L, minlength=90)
+    hs = sum(np.roll(h, k) for k in range(-3, 4))
+    return float(np.radians(bins[int(np.argmax(hs))] + 0.5))
+
+
+
+def long_walls(lines: np.ndarray, *, max_gap_px: float, offset_px: float, min_span_px: float,
+               angle_tol: float = np.deg2rad(12.0), support: float = 0.5) -> list:
+    """Long straight walls along the building's main directions.
+
+    Wall segments within ``angle_tol`` of the main direction
+    (:func:`wall_directions`) or of its perpendicular are turned onto it
+    (a laser map's wall wanders off its line by a few cells and degrees)
+    and grouped: pieces whose lines lie within ``offset_px`` of each other
+    and that follow each other with gaps of at most ``max_gap_px`` are one
+    wall. Walls at least ``min_span_px`` long whose pieces cover at least
+    ``support`` of them are returned as ``(origin, u, n, runs)``: the
+    wall's line is ``origin + t u`` and ``runs`` the ``[t0, t1]`` pieces of
+    it along ``u``, in order."""
+    segs = np.asarray(lines, float).reshape(-1, 4)
+    out = []
+    if segs.shape[0] < 2:
+        return out
+    th0 = wall_directions(segs)
+    v = segs[:, 2:] - segs[:, :2]
+    L = np.hypot(*v.T)
+    th = np.mod(np.arctan2(v[:, 0], v[:, 1]), np.pi)
+    for k in range(2):
+        tk = th0 + k * np.pi / 2
+        dth = np.abs(np.mod(th - tk + np.pi / 2, np.pi) - np.pi / 2)
+        sel = np.flatnonzero(dth <= angle_tol)
+        if sel.size < 2:
+            continue
+        u = np.array([np.sin(tk), np.cos(tk)])
+        n = np.array([-u[1], u[0]])
+        mid = (segs[sel, :2] + segs[sel, 2:]) / 2
+        rho = mid @ n
+        t1, t2 = segs[sel, :2] @ u, segs[sel, 2:] @ u
+        lo, hi = np.minimum(t1, t2), np.maximum(t1, t2)
+        order = np.argsort(rho)
+        groups, cur = [], [order[0]]
+        for a, b in zip(order[:-1], order[1:]):
+            if rho[b] - rho[a] <= offset_px and rho[b] - rho[cur[0]] <= 2 * offset_px:
+                cur.append(b)
+            else:
+                groups.append(cur)
+                cur = [b]
+        groups.append(cur)
+        for grp in groups:
+            grp = np.array(grp)
+            w = L[sel[grp]]
+            r0 = float((rho[grp] * w).sum() / w.sum())
+            chains, runs = [], []
+            for j in grp[np.argsort(lo[grp])]:
+                if runs and lo[j] <= runs[-1][1] + 1.0:
+                    runs[-1][1] = max(runs[-1][1], hi[j])
+                elif runs and lo[j] - runs[-1][1] <= max_gap_px:
+                    runs.append([lo[j], hi[j]])
+                else:
+                    if runs:
+                        chains.append(runs)
+                    runs = [[lo[j], hi[j]]]
+            chains.append(runs)
+            for runs in chains:
+                span = runs[-1][1] - runs[0][0]
+                if span >= min_span_px and sum(r[1] - r[0] for r in runs) >= support * span:
+                    out.append((r0 * n, u, n, runs))
+    return out
+
+
+def across_walls(p, q, walls: list, *, tol_px: float, min_angle: float = np.deg2rad(60.0)) -> bool:
+    """Whether both ends of the segment ``p``-``q`` lie on long walls
+    (:func:`long_walls`, within ``tol_px``, inside their span) that it
+    crosses at ``min_angle`` or steeper: it spans a passage between two
+    walls, such as a corridor between its side walls."""
+    p, q = np.asarray(p, float), np.asarray(q, float)
+    v = q - p
+    d = v / max(float(np.hypot(*v)), 1e-9)
+    hit = [False, False]
+    for origin, u, n, runs in walls:
+        if abs(float(d @ u)) > np.cos(min_angle):
+            continue
+        for k, x in enumerate((p, q)):
+            if hit[k]:
+                continue
+            off = float((x - origin) @ n)
+            t = float((x - origin) @ u)
+            if abs(off) <= tol_px and runs[0][0] - tol_px <= t <= runs[-1][1] + tol_px:
+                hit[k] = True
+    return hit[0] and hit[1]
+
+
+
+def long_wall_gaps(obstacle: np.ndarray, free: np.ndarray, walls: list, *, min_gap_px: float,
+                   max_gap_px: float, depth_px: float) -> list:
+    """Openings in long straight walls (:func:`long_walls`).
+
+    Every gap of ``min_gap_px`` to ``max_gap_px`` between two pieces of a
+    long wall, free along at least half of the wall's line across it, with
+    space at least ``depth_px`` deep on both sides (no niche), is an
+    opening: a corridor's side wall or a façade runs on past its doorways,
+    so a gap in it is a way through it even where the laser saw a speck in
+    the doorway (an open door leaf, a person) or did not see the wall's
+    end. The opening spans the free cells of the gap.
+
+    Returns
+    -------
+    list of ((r1, c1), (r2, c2))
+        Opening segments in pixels.
+    """
+    H, W = free.shape
+    out = []
+    for origin, u, _, runs in walls:
+        for (_, e), (s0, _) in zip(runs[:-1], runs[1:]):
+            if not (min_gap_px <= s0 - e <= max_gap_px):
+                continue
+            ts = np.arange(np.ceil(e), np.floor(s0) + 1)
+            pts = origin + ts[:, None] * u
+            rr = np.rint(pts[:, 0]).astype(int)
+            cc = np.rint(pts[:, 1]).astype(int)
+            if not ((rr >= 0) & (rr < H) & (cc >= 0) & (cc < W)).all():
+                continue
+            fr = free[rr, cc]
+            if fr.mean() < 0.5:
+                continue
+            k = np.flatnonzero(fr)
+            p, q = origin + (ts[k[0]] - 1) * u, origin + (ts[k[-1]] + 1) * u
+            if np.hypot(*(q - p)) < min_gap_px or not _depth_ok(obstacle, p, q, depth_px):
+                continue
+            out.append((p, q))
     return out
