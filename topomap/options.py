@@ -275,6 +275,22 @@ class TopomapOptions(_Options):
         0.1-0.3 m thick and drawn thinner still by a laser scan; a
         free-standing obstacle thicker than this and smaller than
         ``furniture_size`` is furniture.
+    prior_post_shift : float
+        With a previous result (``segment(grid, previous=...)``), a previous
+        door the new run did not find is cut again where walls still meet
+        its line within this distance (m) of both its posts, with free space
+        between them: 0.15 m, as far as a laser SLAM map redraws a wall
+        between two versions (a cell or two, 0.05-0.1 m, and half a cell of
+        rounding); farther, the wall has moved or something stands in the
+        doorway. 0 turns this off (see :class:`topomap.identity.DoorPrior`).
+    prior_changed_area : float
+        With a previous result, a new cut inside a room the previous map had
+        whole is dropped when at most this area (m²) of the map within
+        ``reach`` of it changed (cells free in one map, not in the other):
+        0.25 m², the size of the laser noise along a few metres of wall
+        (a cell's width, 0.05 m, along 5 m), far less than a door frame and
+        the room behind it; the door test sees nothing new there. 0 turns
+        this off.
     """
 
     erosion_radius: float = _opt(0.05, "length")
@@ -305,6 +321,8 @@ class TopomapOptions(_Options):
     alcove_depth: float = _opt(1.2, "length")
     furniture_size: float = _opt(0.0, "length")
     wall_thickness: float = _opt(0.5, "length")
+    prior_post_shift: float = _opt(0.15, "length")
+    prior_changed_area: float = _opt(0.25, "area")
 
     def resolved(self, resolution: float, straight: float = 1.0) -> "TopomapOptions":
         """These options with the map-dependent default ``rise`` filled in
