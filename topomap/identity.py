@@ -434,10 +434,10 @@ class DoorPrior:
     after. :meth:`adjust` gives the cuts hysteresis:
 
     * a previous door whose place is still a narrow passage — along its
-      line, walls within ``prior_post_shift`` of both previous posts, free
-      space between them, a width between ``min_door_width`` and
-      ``max_door_width`` — is cut again even when the new run did not find
-      it;
+      line, walls within ``prior_post_shift`` of both previous posts, no
+      wall between them, a width between ``min_door_width`` and
+      ``max_door_width`` — is cut again (between the walls found) even when
+      the new run did not find it;
     * a new cut that lies inside a room the previous map had whole (the
       previous room on both sides of it, ``min_door_width / 2`` away, is the
       same) is dropped when the map within ``reach`` of it did not change
@@ -456,20 +456,23 @@ class DoorPrior:
         d = np.asarray(self.previous.doors, float).reshape(-1, 2, 2)
         self.xy1, self.xy2 = d[:, 0], d[:, 1]
 
-    def adjust(self, grid, search, segments, opts) -> list:
+    def adjust(self, grid, segments, opts, *, walls: np.ndarray, space: np.ndarray) -> list:
         """The door segments of a new run with the previous doors taken into account.
 
         Parameters
         ----------
         grid : OccupancyGrid
             The map the rooms are cut from (its origin places it in the map frame).
-        search : OccupancyGrid
-            The map doors are searched in (same cells frame as ``grid``).
         segments : list of ((r1, c1), (r2, c2))
             The new run's door segments, pixels of ``grid``.
         opts : TopomapOptions
             The options that ran (``prior_post_shift``, ``prior_changed_area``,
             ``reach``, ``min_door_width``, ``max_door_width``).
+        walls : (M, N) ndarray of bool
+            The cells door posts lie on (the non-free cells of the map doors
+            are searched in, where free-standing clutter is looked through).
+        space : (M, N) ndarray of bool
+            The free cells rooms are cut from (clutter is not).
 
         Returns
         -------
@@ -501,7 +504,7 @@ class DoorPrior:
         again = []
         if opts.prior_post_shift > 0:
             for k in np.flatnonzero(~same.any(0)):
-                s = _passage_along(search.free, P[k], Q[k], opts.prior_post_shift / res)
+                s = _passage_along(walls, space, P[k], Q[k], opts.prior_post_shift / res)
                 if s is not None and opts.min_door_width <= np.hypot(*(s[1] - s[0])) * res <= opts.max_door_width:
                     again.append(s)
         if len(kept) < len(segments) or again:
@@ -548,26 +551,30 @@ class DoorPrior:
         return out
 
 
-def _passage_along(free: np.ndarray, p, q, tol_px: float):
-    """The door line between the walls met along ``p``–``q`` (pixels), from its
-    midpoint outwards: ``(a, b)``, the first non-free cell each way, when the
-    midpoint is free and each lies within ``tol_px`` (plus half a cell's
-    diagonal) of ``p`` and ``q``; else None."""
+def _passage_along(walls: np.ndarray, space: np.ndarray, p, q, tol_px: float):
+    """The door line between the posts met along ``p``–``q`` (pixels), from its
+    midpoint outwards: ``(a, b)``, the first cell each way that is a wall, or
+    that is out of ``space`` (clutter) near the end, when the midpoint is not
+    a wall and each lies within ``tol_px`` (plus half a cell's diagonal) of
+    ``p`` and ``q``; else None. Clutter well inside the passage (a pillar in
+    a wide opening) is looked through, as the door stage does."""
     p, q = np.asarray(p, float), np.asarray(q, float)
     v = q - p
     L = np.hypot(*v)
-    H, W = free.shape
+    H, W = walls.shape
     mid = (p + q) / 2
     mr, mc = int(np.rint(mid[0])), int(np.rint(mid[1]))
-    if L == 0 or not (0 <= mr < H and 0 <= mc < W and free[mr, mc]):
+    if L == 0 or not (0 <= mr < H and 0 <= mc < W) or walls[mr, mc]:
         return None
     u = v / L
     steps = np.arange(0.5, L / 2 + tol_px + 1.0, 0.5)
+    near = steps >= L / 2 - tol_px - np.sqrt(2) / 2
     ends = []
     for end, sgn in ((q, 1.0), (p, -1.0)):
         rc = np.rint(mid[None] + sgn * steps[:, None] * u[None]).astype(np.int64)
         inside = (rc[:, 0] >= 0) & (rc[:, 0] < H) & (rc[:, 1] >= 0) & (rc[:, 1] < W)
-        stop = np.flatnonzero(~inside | ~free[np.clip(rc[:, 0], 0, H - 1), np.clip(rc[:, 1], 0, W - 1)])
+        r, c = np.clip(rc[:, 0], 0, H - 1), np.clip(rc[:, 1], 0, W - 1)
+        stop = np.flatnonzero(~inside | walls[r, c] | (near & ~space[r, c]))
         if stop.size == 0 or not inside[stop[0]]:
             return None
         hit = rc[stop[0]].astype(float)

@@ -659,7 +659,7 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
             cands = cands + [c for _, c in ops]
     if prior is not None:
         with T("prior doors"):
-            segs = prior.adjust(rooms_grid, search, segs, opts)
+            segs = prior.adjust(rooms_grid, segs, opts, walls=walls, space=space)
     with T("rooms"):
         min_cells = int(np.ceil(opts.min_room_area / res ** 2 - 1e-9))
         labels, door_objs, n_rooms = cut_rooms(rooms_grid, segs, space=space, min_room_cells=min_cells)
