@@ -2,14 +2,18 @@
 
 On each exploration sequence of the real maps (ROSE² data: freiburg079_partial_02..15,
 bremen_cartesium_partial_03..17, each map a later state of the same run), every map
-is segmented with ``topomap.segment`` and its rooms given the IDs of the previous
-map's rooms (``topomap.identity.match_rooms``, what ``segment(grid, previous=...)``
-does). A ground-truth room present in two consecutive maps (the same true room:
-one-to-one, overlapping by at least half of the smaller in the map frame, both over
-100 cells) *keeps its ID* when the topomap room covering most of it carries the same
-ID in both maps; an ID change is *explained* when the change record links the two
-IDs (a split or a merge). The same share with fresh numbering (no ``previous``) is
-the reference.
+is segmented three ways: ``topomap.segment(grid, previous=...)`` with the previous
+map's result (its doors are a prior of the door stage, ``topomap.identity.DoorPrior``,
+then its rooms' IDs are given by ``topomap.identity.match_rooms``); a fresh
+``topomap.segment(grid)`` whose rooms are matched to the previous map's
+(``match_rooms`` only); and fresh numbering. A ground-truth room present in two
+consecutive maps (the same true room: one-to-one, overlapping by at least half of
+the smaller in the map frame, both over 100 cells) *keeps its ID* when the topomap
+room covering most of it carries the same ID in both maps; an ID change is
+*explained* when the change record links the two IDs (a split or a merge). The
+room F1 (harmonic mean of the mean precision and recall over the maps, free cells
+scored, :func:`topomap.evaluation.score_segmentation`) shows what the segmentation
+gives up for steadier doors.
 
 The data set's YAML files give every map the origin (0, 0), although the Bremen
 images were cropped anew as the map grew (the building shifts by up to 248 cells
@@ -238,13 +242,17 @@ def main(argv=None):
 {wall:.0f} s wall time).
 
 Each exploration sequence of the real maps (ROSE² data; every map a later state of the same
-run) segmented map by map, each map's rooms given the IDs of the previous map's rooms
-(`topomap.segment(grid, previous=...)`). A ground-truth room present in two consecutive maps
+run) segmented map by map, three ways: *previous doors kept* is `topomap.segment(grid,
+previous=...)` with the previous map's result (the previous doors are a prior of the door
+stage, then the rooms get the previous IDs); *matched only* segments every map afresh and
+gives its rooms the previous map's IDs (`topomap.identity.match_rooms`); *fresh* numbers rooms
+by a row-major scan. A ground-truth room present in two consecutive maps
 (the same true room: overlapping by at least half of the smaller in the map frame, both over
-100 cells) *keeps its ID* when the room covering most of it has the same ID in both maps;
-*fresh numbering* is the same share without `previous` (IDs of a row-major scan). An ID change
+100 cells) *keeps its ID* when the room covering most of it has the same ID in both maps. An ID change
 is *explained* when the change record links the two IDs (a split or a merge); the column
-"new / vanished / split / merged" counts the change records' entries over the sequence. The data set's YAML files give every map the origin
+"new / vanished / split / merged" counts the change records' entries over the sequence. The
+room F1 is the harmonic mean of the rooms' precision and recall against the ground truth (the
+Bormann et al. metric, free cells scored), each the mean over the sequence's maps. The data set's YAML files give every map the origin
 (0, 0) although the images were cropped anew as the map grew; the script recovers each map's
 origin by aligning its free cells with the previous map's (a whole-cell shift), as a SLAM
 map's own origin would.

@@ -29,6 +29,15 @@ significant previous rooms is a *merge* (it keeps the ID of its largest
 overlap), a previous room with no significant new room *vanished*, a new
 room with no significant previous room is *new*.
 
+Doors that last
+---------------
+Before the rooms are matched, ``topomap.segment(grid, previous=...)`` hands the
+previous doors to the default method's door stage (:class:`DoorPrior`): a
+previous door whose place is still a narrow passage is cut again, and a new
+cut inside a previous room whose surroundings did not change is dropped, so
+that a door does not come and go between two versions of a map for reasons
+measured far from it (the wall threshold, the clearance's noise).
+
 Labels with stable IDs
 ----------------------
 Room IDs are still the labels of the label image and the node keys of the
