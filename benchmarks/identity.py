@@ -195,8 +195,8 @@ def table(stats):
     """The Markdown table: one row per sequence and numbering, then the totals."""
     lines = ["| sequence | numbering | maps | GT rooms in two consecutive maps | keep their ID % "
              "| ID changes | explained by the change record % | new / vanished / split / merged (record) "
-             "| room F1 % (mean over maps) |",
-             "| --- | --- | ---: | ---: | ---: | ---: | ---: | --- | ---: |"]
+             "| room F1 % (mean over maps) | s |",
+             "| --- | --- | ---: | ---: | ---: | ---: | ---: | --- | ---: | ---: |"]
     tot = {k: 0 for k in stats[0] if k != "sequence"}
     for st in stats + [None]:
         if st is None:
@@ -208,13 +208,14 @@ def table(stats):
                           ("fresh_", "fresh")):
             if pre == "fresh_":
                 lines.append(f"| {st['sequence']} | {what} | {st['maps']} | {st['fresh_n']} "
-                             f"| {_pct(st['fresh_kept'], st['fresh_n'])} | | | | {_f1(st, pre)} |")
+                             f"| {_pct(st['fresh_kept'], st['fresh_n'])} | | | | {_f1(st, pre)} "
+                             f"| {st['t_segment']:.1f} |")
                 continue
             n = st[pre + "gt"] - st[pre + "uncovered"]
             lines.append(f"| {st['sequence']} | {what} | {st['maps']} | {n} | {_pct(st[pre + 'kept'], n)} "
                          f"| {st[pre + 'changed']} | {_pct(st[pre + 'explained'], st[pre + 'changed'])} "
                          f"| {st[pre + 'new']} / {st[pre + 'vanished']} / {st[pre + 'split']} / "
-                         f"{st[pre + 'merged']} | {_f1(st, pre)} |")
+                         f"{st[pre + 'merged']} | {_f1(st, pre)} | {st['t_' + pre[:-1]]:.1f} |")
     return "\n".join(lines) + "\n"
 
 
@@ -252,7 +253,8 @@ by a row-major scan. A ground-truth room present in two consecutive maps
 is *explained* when the change record links the two IDs (a split or a merge); the column
 "new / vanished / split / merged" counts the change records' entries over the sequence. The
 room F1 is the harmonic mean of the rooms' precision and recall against the ground truth (the
-Bormann et al. metric, free cells scored), each the mean over the sequence's maps. The data set's YAML files give every map the origin
+Bormann et al. metric, free cells scored), each the mean over the sequence's maps; "s" the
+seconds of the sequence's runs (*matched only*: the matching after the fresh runs). The data set's YAML files give every map the origin
 (0, 0) although the images were cropped anew as the map grew; the script recovers each map's
 origin by aligning its free cells with the previous map's (a whole-cell shift), as a SLAM
 map's own origin would.
