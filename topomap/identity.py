@@ -258,12 +258,20 @@ class _Previous:
 
     def rooms_at(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """Previous room ID at every map-frame point (0 = none)."""
-        out = np.zeros(x.shape, np.int64)
+        return self._at(self.labels, x, y)
+
+    def free_at(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Whether the previous map was free at every map-frame point (outside it: not)."""
+        return self._at(self.free, x, y)
+
+    def _at(self, image: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """``image`` (of the previous map's cells) at every map-frame point (0 / False outside)."""
+        out = np.zeros(x.shape, image.dtype)
         r, c = self.grid.world_to_pixel(x, y)
         r, c = np.rint(r).astype(np.int64), np.rint(c).astype(np.int64)
-        H, W = self.grid.shape
+        H, W = image.shape
         ok = (r >= 0) & (r < H) & (c >= 0) & (c < W)
-        out[ok] = self.labels[r[ok], c[ok]]
+        out[ok] = image[r[ok], c[ok]]
         return out
 
 
@@ -545,19 +553,8 @@ class DoorPrior:
         inside = np.hypot(rr - mid[0], cc - mid[1]) <= R
         rr, cc = rr[inside], cc[inside]
         x, y = grid.pixel_to_world(rr, cc)
-        changed = grid.free[rr, cc] != self._free_at(np.asarray(x, float), np.asarray(y, float))
+        changed = grid.free[rr, cc] != self.previous.free_at(np.asarray(x, float), np.asarray(y, float))
         return float(changed.sum()) * res ** 2 <= opts.prior_changed_area
-
-    def _free_at(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        """Whether the previous map was free at every map-frame point (outside it: not)."""
-        prev = self.previous
-        out = np.zeros(x.shape, bool)
-        r, c = prev.grid.world_to_pixel(x, y)
-        r, c = np.rint(r).astype(np.int64), np.rint(c).astype(np.int64)
-        H, W = prev.free.shape
-        ok = (r >= 0) & (r < H) & (c >= 0) & (c < W)
-        out[ok] = prev.free[r[ok], c[ok]]
-        return out
 
 
 def _passage_along(walls: np.ndarray, space: np.ndarray, p, q, tol_px: float):
