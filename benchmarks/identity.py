@@ -2,14 +2,18 @@
 
 On each exploration sequence of the real maps (ROSE² data: freiburg079_partial_02..15,
 bremen_cartesium_partial_03..17, each map a later state of the same run), every map
-is segmented with ``topomap.segment`` and its rooms given the IDs of the previous
-map's rooms (``topomap.identity.match_rooms``, what ``segment(grid, previous=...)``
-does). A ground-truth room present in two consecutive maps (the same true room:
-one-to-one, overlapping by at least half of the smaller in the map frame, both over
-100 cells) *keeps its ID* when the topomap room covering most of it carries the same
-ID in both maps; an ID change is *explained* when the change record links the two
-IDs (a split or a merge). The same share with fresh numbering (no ``previous``) is
-the reference.
+is segmented three ways: ``topomap.segment(grid, previous=...)`` with the previous
+map's result (its doors are a prior of the door stage, ``topomap.identity.DoorPrior``,
+then its rooms' IDs are given by ``topomap.identity.match_rooms``); a fresh
+``topomap.segment(grid)`` whose rooms are matched to the previous map's
+(``match_rooms`` only); and fresh numbering. A ground-truth room present in two
+consecutive maps (the same true room: one-to-one, overlapping by at least half of
+the smaller in the map frame, both over 100 cells) *keeps its ID* when the topomap
+room covering most of it carries the same ID in both maps; an ID change is
+*explained* when the change record links the two IDs (a split or a merge). The
+room F1 (harmonic mean of the mean precision and recall over the maps, free cells
+scored, :func:`topomap.evaluation.score_segmentation`) shows what the segmentation
+gives up for steadier doors.
 
 The data set's YAML files give every map the origin (0, 0), although the Bremen
 images were cropped anew as the map grew (the building shifts by up to 248 cells
@@ -91,50 +95,90 @@ def room_of(labels, top, gt, g):
     return int(np.bincount(v).argmax()) if v.size else 0
 
 
+def _score(seg, gt, grid):
+    """``(precision, recall)`` of ``seg``'s rooms against the ground truth (free cells scored)."""
+    from topomap.evaluation import score_segmentation
+
+    sc = score_segmentation(seg.room_labels, gt, scored=grid.free)
+    return sc["precision"], sc["recall"]
+
+
+def _chain_step(st, pre, prev, seg, ch, prev_gt, prev_grid, gt, grid):
+    """Add one map pair of one chain (``pre``: its key prefix) to the counts ``st``."""
+    st[pre + "pairs"] += 1
+    for k in ("new", "vanished", "split", "merged"):
+        st[pre + k] += len(getattr(ch, k))
+    for g0, g1 in gt_pairs(prev_gt, prev_grid, gt, grid):
+        a = room_of(prev.labels, prev.top_room_id, prev_gt, g0)
+        b = room_of(seg.labels, seg.top_room_id, gt, g1)
+        st[pre + "gt"] += 1
+        if not a or not b:
+            st[pre + "uncovered"] += 1
+        elif a == b:
+            st[pre + "kept"] += 1
+        else:
+            st[pre + "changed"] += 1
+            st[pre + "explained"] += int(ch.explains(a, b))
+
+
+CHAIN_KEYS = ("pairs", "gt", "kept", "changed", "explained", "uncovered", "new", "vanished", "split", "merged",
+              "precision", "recall")
+
+
 def run_sequence(directory, name):
+    """Counts of one sequence for three numberings: ``prior_`` (``segment(grid,
+    previous=...)``: the previous doors are a prior of the door stage, then the
+    rooms are matched), ``match_`` (each map segmented afresh, its rooms matched
+    to the previous map's: ``match_rooms``) and fresh numbering."""
     import topomap
     from PIL import Image
     from topomap.identity import match_rooms
 
     pattern, rng = SEQUENCES[name]
-    st = dict(sequence=name, maps=0, pairs=0, gt=0, kept=0, fresh_kept=0, changed=0, explained=0, uncovered=0,
-              new=0, vanished=0, split=0, merged=0, t_segment=0.0, t_match=0.0)
-    prev = prev_grid = prev_free = prev_gt = None
+    st = dict(sequence=name, maps=0, fresh_kept=0, fresh_n=0, t_segment=0.0, t_prior=0.0, t_match=0.0,
+              fresh_precision=0.0, fresh_recall=0.0)
+    for pre in ("prior_", "match_"):
+        st.update({pre + k: 0 for k in CHAIN_KEYS})
+    prior = match = fresh0 = prev_grid = prev_gt = None
     for i in rng:
         stem = pattern % i
         grid = topomap.load_map(Path(directory) / f"{stem}.yaml")
         gt = np.array(Image.open(Path(directory) / f"{stem}_gt.png")).astype(np.int64)
         if prev_grid is not None:
-            grid = aligned(grid, prev_grid, prev_free)
+            grid = aligned(grid, prev_grid, prev_grid.free)
         t0 = time.perf_counter()
         fresh = topomap.segment(grid)
         t1 = time.perf_counter()
         st["t_segment"] += t1 - t0
         st["maps"] += 1
-        if prev is None:
-            seg = fresh
+        p, r = _score(fresh, gt, grid)
+        st["fresh_precision"] += p
+        st["fresh_recall"] += r
+        if prior is None:
+            new_prior = new_match = fresh
+            st["prior_precision"] += p
+            st["prior_recall"] += r
+            st["match_precision"] += p
+            st["match_recall"] += r
         else:
-            seg, ch = match_rooms(prev, fresh)
-            st["t_match"] += time.perf_counter() - t1
-            st["pairs"] += 1
-            for k in ("new", "vanished", "split", "merged"):
-                st[k] += len(getattr(ch, k))
-            top_p, top_s = getattr(prev, "top_room_id", prev.n_rooms), seg.top_room_id
+            new_prior = topomap.segment(grid, previous=prior)
+            t2 = time.perf_counter()
+            new_match, ch_m = match_rooms(match, fresh)
+            st["t_prior"] += t2 - t1
+            st["t_match"] += time.perf_counter() - t2
+            _chain_step(st, "prior_", prior, new_prior, new_prior.changes, prev_gt, prev_grid, gt, grid)
+            _chain_step(st, "match_", match, new_match, ch_m, prev_gt, prev_grid, gt, grid)
+            for pre, seg in (("prior_", new_prior), ("match_", new_match)):
+                p, r = _score(seg, gt, grid)
+                st[pre + "precision"] += p
+                st[pre + "recall"] += r
             for g0, g1 in gt_pairs(prev_gt, prev_grid, gt, grid):
-                a = room_of(prev.labels, top_p, prev_gt, g0)
-                b = room_of(seg.labels, top_s, gt, g1)
-                st["gt"] += 1
-                if not a or not b:
-                    st["uncovered"] += 1
-                    continue
-                st["fresh_kept"] += int(room_of(prev_fresh.labels, prev_fresh.n_rooms, prev_gt, g0)
-                                        == room_of(fresh.labels, fresh.n_rooms, gt, g1))
-                if a == b:
-                    st["kept"] += 1
-                else:
-                    st["changed"] += 1
-                    st["explained"] += int(ch.explains(a, b))
-        prev, prev_fresh, prev_grid, prev_free, prev_gt = seg, fresh, grid, grid.free, gt
+                a = room_of(fresh0.labels, fresh0.n_rooms, prev_gt, g0)
+                b = room_of(fresh.labels, fresh.n_rooms, gt, g1)
+                if a and b:
+                    st["fresh_n"] += 1
+                    st["fresh_kept"] += int(a == b)
+        prior, match, fresh0, prev_grid, prev_gt = new_prior, new_match, fresh, grid, gt
     return st
 
 
@@ -142,11 +186,17 @@ def _pct(a, b):
     return f"{100 * a / b:.1f}" if b else "–"
 
 
+def _f1(st, pre):
+    p, r = st[pre + "precision"] / st["maps"], st[pre + "recall"] / st["maps"]
+    return f"{100 * 2 * p * r / (p + r):.1f}" if p + r else "–"
+
+
 def table(stats):
-    lines = ["| sequence | maps | GT rooms in two consecutive maps | keep their ID % | fresh numbering % "
+    """The Markdown table: one row per sequence and numbering, then the totals."""
+    lines = ["| sequence | numbering | maps | GT rooms in two consecutive maps | keep their ID % "
              "| ID changes | explained by the change record % | new / vanished / split / merged (record) "
-             "| segment s | match s |",
-             "| --- | ---: | ---: | ---: | ---: | ---: | ---: | --- | ---: | ---: |"]
+             "| room F1 % (mean over maps) | s |",
+             "| --- | --- | ---: | ---: | ---: | ---: | ---: | --- | ---: | ---: |"]
     tot = {k: 0 for k in stats[0] if k != "sequence"}
     for st in stats + [None]:
         if st is None:
@@ -154,11 +204,18 @@ def table(stats):
         else:
             for k in tot:
                 tot[k] += st[k]
-        n = st["gt"] - st["uncovered"]
-        lines.append(f"| {st['sequence']} | {st['maps']} | {n} | {_pct(st['kept'], n)} | {_pct(st['fresh_kept'], n)} "
-                     f"| {st['changed']} | {_pct(st['explained'], st['changed'])} "
-                     f"| {st['new']} / {st['vanished']} / {st['split']} / {st['merged']} "
-                     f"| {st['t_segment']:.1f} | {st['t_match']:.1f} |")
+        for pre, what in (("prior_", "previous doors kept (`previous=`)"), ("match_", "matched only"),
+                          ("fresh_", "fresh")):
+            if pre == "fresh_":
+                lines.append(f"| {st['sequence']} | {what} | {st['maps']} | {st['fresh_n']} "
+                             f"| {_pct(st['fresh_kept'], st['fresh_n'])} | | | | {_f1(st, pre)} "
+                             f"| {st['t_segment']:.1f} |")
+                continue
+            n = st[pre + "gt"] - st[pre + "uncovered"]
+            lines.append(f"| {st['sequence']} | {what} | {st['maps']} | {n} | {_pct(st[pre + 'kept'], n)} "
+                         f"| {st[pre + 'changed']} | {_pct(st[pre + 'explained'], st[pre + 'changed'])} "
+                         f"| {st[pre + 'new']} / {st[pre + 'vanished']} / {st[pre + 'split']} / "
+                         f"{st[pre + 'merged']} | {_f1(st, pre)} | {st['t_' + pre[:-1]]:.1f} |")
     return "\n".join(lines) + "\n"
 
 
@@ -186,13 +243,18 @@ def main(argv=None):
 {wall:.0f} s wall time).
 
 Each exploration sequence of the real maps (ROSE² data; every map a later state of the same
-run) segmented map by map, each map's rooms given the IDs of the previous map's rooms
-(`topomap.segment(grid, previous=...)`). A ground-truth room present in two consecutive maps
+run) segmented map by map, three ways: *previous doors kept* is `topomap.segment(grid,
+previous=...)` with the previous map's result (the previous doors are a prior of the door
+stage, then the rooms get the previous IDs); *matched only* segments every map afresh and
+gives its rooms the previous map's IDs (`topomap.identity.match_rooms`); *fresh* numbers rooms
+by a row-major scan. A ground-truth room present in two consecutive maps
 (the same true room: overlapping by at least half of the smaller in the map frame, both over
-100 cells) *keeps its ID* when the room covering most of it has the same ID in both maps;
-*fresh numbering* is the same share without `previous` (IDs of a row-major scan). An ID change
+100 cells) *keeps its ID* when the room covering most of it has the same ID in both maps. An ID change
 is *explained* when the change record links the two IDs (a split or a merge); the column
-"new / vanished / split / merged" counts the change records' entries over the sequence. The data set's YAML files give every map the origin
+"new / vanished / split / merged" counts the change records' entries over the sequence. The
+room F1 is the harmonic mean of the rooms' precision and recall against the ground truth (the
+Bormann et al. metric, free cells scored), each the mean over the sequence's maps; "s" the
+seconds of the sequence's runs (*matched only*: the matching after the fresh runs). The data set's YAML files give every map the origin
 (0, 0) although the images were cropped anew as the map grew; the script recovers each map's
 origin by aligning its free cells with the previous map's (a whole-cell shift), as a SLAM
 map's own origin would.

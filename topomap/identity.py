@@ -29,6 +29,15 @@ significant previous rooms is a *merge* (it keeps the ID of its largest
 overlap), a previous room with no significant new room *vanished*, a new
 room with no significant previous room is *new*.
 
+Doors that last
+---------------
+Before the rooms are matched, ``topomap.segment(grid, previous=...)`` hands the
+previous doors to the default method's door stage (:class:`DoorPrior`): a
+previous door whose place is still a narrow passage is cut again, and a new
+cut inside a previous room whose surroundings did not change is dropped, so
+that a door does not come and go between two versions of a map for reasons
+measured far from it (the wall threshold, the clearance's noise).
+
 Labels with stable IDs
 ----------------------
 Room IDs are still the labels of the label image and the node keys of the
@@ -55,7 +64,7 @@ from .segmentation import Segmentation
 
 log = logging.getLogger("topomap")
 
-__all__ = ["RoomChanges", "TrackedSegmentation", "match_rooms", "DEFAULT_MIN_OVERLAP"]
+__all__ = ["RoomChanges", "TrackedSegmentation", "DoorPrior", "match_rooms", "DEFAULT_MIN_OVERLAP"]
 
 #: Default share of the smaller room two rooms must have in common to be the same room.
 DEFAULT_MIN_OVERLAP = 0.5
@@ -187,6 +196,9 @@ class _Previous:
     and a lookup of its room at map-frame points."""
 
     def __init__(self, previous):
+        if isinstance(previous, _Previous):
+            self.__dict__.update(previous.__dict__)
+            return
         if isinstance(previous, (str, Path)):
             from .export import load_graph
 
@@ -210,6 +222,8 @@ class _Previous:
                         attrs[int(r)] = {**attrs.get(int(r), {}), **extra}
             self.attrs = attrs
             nxt = getattr(previous, "next_room_id", None)
+            self.doors = [(tuple(d.xy1), tuple(d.xy2)) for d in previous.doors]
+            self.free = previous.grid.free
         elif isinstance(previous, nx.Graph):
             self.seg, self.G = None, previous
             self.name = str(previous.graph.get("map", "previous room graph"))
@@ -230,6 +244,8 @@ class _Previous:
                     self.attrs[r] = extra
             nxt = previous.graph.get("next_room_id")
             self.grid, self.labels = _rasterised(previous, ids)
+            self.doors = _graph_doors(previous)
+            self.free = self.labels > 0  # a room graph knows its rooms' cells, not the map
         else:
             raise ParameterError("previous must be a Segmentation, a room graph or the path of a saved room "
                                  f"graph, got {type(previous).__name__}")
@@ -242,12 +258,20 @@ class _Previous:
 
     def rooms_at(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """Previous room ID at every map-frame point (0 = none)."""
-        out = np.zeros(x.shape, np.int64)
+        return self._at(self.labels, x, y)
+
+    def free_at(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Whether the previous map was free at every map-frame point (outside it: not)."""
+        return self._at(self.free, x, y)
+
+    def _at(self, image: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """``image`` (of the previous map's cells) at every map-frame point (0 / False outside)."""
+        out = np.zeros(x.shape, image.dtype)
         r, c = self.grid.world_to_pixel(x, y)
         r, c = np.rint(r).astype(np.int64), np.rint(c).astype(np.int64)
-        H, W = self.grid.shape
+        H, W = image.shape
         ok = (r >= 0) & (r < H) & (c >= 0) & (c < W)
-        out[ok] = self.labels[r[ok], c[ok]]
+        out[ok] = image[r[ok], c[ok]]
         return out
 
 
@@ -396,3 +420,171 @@ def _relabelled(seg: Segmentation, ids: dict, changes: RoomChanges, attrs: dict)
     base.update(labels=labels, doors=doors, room_count=None, _room_graph=None, timings=dict(seg.timings))
     return TrackedSegmentation(**base, room_ids=tuple(sorted(ids.values())), next_room_id=changes.next_room_id,
                                changes=changes, room_attributes=attrs)
+
+
+# --------------------------------------------------------------------------
+# Doors that last: the previous doors as a prior of the door stage
+# --------------------------------------------------------------------------
+
+def _graph_doors(G) -> list:
+    """``[((x1, y1), (x2, y2))]``: the doors (edges) of room graph ``G`` in map-frame metres
+    (an edge without its end points, as in a hand-built graph, is no door here)."""
+    out = []
+    for _, _, d in G.edges(data=True):
+        try:
+            out.append(((float(d["x1"]), float(d["y1"])), (float(d["x2"]), float(d["y2"]))))
+        except (KeyError, TypeError, ValueError):
+            continue
+    return out
+
+
+class DoorPrior:
+    """The doors and free space of a previous result, as a prior of the door
+    stage of a new run of the default method (``topomap.segment(grid,
+    previous=...)`` makes one and hands it to
+    :func:`~topomap.segmentation.segment_topomap`).
+
+    A robot's map grows by a little between two versions, but the door
+    decisions of a fresh run also depend on quantities measured over the
+    whole map (the wall-thickness threshold, the clearance's noise), so a
+    door found in one map may be missing from the next and back in the one
+    after. :meth:`adjust` gives the cuts hysteresis:
+
+    * a previous door whose place is still a narrow passage — along its
+      line, walls within ``prior_post_shift`` of both previous posts, no
+      wall between them, a width between ``min_door_width`` and
+      ``max_door_width`` — is cut again (between the walls found) even when
+      the new run did not find it;
+    * a new cut that lies inside a room the previous map had whole (the
+      previous room on both sides of it, ``min_door_width / 2`` away, is the
+      same) is dropped when the map within ``reach`` of it did not change
+      (at most ``prior_changed_area`` of cells free in one map and not in
+      the other): the same walls give the same rooms.
+
+    Parameters
+    ----------
+    previous : Segmentation or networkx.MultiGraph or str or os.PathLike
+        As for :func:`match_rooms`. From a room graph, doors are its edges'
+        end points and the previous free space is its rooms' cells.
+    """
+
+    def __init__(self, previous):
+        self.previous = _Previous(previous)
+        d = np.asarray(self.previous.doors, float).reshape(-1, 2, 2)
+        self.xy1, self.xy2 = d[:, 0], d[:, 1]
+
+    def adjust(self, grid, segments, opts, *, walls: np.ndarray, space: np.ndarray) -> list:
+        """The door segments of a new run with the previous doors taken into account.
+
+        Parameters
+        ----------
+        grid : OccupancyGrid
+            The map the rooms are cut from (its origin places it in the map frame).
+        segments : list of ((r1, c1), (r2, c2))
+            The new run's door segments, pixels of ``grid``.
+        opts : TopomapOptions
+            The options that ran (``prior_post_shift``, ``prior_changed_area``,
+            ``reach``, ``min_door_width``, ``max_door_width``).
+        walls : (M, N) ndarray of bool
+            The cells door posts lie on (the non-free cells of the map doors
+            are searched in, where free-standing clutter is looked through).
+        space : (M, N) ndarray of bool
+            The free cells rooms are cut from (clutter is not).
+
+        Returns
+        -------
+        list of ((r1, c1), (r2, c2))
+            ``segments`` without the dropped new cuts, then the previous
+            doors cut again.
+        """
+        from .geometry import point_segment_distances
+
+        res = grid.resolution
+        K = self.xy1.shape[0]
+        r1, c1 = grid.world_to_pixel(self.xy1[:, 0], self.xy1[:, 1])
+        r2, c2 = grid.world_to_pixel(self.xy2[:, 0], self.xy2[:, 1])
+        P, Q = np.stack([r1, c1], 1).reshape(K, 2), np.stack([r2, c2], 1).reshape(K, 2)
+        S = np.asarray([np.r_[p, q] for p, q in segments], float).reshape(-1, 4)
+        A, B = S[:, :2], S[:, 2:]
+        # a new cut and a previous door are the same door when the midpoint of
+        # one lies within half its width of the other (as duplicates are found)
+        same = np.zeros((len(segments), K), bool)
+        if K and len(segments):
+            wn = np.hypot(*(B - A).T)
+            wp = np.hypot(*(Q - P).T)
+            mn, mp = (A + B) / 2, (P + Q) / 2
+            same = ((point_segment_distances(mn[:, None], P[None], Q[None]) <= 0.5 * wn[:, None])
+                    | (point_segment_distances(mp[None], A[:, None], B[:, None]) <= 0.5 * wp[None]))
+        kept = list(segments)
+        if opts.prior_changed_area > 0:
+            kept = [s for j, s in enumerate(segments) if same[j].any() or not self._unchanged_room(grid, s, opts)]
+        again = []
+        if opts.prior_post_shift > 0:
+            for k in np.flatnonzero(~same.any(0)):
+                s = _passage_along(walls, space, P[k], Q[k], opts.prior_post_shift / res)
+                if s is not None and opts.min_door_width <= np.hypot(*(s[1] - s[0])) * res <= opts.max_door_width:
+                    again.append(s)
+        if len(kept) < len(segments) or again:
+            log.info("%s: %d doors of %s cut again, %d new cuts inside its unchanged rooms dropped", grid.name,
+                     len(again), self.previous.name, len(segments) - len(kept))
+        return kept + again
+
+    def _unchanged_room(self, grid, seg, opts) -> bool:
+        """Whether cut ``seg`` (pixels of ``grid``) lies inside one previous room
+        and the map within ``opts.reach`` of it is the same in both maps."""
+        res = grid.resolution
+        p, q = np.asarray(seg[0], float), np.asarray(seg[1], float)
+        v = q - p
+        n = np.hypot(*v)
+        if n == 0:
+            return False
+        mid, nrm = (p + q) / 2, np.array([-v[1], v[0]]) / n
+        side = opts.min_door_width / 2 / res
+        sides = np.stack([mid + side * nrm, mid - side * nrm])
+        x, y = grid.pixel_to_world(sides[:, 0], sides[:, 1])
+        a, b = self.previous.rooms_at(np.asarray(x, float), np.asarray(y, float))
+        if a == 0 or a != b:
+            return False
+        R = opts.reach / res
+        H, W = grid.shape
+        r0, r1 = max(int(np.floor(mid[0] - R)), 0), min(int(np.ceil(mid[0] + R)) + 1, H)
+        c0, c1 = max(int(np.floor(mid[1] - R)), 0), min(int(np.ceil(mid[1] + R)) + 1, W)
+        rr, cc = np.mgrid[r0:r1, c0:c1]
+        inside = np.hypot(rr - mid[0], cc - mid[1]) <= R
+        rr, cc = rr[inside], cc[inside]
+        x, y = grid.pixel_to_world(rr, cc)
+        changed = grid.free[rr, cc] != self.previous.free_at(np.asarray(x, float), np.asarray(y, float))
+        return float(changed.sum()) * res ** 2 <= opts.prior_changed_area
+
+
+def _passage_along(walls: np.ndarray, space: np.ndarray, p, q, tol_px: float):
+    """The door line between the posts met along ``p``–``q`` (pixels), from its
+    midpoint outwards: ``(a, b)``, the first cell each way that is a wall, or
+    that is out of ``space`` (clutter) near the end, when the midpoint is not
+    a wall and each lies within ``tol_px`` (plus half a cell's diagonal) of
+    ``p`` and ``q``; else None. Clutter well inside the passage (a pillar in
+    a wide opening) is looked through, as the door stage does."""
+    p, q = np.asarray(p, float), np.asarray(q, float)
+    v = q - p
+    L = np.hypot(*v)
+    H, W = walls.shape
+    mid = (p + q) / 2
+    mr, mc = int(np.rint(mid[0])), int(np.rint(mid[1]))
+    if L == 0 or not (0 <= mr < H and 0 <= mc < W) or walls[mr, mc]:
+        return None
+    u = v / L
+    steps = np.arange(0.5, L / 2 + tol_px + 1.0, 0.5)
+    near = steps >= L / 2 - tol_px - np.sqrt(2) / 2
+    ends = []
+    for end, sgn in ((q, 1.0), (p, -1.0)):
+        rc = np.rint(mid[None] + sgn * steps[:, None] * u[None]).astype(np.int64)
+        inside = (rc[:, 0] >= 0) & (rc[:, 0] < H) & (rc[:, 1] >= 0) & (rc[:, 1] < W)
+        r, c = np.clip(rc[:, 0], 0, H - 1), np.clip(rc[:, 1], 0, W - 1)
+        stop = np.flatnonzero(~inside | walls[r, c] | (near & ~space[r, c]))
+        if stop.size == 0 or not inside[stop[0]]:
+            return None
+        hit = rc[stop[0]].astype(float)
+        if np.hypot(*(hit - end)) > tol_px + np.sqrt(2) / 2:
+            return None
+        ends.append(hit)
+    return ends[1], ends[0]

@@ -567,7 +567,8 @@ def segment_paper(grid: OccupancyGrid, options: PaperOptions | None = None, **kw
     return seg
 
 
-def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, **kwargs) -> Segmentation:
+def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, *, prior=None,
+                    **kwargs) -> Segmentation:
     """Segment ``grid`` with topomap's default method.
 
     The paper's ideas — skeletons of free *and* occupied space, a threshold
@@ -597,6 +598,9 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
     **kwargs
         Fields of :class:`~topomap.options.TopomapOptions` to override, for
         example ``window=0.4``.
+    prior : topomap.identity.DoorPrior, optional
+        A previous result's doors: its doors are kept and new cuts in its
+        unchanged rooms dropped (:meth:`~topomap.identity.DoorPrior.adjust`).
 
     Returns
     -------
@@ -662,6 +666,9 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
                 ops = [(w, c) for w, c in ops if not W.across_walls(c.ip1, c.ip2, lw, tol_px=opts.wall_wander / res)]
             segs = segs + D.suppress_duplicates(ops, res, kept=segs)
             cands = cands + [c for _, c in ops]
+    if prior is not None:
+        with T("prior doors"):
+            segs = prior.adjust(rooms_grid, segs, opts, walls=walls, space=space)
     with T("rooms"):
         min_cells = int(np.ceil(opts.min_room_area / res ** 2 - 1e-9))
         wide = d_free >= 0.5 * opts.wall_gap / res - 1e-6 if opts.wall_gap > 0 else None
@@ -724,7 +731,9 @@ def segment(grid: OccupancyGrid, *, method: str = None, previous=None, **params)
         One of :data:`METHODS` (default :data:`DEFAULT_METHOD`).
     previous : Segmentation or networkx.MultiGraph or str or os.PathLike, optional
         An earlier result (or saved room graph file) of the same place: rooms
-        keep its IDs (:func:`topomap.identity.match_rooms`; ``seg.changes``).
+        keep its IDs (:func:`topomap.identity.match_rooms`; ``seg.changes``);
+        with ``"topomap"`` its doors are a prior of the door stage
+        (:class:`topomap.identity.DoorPrior`).
     **params
         Keyword options of the method, lengths in metres (for ``"topomap"``
         and ``"paper"`` the fields of :class:`~topomap.options.TopomapOptions`
@@ -747,10 +756,16 @@ def segment(grid: OccupancyGrid, *, method: str = None, previous=None, **params)
     if not isinstance(grid, OccupancyGrid):
         raise ParameterError(f"segment() needs an OccupancyGrid (see topomap.load_map), got {type(grid).__name__}")
     t0 = time.perf_counter()
+    if previous is not None:
+        from .identity import DoorPrior
+
+        previous = DoorPrior(previous)  # read once, for the door stage and the matching
+        if method == "topomap":
+            params = {**params, "prior": previous}
     seg = METHODS[method](grid, **params)
     if previous is not None:
         from .identity import match_rooms
 
-        seg, _ = match_rooms(previous, seg)
+        seg, _ = match_rooms(previous.previous, seg)
     seg.timings["total"] = time.perf_counter() - t0
     return seg
