@@ -279,16 +279,23 @@ class TopomapOptions(_Options):
         0.2 m. A laser SLAM map draws a straight wall a few cells off its
         line over tens of metres (odometry drift, scan noise); two different
         walls are at least a wall's thickness plus a room apart.
-    furniture_size : float
+    furniture_size : float or None
         Free-standing obstacles less than this (m) across that are thicker
         than ``wall_thickness`` are furniture — desks, cupboards, a table
         with its chairs, a robot's scan of a sofa — and are looked through
-        like smaller clutter. Default 0 (off): on floor plans, solid blocks
-        of that size (shafts, stair cores) are walls. On a furnished
-        office's laser SLAM map, 3.0 m (longer than a desk or a cupboard,
-        1.6-2.4 m, shorter than a room) keeps rooms whole where furniture
-        stands free: on the full Freiburg 079 map of the benchmark, recall
-        83 -> 92 %, precision 96 -> 94 %.
+        like smaller clutter, unless a long wall (``long_wall``) runs along
+        them (a piece of a structural wall a scan saw thick). None
+        (default): measured on the map, like ``rise``: on a map a laser
+        scanner drew (fewer than ``straight_walls`` of its wall faces on
+        straight lines) ``scan_furniture_size``; on a drawn plan 0 (off),
+        where a solid block of that size is drawn as a wall (a shaft, a
+        stair core) and furniture stands against the walls. Filled in by
+        :meth:`resolved`.
+    scan_furniture_size : float
+        ``furniture_size`` (m) on a map a laser scanner drew: 3.0 m, longer
+        than a desk or a cupboard (1.6-2.4 m) and shorter than a room; on
+        the benchmark's real maps it keeps rooms whole where furniture
+        stands free.
     wall_thickness : float
         Thickest free-standing piece of wall (m): 0.5 m. Inner walls are
         0.1-0.3 m thick and drawn thinner still by a laser scan; a
@@ -347,20 +354,25 @@ class TopomapOptions(_Options):
     alcove_depth: float = _opt(1.2, "length")
     long_wall: float = _opt(4.0, "length")
     wall_wander: float = _opt(0.2, "length")
-    furniture_size: float = _opt(0.0, "length")
+    furniture_size: Optional[float] = _opt(None, "optional length")
+    scan_furniture_size: float = _opt(3.0, "length")
     wall_thickness: float = _opt(0.5, "length")
     prior_post_shift: float = _opt(0.15, "length")
     prior_changed_area: float = _opt(1.0, "area")
 
     def resolved(self, resolution: float, straight: float = 1.0) -> "TopomapOptions":
-        """These options with the map-dependent default ``rise`` filled in
-        for a map of ``resolution`` m/px whose wall faces lie on straight
-        lines at a share of ``straight`` (what actually runs)."""
-        if self.rise is not None:
-            return self
-        if straight < self.straight_walls:
-            return dataclasses.replace(self, rise=self.scan_rise)
-        return dataclasses.replace(self, rise=max(self.skeleton_cell, resolution) * (np.sqrt(2) / 2 + 0.5))
+        """These options with the map-dependent defaults ``rise`` and
+        ``furniture_size`` filled in for a map of ``resolution`` m/px whose
+        wall faces lie on straight lines at a share of ``straight`` (what
+        actually runs)."""
+        scanned = straight < self.straight_walls
+        fill = {}
+        if self.rise is None:
+            fill["rise"] = (self.scan_rise if scanned
+                            else max(self.skeleton_cell, resolution) * (np.sqrt(2) / 2 + 0.5))
+        if self.furniture_size is None:
+            fill["furniture_size"] = self.scan_furniture_size if scanned else 0.0
+        return dataclasses.replace(self, **fill) if fill else self
 
 
 @dataclass(frozen=True)

@@ -303,13 +303,14 @@ def close_wall_gaps(grid: OccupancyGrid, wall_gap: float):
 
 
 def clutter_mask(free: np.ndarray, max_extent_px: float, *, furniture_px: float = 0.0,
-                 wall_thickness_px: float = np.inf) -> np.ndarray:
+                 wall_thickness_px: float = np.inf, keep=None) -> np.ndarray:
     """Obstacle cells of free-standing clutter (8-connected components of the
     non-free cells): components less than ``max_extent_px`` across (bounding
     box) — chairs, plants, small tables, pillars — and components less than
     ``furniture_px`` across that are thicker than ``wall_thickness_px``
     (twice their largest inscribed radius) — desks, cupboards, tables with
-    their chairs: no free-standing piece of wall is that thick."""
+    their chairs: no free-standing piece of wall is that thick — unless
+    it touches a cell of ``keep`` (a long wall runs along it)."""
     import cv2
 
     n, comp, stats, _ = cv2.connectedComponentsWithStats((~free).astype(np.uint8), connectivity=8)
@@ -317,6 +318,10 @@ def clutter_mask(free: np.ndarray, max_extent_px: float, *, furniture_px: float 
     small = extent < max_extent_px
     bulky = (extent < furniture_px) & ~small
     bulky[0] = False
+    if keep is not None:
+        on_wall = np.unique(comp[keep])
+        small[on_wall] = False
+        bulky[on_wall] = False
     if bulky.any():
         from scipy import ndimage
 
@@ -328,11 +333,11 @@ def clutter_mask(free: np.ndarray, max_extent_px: float, *, furniture_px: float 
 
 
 def without_clutter(grid: OccupancyGrid, min_wall_length: float, *, furniture_size: float = 0.0,
-                    wall_thickness: float = np.inf):
+                    wall_thickness: float = np.inf, keep=None):
     """The map doors are searched in: free-standing clutter smaller than a
     wall piece (``min_wall_length`` m across, 0 = none), and bulky furniture
     (less than ``furniture_size`` m across, thicker than ``wall_thickness``
-    m; see :func:`clutter_mask`), made free.
+    m, touching no cell of ``keep``; see :func:`clutter_mask`), made free.
 
     Returns
     -------
@@ -347,7 +352,7 @@ def without_clutter(grid: OccupancyGrid, min_wall_length: float, *, furniture_si
     # is looked through while doors are searched (rooms still use the map)
     res = grid.resolution
     clutter = clutter_mask(grid.free, min_wall_length / res, furniture_px=furniture_size / res,
-                           wall_thickness_px=wall_thickness / res)
+                           wall_thickness_px=wall_thickness / res, keep=keep)
     if clutter.any():
         grid = OccupancyGrid(np.where(clutter, FREE, grid.cells).astype(np.int8), grid.resolution,
                              grid.origin, grid.source)
@@ -567,6 +572,21 @@ def segment_paper(grid: OccupancyGrid, options: PaperOptions | None = None, **kw
     return seg
 
 
+def _wall_stage(search: OccupancyGrid, opts):
+    """Stage "walls": the wall faces of ``search`` (every non-free cell
+    bounds free space), their straight lines (:func:`topomap.walls.wall_lines`)
+    and the long walls among them (:func:`topomap.walls.long_walls`; none
+    when ``opts.long_wall`` is 0)."""
+    from . import walls as W
+
+    res = search.resolution
+    faces = W.wall_faces(~search.free, search.free)
+    lines = W.wall_lines(faces, min_length_px=opts.min_wall_length / res)
+    lw = (W.long_walls(lines, max_gap_px=opts.max_door_width / res, offset_px=opts.wall_wander / res,
+                       min_span_px=opts.long_wall / res) if opts.long_wall > 0 else [])
+    return faces, lines, lw
+
+
 def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, *, prior=None,
                     **kwargs) -> Segmentation:
     """Segment ``grid`` with topomap's default method.
@@ -625,18 +645,31 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
     full = grid
     box = crop_box(grid, metres_to_px(opts.wall_band + opts.dilation_size + opts.max_door_width, res))
     rooms_grid = crop_grid(grid, box) if box is not None else grid
+    furniture = opts.furniture_size or 0.0  # None: measured on the map below
     with T("preprocess"):
-        looked, clutter = without_clutter(rooms_grid, opts.min_wall_length, furniture_size=opts.furniture_size,
+        looked, clutter = without_clutter(rooms_grid, opts.min_wall_length, furniture_size=furniture,
                                           wall_thickness=opts.wall_thickness)
         search, closed = close_wall_gaps(looked, opts.wall_gap)
+    with T("walls"):
+        faces, lines, lw = _wall_stage(search, opts)
+        straight = W.straight_share(faces, lines)
+        opts = opts.resolved(res, straight)  # rise and furniture measured on the map
+    if opts.furniture_size > furniture:
+        with T("furniture"):
+            # bulky free-standing furniture is looked through too, except
+            # where a long wall runs along it
+            looked2, clutter2 = without_clutter(rooms_grid, opts.min_wall_length,
+                                                furniture_size=opts.furniture_size,
+                                                wall_thickness=opts.wall_thickness,
+                                                keep=W.wall_mask(_wall_stage(looked, opts)[2], looked.free.shape))
+            if clutter2 is not None and (clutter is None or not np.array_equal(clutter2, clutter)):
+                looked, clutter = looked2, clutter2
+                search, closed = close_wall_gaps(looked, opts.wall_gap)
+                faces, lines, lw = _wall_stage(search, opts)
+    with T("preprocess"):
         space = search.free if clutter is None else search.free & ~clutter
         f, d_free, occ = preprocess_masks(search, opts)
     walls = ~search.free  # what bounds free space: door posts and wall faces lie on these cells
-    with T("walls"):
-        faces = W.wall_faces(walls, search.free)
-        lines = W.wall_lines(faces, min_length_px=opts.min_wall_length / res)
-        straight = W.straight_share(faces, lines)
-        opts = opts.resolved(res, straight)  # rise measured on the map
     factor = skeleton_factor(opts.skeleton_cell, res)
     with T("skeletons"):
         fs, os_ = coarse_skeletons(f, occ, factor)
@@ -655,11 +688,9 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
                 side_px=opts.min_door_width / res, depth_px=opts.alcove_depth / res, faces=faces, lines=lines,
                 beside_px=opts.beside_wall / res),
                 res)
-            if opts.long_wall > 0:
+            if lw:
                 # long straight walls: the gaps in them are openings, and an
                 # opening from one of them to another spans a corridor
-                lw = W.long_walls(lines, max_gap_px=opts.max_door_width / res, offset_px=opts.wall_wander / res,
-                                  min_span_px=opts.long_wall / res)
                 ops = ops + D.opening_candidates(W.long_wall_gaps(
                     walls, search.free, lw, min_gap_px=opts.min_door_width / res,
                     max_gap_px=opts.max_door_width / res, depth_px=opts.alcove_depth / res), res)

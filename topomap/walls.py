@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["wall_faces", "wall_lines", "straight_share", "wall_openings", "wall_directions", "long_walls",
-           "across_walls", "long_wall_gaps"]
+           "across_walls", "long_wall_gaps", "wall_mask"]
 
 
 def wall_faces(obstacle: np.ndarray, free: np.ndarray) -> np.ndarray:
@@ -364,6 +364,19 @@ def long_walls(lines: np.ndarray, *, max_gap_px: float, offset_px: float, min_sp
                 if span >= min_span_px and sum(r[1] - r[0] for r in runs) >= support * span:
                     out.append((r0 * n, u, n, runs))
     return out
+
+
+def wall_mask(walls: list, shape, *, width_px: int = 5) -> np.ndarray:
+    """The cells of the long walls (:func:`long_walls`): each piece drawn
+    ``width_px`` cells wide (the wander of a scanned wall about its line)."""
+    import cv2
+
+    m = np.zeros(shape, np.uint8)
+    for origin, u, _, runs in walls:
+        for t0, t1 in runs:
+            p, q = origin + t0 * u, origin + t1 * u
+            cv2.line(m, (int(round(p[1])), int(round(p[0]))), (int(round(q[1])), int(round(q[0]))), 1, width_px)
+    return m > 0
 
 
 def across_walls(p, q, walls: list, *, tol_px: float, min_angle: float = np.deg2rad(60.0)) -> bool:
