@@ -74,16 +74,21 @@ def _room_polygons(labels, objs, to_world):
     import shapely
 
     out = {}
-    cell = 1.0  # m² per cell, for the warning
+    cell, mirror = 1.0, False  # m² per cell (for the warning); whether to_world turns rings around
     if to_world is not None:
-        x, y = to_world(np.array([0.0, 0.0]), np.array([0.0, 1.0]))
+        x, y = to_world(np.array([0.0, 0.0, 1.0]), np.array([0.0, 1.0, 0.0]))
         cell = float(np.hypot(x[1] - x[0], y[1] - y[0])) ** 2
+        mirror = (x[1] - x[0]) * (y[2] - y[0]) - (y[1] - y[0]) * (x[2] - x[0]) < 0  # (col, row) to (x, y)
     for i, sl in enumerate(objs, start=1):
         if sl is None:
             continue
         m = _outline_cells(labels[sl], i, cell if to_world is not None else None)
         xy, ring, piece, _ = mask_rings(m)
         del m
+        if mirror:  # every ring backwards: exteriors counterclockwise in (x, y)
+            bounds = np.flatnonzero(np.r_[True, ring[1:] != ring[:-1], True])
+            size = np.diff(bounds)
+            xy = xy[np.repeat(bounds[:-1] + bounds[1:] - 1, size) - np.arange(ring.size)]
         rows, cols = xy[:, 0] + sl[0].start, xy[:, 1] + sl[1].start
         del xy
         if to_world is not None:
