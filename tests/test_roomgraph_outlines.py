@@ -39,9 +39,9 @@ def test_outline_holds_exactly_the_rooms_cell_centres(frame):
     assert len(polys[1].interiors) == 1
     assert polys[2].geom_type == "MultiPolygon" and len(polys[2].geoms) == 2
     cell = 0.05 ** 2 if to_world else 1.0
-    # the outline runs along the cells' outer edges (corners cut by at most a quarter cell's diagonal)
-    for i in (1, 2, 4):
-        assert polys[i].area == pytest.approx((L == i).sum() * cell, rel=0.02)
+    # the outline runs exactly along the cells' outer edges
+    for i in polys:
+        assert polys[i].area == pytest.approx((L == i).sum() * cell, rel=1e-12)
 
 
 def test_room_graph_polygons_are_room_polygons():
