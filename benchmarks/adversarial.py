@@ -187,10 +187,10 @@ def main():
                      f"| {wall:.1f} | {us} |")
     table = "\n".join(lines) + "\n"
     verdict = ("every row is within it" if not over else
-               "these rows exceed it: " + ", ".join(over))
+               "these rows exceed it: " + "; ".join(f"'{n}'" for n in over))
     simple = [r[0] for r in rows if r[7]]
-    simple = ("The room outlines of " + ", ".join(simple) + " exceed their detail limit: they are simplified, "
-              "with a warning." if simple else "No room outline exceeds its detail limit.")
+    simple = ("The room outlines of the rows " + "; ".join(f"'{n}'" for n in simple) + " exceed their detail "
+              "limit: they are simplified, with a warning." if simple else "No room outline exceeds its detail limit.")
     load = os.getloadavg()
     cmd = "python benchmarks/adversarial.py" + (f" --scale {args.scale:g}" if args.scale != 1 else "")
     text = (f"## Adversarial maps: peak memory and time of the whole job\n\n"
