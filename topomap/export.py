@@ -131,37 +131,96 @@ def _wkt_ring(text: str) -> str:
     return "(" + _POINT_ZERO.sub("", wkt) + ")"
 
 
-#: Inside :func:`write_outputs`: ``{id(geometry): (geometry, ring texts)}``, so the GraphML / JSON
-#: WKT and the GeoJSON coordinates of a room's outline encode its floats once.
+#: Inside :func:`write_outputs`: ``{id(geometry): (geometry, coordinates text)}``, so the GraphML /
+#: JSON WKT and the GeoJSON coordinates of a room's outline encode its floats once.
 _RING_MEMO = contextvars.ContextVar("topomap_ring_memo", default=None)
+
+#: Coordinates encoded per json.dumps call in :func:`_coords_json`: Python lists of this many
+#: points at a time, whatever the size of the outline.
+_CHUNK = 1 << 15
+
+
+def _coords_json(geom) -> str:
+    """GeoJSON ``coordinates`` text of a 2-D, non-empty Polygon or MultiPolygon (memoised in write_outputs).
+
+    The same text as ``json.dumps`` of the nested lists of its rings' coordinates, but made a block of
+    whole polygons (or of one polygon's rings) at a time: time and memory are linear in the
+    coordinates, with no Python object per ring or coordinate kept.
+    """
+    import shapely
+
+    memo = _RING_MEMO.get()
+    if memo is not None:
+        hit = memo.get(id(geom))
+        if hit is not None and hit[0] is geom:
+            return hit[1]
+    multi = geom.geom_type == "MultiPolygon"
+    parts = shapely.get_parts(geom) if multi else np.array([geom], dtype=object)
+    n_rings = shapely.get_num_interior_rings(parts) + 1
+    ring_end = np.cumsum(shapely.get_num_coordinates(shapely.get_rings(parts)))  # coordinates, ring by ring
+    part_end = np.cumsum(n_rings)  # rings, part by part
+    xy = shapely.get_coordinates(geom)
+    del parts
+    texts = []
+    k, n = 0, len(part_end)
+    while k < n:
+        r0 = part_end[k - 1] if k else 0
+        c0 = ring_end[r0 - 1] if r0 else 0
+        # whole polygons up to _CHUNK coordinates, at least one
+        k1 = max(int(np.searchsorted(ring_end[part_end - 1], c0 + _CHUNK, side="right")), k + 1)
+        r1 = part_end[k1 - 1]
+        if k1 > k + 1 or ring_end[r1 - 1] - c0 <= _CHUNK:
+            pts = xy[c0:ring_end[r1 - 1]].tolist()
+            bounds = np.r_[c0, ring_end[r0:r1]] - c0
+            rings = [pts[bounds[j]:bounds[j + 1]] for j in range(r1 - r0)]
+            polys = np.r_[0, part_end[k:k1] - r0]
+            texts.append(json.dumps([rings[polys[j]:polys[j + 1]] for j in range(k1 - k)])[1:-1])
+        else:  # one polygon of more coordinates: its rings in blocks of up to _CHUNK coordinates
+            inner = []
+            r = r0
+            while r < r1:
+                c = ring_end[r - 1] if r else 0
+                rb = min(max(int(np.searchsorted(ring_end, c + _CHUNK, side="right")), r + 1), r1)
+                pts = xy[c:ring_end[rb - 1]].tolist()
+                bounds = np.r_[c, ring_end[r:rb]] - c
+                inner.append(json.dumps([pts[bounds[j]:bounds[j + 1]] for j in range(rb - r)])[1:-1])
+                r = rb
+            texts.append("[" + ", ".join(inner) + "]")
+            del inner
+        k = k1
+    del xy
+    text = "[" + ", ".join(texts) + "]"
+    if not multi:
+        text = text[1:-1]
+    if memo is not None:
+        memo[id(geom)] = (geom, text)
+    return text
 
 
 def _poly_rings(p) -> list:
-    """:func:`_ring_json` texts of a 2-D Polygon's exterior and interiors (memoised in write_outputs)."""
-    memo = _RING_MEMO.get()
-    if memo is not None:
-        hit = memo.get(id(p))
-        if hit is not None and hit[0] is p:
-            return hit[1]
-    rings = [_ring_json(r.coords) for r in [p.exterior, *p.interiors]]
-    if memo is not None:
-        memo[id(p)] = (p, rings)
-    return rings
-
-
-def _parts(geom) -> list:
-    """A 2-D Polygon's or MultiPolygon's polygons; kept (so memo ids stay valid) while a write runs."""
-    memo = _RING_MEMO.get()
-    if memo is None:
-        return list(geom.geoms)
-    hit = memo.get(id(geom))
-    if hit is None or hit[0] is not geom:
-        hit = memo[id(geom)] = (geom, list(geom.geoms))
-    return hit[1]
+    """:func:`_ring_json` texts of a 2-D Polygon's exterior and interiors."""
+    return [_ring_json(r.coords) for r in [p.exterior, *p.interiors]]
 
 
 def _poly_wkt(p) -> str:
     return "(" + ", ".join(map(_wkt_ring, _poly_rings(p))) + ")"
+
+
+def _polygonal_wkt(geom) -> str:
+    """WKT of a 2-D, non-empty Polygon or MultiPolygon from its :func:`_coords_json` text."""
+    text = _coords_json(geom)
+    if "e" in text or "N" in text or "I" in text:  # an exponent, NaN or Infinity: ring by ring
+        parts = geom.geoms if geom.geom_type == "MultiPolygon" else [geom]
+        body = ", ".join(map(_poly_wkt, parts))
+        return f"{geom.geom_type.upper()} " + (f"({body})" if geom.geom_type == "MultiPolygon" else body)
+    # separators between elements ("], [") marked, the commas left are inside points; then the
+    # boundaries of polygons, of rings and of points (longest first), and the outer brackets
+    depth = 4 if geom.geom_type == "MultiPolygon" else 3
+    wkt = text[depth:-depth].replace("], [", "]|[").replace(", ", " ")
+    if depth == 4:
+        wkt = wkt.replace("]]]|[[[", ")), ((")
+    wkt = "(" * (depth - 1) + wkt.replace("]]|[[", "), (").replace("]|[", ", ") + ")" * (depth - 1)
+    return f"{geom.geom_type.upper()} " + _POINT_ZERO.sub("", wkt)
 
 
 def geometry_wkt(geom) -> str:
@@ -184,10 +243,8 @@ def geometry_wkt(geom) -> str:
         return f"POINT ({_num(geom.x)} {_num(geom.y)})"
     if t == "LineString":
         return "LINESTRING " + _ring(geom.coords)
-    if t == "Polygon":
-        return "POLYGON " + _poly_wkt(geom)
-    if t == "MultiPolygon":
-        return "MULTIPOLYGON (" + ", ".join(_poly_wkt(p) for p in _parts(geom)) + ")"
+    if t in ("Polygon", "MultiPolygon"):
+        return _polygonal_wkt(geom)
     return shapely.to_wkt(geom, rounding_precision=-1)
 
 
@@ -643,7 +700,7 @@ def _geojson_parts(G, plain=_plain):
 
 
 def _geojson_text(G) -> str:
-    """``json.dumps(to_geojson(G))``, the rooms' outlines from their ring texts (:func:`_poly_rings`)."""
+    """``json.dumps(to_geojson(G))``, the rooms' outlines from their coordinates texts (:func:`_coords_json`)."""
     props, feats = _geojson_parts(G, _plain_for_dumps)
     texts = []
     for f, geom in feats:
@@ -665,13 +722,10 @@ def _plain_for_dumps(v):
 
 
 def _geom_json_text(geom) -> str:
-    """``json.dumps(_geom_json(geom))``; 2-D polygons from their memoised ring texts."""
+    """``json.dumps(_geom_json(geom))``; 2-D polygons from their memoised coordinates texts."""
     t = geom.geom_type
     if t in ("Polygon", "MultiPolygon") and not geom.is_empty and not geom.has_z:
-        if t == "Polygon":
-            return '{"type": "Polygon", "coordinates": [' + ", ".join(_poly_rings(geom)) + "]}"
-        return ('{"type": "MultiPolygon", "coordinates": ['
-                + ", ".join("[" + ", ".join(_poly_rings(p)) + "]" for p in _parts(geom)) + "]}")
+        return '{"type": "' + t + '", "coordinates": ' + _coords_json(geom) + "}"
     return json.dumps(_geom_json(geom))
 
 

@@ -8,13 +8,26 @@ edge, keyed by the door id). Every attribute, with its unit, is listed on the
 
 from __future__ import annotations
 
+import logging
 import weakref
 
 import numpy as np
 import networkx as nx
 from scipy import ndimage as ndi
 
-__all__ = ["room_graph", "room_polygons"]
+from .geometry import mask_rings
+
+__all__ = ["room_graph", "room_polygons", "OUTLINE_MIN_RINGS", "OUTLINE_CELLS_PER_RING"]
+
+log = logging.getLogger("topomap")
+
+#: Detail limit of a room's outline: at most ``OUTLINE_MIN_RINGS + cells // OUTLINE_CELLS_PER_RING``
+#: rings (pieces and holes) for a room of ``cells`` cells. Beyond it (a room of scan specks or of
+#: thousands of pieces that touch at corners only) the smallest pieces are left out of the outline
+#: and the smallest holes holding no other room are filled; the labels keep every cell.
+OUTLINE_MIN_RINGS = 4000
+#: See :data:`OUTLINE_MIN_RINGS`.
+OUTLINE_CELLS_PER_RING = 64
 
 #: graph -> (weak reference to the labels, their rooms' boxes) of the graphs room_graph built, for
 #: topomap.planning's room windows (beside the graph, not in it: never saved, copied or pickled)
@@ -35,73 +48,125 @@ def room_polygons(labels: np.ndarray, to_world=None) -> dict:
     Returns
     -------
     dict
-        ``label -> shapely geometry``. The outline follows the outer edges of
-        the room's cells (a cell is a unit square centred on its pixel).
+        ``label -> shapely geometry``. The outline runs exactly along the
+        outer edges of the room's cells (a cell is a unit square centred on
+        its pixel): a Polygon for a room whose cells are 4-connected, else a
+        MultiPolygon of its 4-connected pieces (cells that touch at a corner
+        only are different pieces), each with a hole for every enclosed
+        patch of other cells. The geometry is valid as built (no repair) and
+        holds exactly the room's cells; exteriors run counterclockwise,
+        holes clockwise (in the map frame, as RFC 7946 asks). Time and
+        memory are linear in the cells of each room's bounding box.
+
+        A room of more pieces and holes than :data:`OUTLINE_MIN_RINGS` +
+        cells / :data:`OUTLINE_CELLS_PER_RING` (never seen in a building
+        map: scan specks at more than one cell in 64, or a checkerboard)
+        gets a simplified outline, with a warning: its smallest pieces are
+        left out and its smallest holes that hold no other room are filled,
+        down to that limit (its largest piece is always kept). Its cells
+        stay in the labels and in the room's ``cells`` and ``area``.
     """
     return _room_polygons(labels, ndi.find_objects(labels), to_world)
 
 
 def _room_polygons(labels, objs, to_world):
     """:func:`room_polygons` with the rooms' bounding boxes (``ndi.find_objects(labels)``) given."""
-    import cv2
     import shapely
-    from shapely.geometry import MultiPolygon, Polygon
 
     out = {}
-    q = 0.25 * (abs(to_world(0, 1)[0] - to_world(0, 0)[0]) + abs(to_world(0, 1)[1] - to_world(0, 0)[1])
-                if to_world is not None else 1.0)
+    cell, mirror = 1.0, False  # m² per cell (for the warning); whether to_world turns rings around
+    if to_world is not None:
+        x, y = to_world(np.array([0.0, 0.0, 1.0]), np.array([0.0, 1.0, 0.0]))
+        cell = float(np.hypot(x[1] - x[0], y[1] - y[0])) ** 2
+        mirror = (x[1] - x[0]) * (y[2] - y[0]) - (y[1] - y[0]) * (x[2] - x[0]) < 0  # (col, row) to (x, y)
     for i, sl in enumerate(objs, start=1):
         if sl is None:
             continue
-        r0, c0 = sl[0].start, sl[1].start
-        m = (labels[sl] == i).astype(np.uint8)
-        # upsample x2 so contours run along cell edges rather than centres (nearest: each cell 2 x 2)
-        m2 = np.zeros((2 * m.shape[0] + 2, 2 * m.shape[1] + 2), np.uint8)  # padded by one sub-cell
-        m2[1:-1, 1:-1] = cv2.resize(m, (2 * m.shape[1], 2 * m.shape[0]), interpolation=cv2.INTER_NEAREST)
-        contours, hier = cv2.findContours(m2, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_SIMPLE)
-        polys = []
-        if hier is not None:
-            hier = hier[0]
-            xy = _to_coords(np.concatenate(contours), r0, c0, to_world)  # every contour's points at once
-            ends = np.cumsum([len(c) for c in contours])
-            rings = np.split(xy, ends[:-1])
-            for k in range(len(contours)):
-                if hier[k][3] != -1:
-                    continue  # a hole, handled with its parent
-                holes = []
-                child = hier[k][2]
-                while child != -1:
-                    if len(rings[child]) >= 3:
-                        holes.append(shapely.linearrings(rings[child]))
-                    child = hier[child][0]
-                if len(rings[k]) >= 3:
-                    polys.append(shapely.polygons(rings[k], holes=holes or None))
-        if polys:
-            geom = shapely.union_all(shapely.buffer(polys, 0)) if len(polys) > 1 else \
-                shapely.union_all([polys[0].buffer(0)])
+        m = _outline_cells(labels[sl], i, cell if to_world is not None else None)
+        xy, ring, piece, _ = mask_rings(m)
+        del m
+        if mirror:  # every ring backwards: exteriors counterclockwise in (x, y)
+            bounds = np.flatnonzero(np.r_[True, ring[1:] != ring[:-1], True])
+            size = np.diff(bounds)
+            xy = xy[np.repeat(bounds[:-1] + bounds[1:] - 1, size) - np.arange(ring.size)]
+        rows, cols = xy[:, 0] + sl[0].start, xy[:, 1] + sl[1].start
+        del xy
+        if to_world is not None:
+            x, y = to_world(rows, cols)
+            x, y = np.asarray(x, float), np.asarray(y, float)
         else:
-            geom = Polygon()
-        if not geom.is_empty:
-            # the outline ran through sub-cell centres a quarter cell inside
-            # the cells' edges: offset it out by that quarter cell
-            geom = geom.buffer(q, join_style="mitre", mitre_limit=2.0)
-        if geom.geom_type == "GeometryCollection":
-            geom = MultiPolygon([g for g in geom.geoms if g.geom_type == "Polygon"])
-        out[i] = geom
+            x, y = cols, rows
+        polys = shapely.polygons(shapely.linearrings(np.stack([x, y], 1), indices=ring), indices=piece)
+        out[i] = polys[0] if len(polys) == 1 else shapely.multipolygons(polys)
     return out
 
 
-def _to_coords(cnt, r0, c0, to_world):
-    # contour points are centres of sub-cells of the x2, padded grid: sub-cell
-    # k (after the pad) has its centre at k / 2 - 0.25 in cell units, a
-    # quarter cell inside the cells' outer edges (pushed back out by the caller)
-    pts = cnt[:, 0, :].astype(float) - 1.0
-    cols = pts[:, 0] / 2.0 - 0.25 + c0
-    rows = pts[:, 1] / 2.0 - 0.25 + r0
-    if to_world is not None:
-        x, y = to_world(rows, cols)
-        return np.stack([np.asarray(x, float), np.asarray(y, float)], 1)
-    return np.stack([cols, rows], 1)
+def _components(mask, connectivity):
+    """``(labels, count)`` of the ``connectivity``-connected components of ``mask`` (labels 1..count, 0 = not in it)."""
+    import cv2
+
+    n, lab = cv2.connectedComponents(mask.view(np.uint8), connectivity=connectivity, ltype=cv2.CV_32S)
+    return lab, n - 1
+
+
+def _first(values, k, largest):
+    """Indices of the ``k`` largest (or smallest) ``values``, ties by index: the same choice everywhere."""
+    if k <= 0:
+        return np.zeros(0, np.int64)
+    if k >= values.size:
+        return np.arange(values.size)
+    v = -values if largest else values
+    t = np.partition(v, k - 1)[k - 1]  # the k-th value
+    below = np.flatnonzero(v < t)
+    return np.r_[below, np.flatnonzero(v == t)[:k - below.size]]
+
+
+def _outline_cells(L, i, cell):
+    """The cells the outline of room ``i`` (in its box of labels ``L``) encloses: the room's cells, or
+    beyond the detail limit (:data:`OUTLINE_MIN_RINGS`) its largest pieces (up to half the limit) and
+    the holes among them, the smallest filled where they hold no other room, with a warning."""
+    m = L == i
+    cells = int(np.count_nonzero(m))
+    limit = OUTLINE_MIN_RINGS + cells // OUTLINE_CELLS_PER_RING
+    # every ring has at least 4 edges: rooms of few edges need no count of their pieces and holes
+    edges = (np.count_nonzero(m[1:] != m[:-1]) + np.count_nonzero(m[:, 1:] != m[:, :-1])
+             + 2 * (m.shape[0] + m.shape[1]))
+    if edges <= 4 * limit:
+        return m
+    pieces, n_pieces = _components(m, 4)
+    n_holes = _components(np.pad(~m, 1, constant_values=True), 4)[1] - 1  # all but the patch around the box
+    if n_pieces + n_holes <= limit:
+        return m
+    size = np.bincount(pieces.ravel())
+    size[0] = 0
+    keep = np.zeros(size.size, bool)
+    keep[_first(size[1:], min(n_pieces, max(limit // 2, 1)), True) + 1] = True
+    dropped = size[~keep][1:]
+    del size
+    m2 = keep[pieces]
+    del pieces
+    # the holes among the pieces kept: 4-connected patches of other cells that do not reach the box's
+    # border; the smallest of those that hold no other room's cell are filled, until within the limit
+    holes, n = _components(np.pad(~m2, 1, constant_values=True), 4)
+    hsize = np.bincount(holes.ravel())
+    may = np.ones(hsize.size, bool)
+    may[[0, holes[0, 0]]] = False
+    may[holes[1:-1, 1:-1][(L != 0) & ~m]] = False
+    cand = np.flatnonzero(may)
+    fill = cand[_first(hsize[cand], int(keep.sum()) + n - 1 - limit, False)]
+    lut = np.zeros(hsize.size, bool)
+    lut[fill] = True
+    m2 |= lut[holes[1:-1, 1:-1]]
+    del holes, lut
+    unit = "m²" if cell is not None else "cells"
+    cell = 1.0 if cell is None else cell
+    log.warning("room %d: %d pieces and %d enclosed patches of other cells, more detail than its outline holds "
+                "(%d rings for its %d cells): the outline leaves out %d of its pieces (%.4g %s, the largest %.4g "
+                "%s) and fills %d patches among the others (%.4g %s, the largest %.4g %s); the labels keep every "
+                "cell", i, n_pieces, n_holes, limit, cells, dropped.size, dropped.sum() * cell, unit,
+                (dropped.max() if dropped.size else 0) * cell, unit, fill.size, hsize[fill].sum() * cell, unit,
+                (hsize[fill].max() if fill.size else 0) * cell, unit)
+    return m2
 
 
 def room_graph(seg) -> nx.MultiGraph:
