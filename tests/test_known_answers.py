@@ -22,26 +22,16 @@ FURNITURE_REASON = (
     "not looked through): it cuts the room between the table and the "
     "north cabinet (0.92 m) and between the table and the south cabinet (1.42 m), "
     "furniture taken for door posts")
-PILLARS_REASON = (
-    "default method gives 4 rooms / 3 doors: besides the office door it cuts the corridor "
-    "twice, at the pairs of pillars against the walls at x = 7.2 m and x = 13.2 m "
-    "(1.3 m between the pillars), pillars taken for door posts")
-NOISY_REASON = (
-    "default method gives 4 rooms / 3 doors: as on the clean corridor_with_pillars, it cuts "
-    "the corridor at the pairs of pillars against the walls at x = 7.2 m and x = 13.1 m")
-
 CASES = [
     pytest.param(T.room_with_furniture, 1, 0, id="room_with_furniture",
                  marks=pytest.mark.xfail(strict=True, reason=FURNITURE_REASON)),
     pytest.param(T.door_beside_wall, 2, 1, id="door_beside_wall"),
-    pytest.param(T.corridor_with_pillars, 2, 1, id="corridor_with_pillars",
-                 marks=pytest.mark.xfail(strict=True, reason=PILLARS_REASON)),
+    pytest.param(T.corridor_with_pillars, 2, 1, id="corridor_with_pillars"),
     pytest.param(T.corridor_with_niches, 3, 2, id="corridor_with_niches"),
     pytest.param(T.room_with_desks, 2, 1, id="room_with_desks"),
     pytest.param(T.specks_outside_building, 2, 1, id="specks_outside_building"),
     pytest.param(T.free_strip_at_edge, 2, 1, id="free_strip_at_edge"),
-    pytest.param(T.noisy_corridor_with_pillars, 2, 1, id="noisy_corridor_with_pillars",
-                 marks=pytest.mark.xfail(strict=True, reason=NOISY_REASON)),
+    pytest.param(T.noisy_corridor_with_pillars, 2, 1, id="noisy_corridor_with_pillars"),
 ]
 
 ALL_MAPS = [T.room_with_furniture, T.door_beside_wall] + T.REAL_WORLD

@@ -23,7 +23,8 @@ from .walls import wall_faces
 __all__ = ["Candidate", "Door", "passage_candidates", "intersection_points",
            "wall_threshold", "select_doors", "segment_crosses", "passage_minima",
            "nearest_wall_points", "protrusion", "protrusion_at", "occupied_skeleton_lines",
-           "find_bottlenecks", "judge_doors", "suppress_duplicates", "opening_candidates", "STATUSES"]
+           "find_bottlenecks", "judge_doors", "suppress_duplicates", "opening_candidates", "across_corridor",
+           "STATUSES"]
 
 # --------------------------------------------------------------------------
 # Candidate statuses: why a candidate was kept or refused (see the "How it
@@ -60,11 +61,13 @@ DUPLICATE = "duplicate"
 WIDE_WITHOUT_WALL_ENDS = "wide opening without wall ends"
 #: topomap: an opening between collinear pieces of a straight wall, cut as a door.
 WALL_OPENING = "opening in a wall"
+#: topomap: both posts stand out less than ``pillar_depth`` from the two long side walls of a corridor.
+ACROSS_CORRIDOR = "across a corridor"
 
 #: Every status a candidate can end with or pass through.
 STATUSES = (CANDIDATE, DOOR, NO_WALL_BOTH_SIDES, NO_ENDPOINTS, NO_PROTRUDING_WALL_NEAR, CENTRES_APART,
             CROSSES_WALL_SKELETON, WIDTH_OUT_OF_RANGE, POSTS_NOT_FACING, NO_PROTRUDING_WALL, MOUTH,
-            MOUTH_WITHOUT_PROTRUDING_WALLS, DUPLICATE, WIDE_WITHOUT_WALL_ENDS, WALL_OPENING)
+            MOUTH_WITHOUT_PROTRUDING_WALLS, DUPLICATE, WIDE_WITHOUT_WALL_ENDS, WALL_OPENING, ACROSS_CORRIDOR)
 
 
 @dataclass
@@ -724,6 +727,26 @@ def _wall_ends_at_posts(tree, c, threshold_px: float) -> bool:
     d1, _ = tree.query(c.ip1)
     d2, _ = tree.query(c.ip2)
     return bool(d1 <= threshold_px and d2 <= threshold_px)
+
+
+def across_corridor(accepted, walls: list, depth_px: float) -> list:
+    """Stage "door judging": the accepted ``(width, Candidate)`` whose posts
+    do not both lie within ``depth_px`` of two long walls the door crosses
+    (:func:`topomap.walls.across_walls`); those get :data:`ACROSS_CORRIDOR`.
+
+    A narrowing between two things that stand out of a corridor's side
+    walls by less than that — pillars, wall columns, radiators, cupboards —
+    is the corridor's own; a door across a corridor sits in a wall across
+    it, which stands out farther."""
+    from .walls import across_walls
+
+    kept = []
+    for width, c in accepted:
+        if across_walls(c.ip1, c.ip2, walls, tol_px=depth_px):
+            c.status = ACROSS_CORRIDOR
+        else:
+            kept.append((width, c))
+    return kept
 
 
 def opening_candidates(openings, resolution: float) -> list:

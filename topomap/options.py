@@ -274,6 +274,14 @@ class TopomapOptions(_Options):
         with specks in it (an open door leaf, a person the laser saw); and an
         opening whose two ends lie on two such walls that it crosses spans
         the corridor between them and is no door. 0 turns both off.
+    pillar_depth : float
+        A bottleneck between two posts that each stand out less than this
+        (m) from a long wall (``long_wall``), the door crossing both walls,
+        is a narrowing of the corridor between those walls, not a door:
+        0.5 m, as far as a pillar, a wall column, a radiator or a cupboard
+        stands out from a corridor's side wall. A door across a corridor
+        sits in a wall across it, which stands out farther (in a 2 m
+        corridor, 0.5 m either side of a 1 m door). 0 turns this off.
     wall_wander : float
         Pieces of one long wall lie within this distance (m) of its line:
         0.2 m. A laser SLAM map draws a straight wall a few cells off its
@@ -354,6 +362,7 @@ class TopomapOptions(_Options):
     alcove_depth: float = _opt(1.2, "length")
     long_wall: float = _opt(4.0, "length")
     wall_wander: float = _opt(0.2, "length")
+    pillar_depth: float = _opt(0.5, "length")
     furniture_size: Optional[float] = _opt(None, "optional length")
     scan_furniture_size: float = _opt(3.0, "length")
     wall_thickness: float = _opt(0.5, "length")

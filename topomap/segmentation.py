@@ -679,6 +679,8 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
         thr_px = D.wall_threshold(d_occ, S.graph_pixels(Go))
         cands = D.find_bottlenecks(Gf, walls, opts, res, thr_px)
         accepted = D.judge_doors(cands, search.free, S.graph_endpoints(Go), thr_px, opts, res)
+        if lw and opts.pillar_depth > 0:
+            accepted = D.across_corridor(accepted, lw, opts.pillar_depth / res)
         segs = D.suppress_duplicates(accepted, res)
     if opts.openings:
         with T("openings"):
