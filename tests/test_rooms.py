@@ -73,10 +73,10 @@ def test_fill_pieces_wide_gap_between_two_labels():
     assert set(np.unique(got[:, 30:60])) == {1, 2}
 
 
-@pytest.mark.parametrize("dtype", [np.uint16, np.int32, np.int64])
+@pytest.mark.parametrize("dtype", [np.uint8, np.uint16, np.int32, np.int64])
 def test_lookup_is_indexing(dtype):
     rng = np.random.default_rng(3)
-    labels = rng.integers(0, 300, size=(120, 130)).astype(dtype)
+    labels = rng.integers(0, 256 if dtype == np.uint8 else 300, size=(120, 130)).astype(dtype)
     for table in (rng.permutation(300).astype(np.int32), rng.random(300).astype(np.float32),
                   rng.integers(0, 255, 300).astype(np.uint8)):
         got = lookup(table, labels)

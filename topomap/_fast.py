@@ -74,9 +74,12 @@ def lookup(table: np.ndarray, labels: np.ndarray) -> np.ndarray:
         return table[labels]
     import cv2
 
-    full = np.zeros(2 ** 16, table.dtype)
-    full[:table.size] = table
-    idx = labels if labels.dtype == np.uint16 else labels.astype(np.uint16)  # every index < 2**16
+    if labels.dtype == np.uint8:
+        idx, size = labels, 2 ** 8
+    else:
+        idx, size = (labels if labels.dtype == np.uint16 else labels.astype(np.uint16)), 2 ** 16  # each < 2**16
+    full = np.zeros(size, table.dtype)
+    full[:min(table.size, size)] = table[:size]
     return cv2.LUT(np.ascontiguousarray(idx), full)
 
 

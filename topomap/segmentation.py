@@ -312,19 +312,24 @@ def clutter_mask(free: np.ndarray, max_extent_px: float, *, furniture_px: float 
     their chairs: no free-standing piece of wall is that thick."""
     import cv2
 
-    n, comp, stats, _ = cv2.connectedComponentsWithStats((~free).astype(np.uint8), connectivity=8)
+    from ._fast import lookup
+
+    solid = np.logical_not(free).view(np.uint8)
+    n, comp, stats, _ = cv2.connectedComponentsWithStats(solid, connectivity=8)
     extent = np.maximum(stats[:, cv2.CC_STAT_WIDTH], stats[:, cv2.CC_STAT_HEIGHT])
     small = extent < max_extent_px
     bulky = (extent < furniture_px) & ~small
     bulky[0] = False
-    if bulky.any():
-        from scipy import ndimage
-
-        inside = cv2.distanceTransform((~free).astype(np.uint8), cv2.DIST_L2, 3)
-        radius = np.asarray(ndimage.maximum(inside, comp, index=np.arange(n)))
-        small |= bulky & (2 * radius >= wall_thickness_px)
+    H, W = free.shape
+    for i in np.flatnonzero(bulky):
+        # the largest inscribed radius: the distance transform on the component's box grown by one cell
+        # (every cell beside the component is free, so its distances are those of the whole map's)
+        c0, r0, w, h = (int(v) for v in stats[i, :4])
+        r0, c0, r1, c1 = max(r0 - 1, 0), max(c0 - 1, 0), min(r0 + h + 1, H), min(c0 + w + 1, W)
+        inside = cv2.distanceTransform(np.ascontiguousarray(solid[r0:r1, c0:c1]), cv2.DIST_L2, 3)
+        small[i] = 2 * inside[comp[r0:r1, c0:c1] == i].max() >= wall_thickness_px
     small[0] = False  # label 0: the free cells themselves
-    return small[comp]
+    return lookup(small.view(np.uint8), comp).view(bool)
 
 
 def without_clutter(grid: OccupancyGrid, min_wall_length: float, *, furniture_size: float = 0.0,
