@@ -16,6 +16,14 @@ import numpy as np
 __all__ = ["edt", "label", "lookup"]
 
 
+def _bytes(mask: np.ndarray) -> np.ndarray:
+    """``mask`` as a C-contiguous uint8 image (a contiguous bool array is viewed, not copied)."""
+    mask = np.asarray(mask)
+    if mask.dtype == bool and mask.flags.c_contiguous:
+        return mask.view(np.uint8)
+    return np.ascontiguousarray(mask, dtype=np.uint8)
+
+
 def edt(mask: np.ndarray, *, exact: bool = True) -> np.ndarray:
     """Euclidean distance (pixels) of each True cell to the nearest False cell.
 
@@ -35,7 +43,7 @@ def edt(mask: np.ndarray, *, exact: bool = True) -> np.ndarray:
     """
     import cv2
 
-    m = np.ascontiguousarray(mask, dtype=np.uint8)
+    m = _bytes(mask)
     if m.all():
         # no background at all: infinite distance; report a large finite value
         return np.full(m.shape, float(max(m.shape)), np.float32)
@@ -46,8 +54,7 @@ def label(mask: np.ndarray, connectivity: int = 8):
     """Connected components of ``mask``: ``(labels int32, count)``; 0 = background."""
     import cv2
 
-    m = np.ascontiguousarray(mask, dtype=np.uint8)
-    n, lab = cv2.connectedComponents(m, connectivity=connectivity, ltype=cv2.CV_32S)
+    n, lab = cv2.connectedComponents(_bytes(mask), connectivity=connectivity, ltype=cv2.CV_32S)
     return lab, n - 1
 
 

@@ -258,19 +258,20 @@ def preprocess_masks(grid: OccupancyGrid, opts, *, occupied=None):
     dil = metres_to_px(opts.dilation_size, res)
     band = metres_to_px(opts.wall_band, res, 1)
     free = grid.free
-    f = free.astype(np.uint8)
+    f = free.view(np.uint8)
     if er > 0:
         f = cv2.erode(f, disk(er), borderType=cv2.BORDER_CONSTANT, borderValue=0)
     if med >= 3:
         k = med if med % 2 else med + 1
-        f = cv2.medianBlur(f * 255, k) > 127
+        f = cv2.medianBlur(f, k).view(bool)  # the median of 0 / 1 values is 0 / 1
     else:
         f = f.astype(bool)
     d_free = edt(free)
-    dist_out = edt(~free, exact=False)  # only compared with the band width
-    occ = (~free if occupied is None else occupied & ~free) & (dist_out <= band)
+    solid = ~free
+    dist_out = edt(solid, exact=False)  # only compared with the band width
+    occ = (solid if occupied is None else occupied & solid) & (dist_out <= band)
     if dil > 1:
-        occ = cv2.dilate(occ.astype(np.uint8), np.ones((dil, dil), np.uint8)) > 0
+        occ = cv2.dilate(occ.view(np.uint8), np.ones((dil, dil), np.uint8)).view(bool)  # 0 / 1
     return f, d_free, occ
 
 
@@ -293,8 +294,8 @@ def close_wall_gaps(grid: OccupancyGrid, wall_gap: float):
     if r <= 0:
         return grid, None
     free = grid.free
-    shut = cv2.morphologyEx((~free).astype(np.uint8), cv2.MORPH_CLOSE, disk(r),
-                            borderType=cv2.BORDER_CONSTANT, borderValue=0) > 0
+    shut = cv2.morphologyEx(np.logical_not(free).view(np.uint8), cv2.MORPH_CLOSE, disk(r),
+                            borderType=cv2.BORDER_CONSTANT, borderValue=0).view(bool)  # 0 / 1
     closed = shut & free
     if closed.any():
         grid = OccupancyGrid(np.where(closed, OCCUPIED, grid.cells).astype(np.int8), grid.resolution,
