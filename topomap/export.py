@@ -149,6 +149,50 @@ def _poly_rings(p) -> list:
     return rings
 
 
+def _rings_json(rings) -> list:
+    """:func:`_ring_json` of every ring of ``rings`` (coordinate sequences), at once.
+
+    The same texts, faster: a room's outline has its corners on the map's
+    cell edges, so its coordinates take few distinct values; each distinct
+    value (bit pattern: ``-0.0`` is not ``0.0``) is written once by
+    ``json.dumps``, and the texts are put together from those.
+    """
+    arrs = [np.asarray(c, float).reshape(-1, 2) for c in rings]
+    if not arrs:
+        return []
+    xy = np.concatenate(arrs)
+    bits, inv = np.unique(xy.view(np.int64), return_inverse=True)
+    words = np.array([json.dumps(v) for v in bits.view(np.float64).tolist()], dtype=object)[inv.reshape(xy.shape)]
+    pairs = (words[:, 0] + ", " + words[:, 1]).tolist() if len(xy) else []
+    out, k = [], 0
+    for a in arrs:
+        m = len(a)
+        out.append("[[" + "], [".join(pairs[k:k + m]) + "]]" if m else "[]")
+        k += m
+    return out
+
+
+def _memo_rings(G) -> None:
+    """Fill write_outputs' ring memo for every 2-D polygon of ``G``'s rooms (:func:`_rings_json`)."""
+    memo = _RING_MEMO.get()
+    if memo is None:
+        return
+    polys = []
+    for _, d in G.nodes(data=True):
+        for v in d.values():
+            if not _is_geom(v) or v.is_empty or v.has_z:
+                continue
+            if v.geom_type == "Polygon":
+                polys.append(v)
+            elif v.geom_type == "MultiPolygon":
+                polys += [q for q in _parts(v) if not q.is_empty]
+    polys = [q for q in polys if memo.get(id(q), (None,))[0] is not q]
+    rings = [[q.exterior, *q.interiors] for q in polys]
+    texts = iter(_rings_json([r.coords for rs in rings for r in rs]))
+    for q, rs in zip(polys, rings):
+        memo[id(q)] = (q, [next(texts) for _ in rs])
+
+
 def _parts(geom) -> list:
     """A 2-D Polygon's or MultiPolygon's polygons; kept (so memo ids stay valid) while a write runs."""
     memo = _RING_MEMO.get()
@@ -1052,6 +1096,7 @@ def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None, geojs
     to_file = ("labels", "graphml", "json", "geojson")  # writers given the open temporary file
     memo = _RING_MEMO.set({})  # outlines' floats encoded once, for the WKT and the GeoJSON
     try:
+        _memo_rings(graph)
         with ExitStack() as stack:  # on success renames every temporary file; on error removes them all
             tmp = {k: stack.enter_context(atomic_write(outdir / f, None)) for k, f in names.items()}
             for k in names:
