@@ -40,3 +40,38 @@ def test_clutter_mask_is_its_definition(seed):
         assert got.dtype == want.dtype == bool
         np.testing.assert_array_equal(got, want)
         assert got[free].sum() == 0
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_close_by_distance_is_the_closing(seed):
+    from topomap.geometry import disk
+    from topomap.segmentation import _close_by_distance
+
+    rng = np.random.default_rng(seed)
+    free = rng.random((130, 170)) < rng.uniform(0.6, 0.97)
+    free[:, :3] = seed % 2 == 0  # obstacles on the image edge, or free cells there
+    for r in (2, 6, 12, 19):
+        want = cv2.morphologyEx((~free).astype(np.uint8), cv2.MORPH_CLOSE, disk(r),
+                                borderType=cv2.BORDER_CONSTANT, borderValue=0) > 0
+        np.testing.assert_array_equal(_close_by_distance(free, r), want)
+    assert not _close_by_distance(np.ones((20, 20), bool), 13).any()
+
+
+@pytest.mark.parametrize("resolution", [0.05, 0.02, 0.01])
+def test_free_mask_median_is_medianblur(resolution):
+    # a fine map: median windows wider than 5 cells take the box-count route
+    from topomap.geometry import disk, metres_to_px
+    from topomap.io import from_array
+    from topomap.options import TopomapOptions
+    from topomap.segmentation import preprocess_masks
+
+    rng = np.random.default_rng(int(resolution * 1000))
+    free = ndi.binary_opening(rng.random((160, 190)) < 0.8)
+    opts = TopomapOptions()
+    f, _, _ = preprocess_masks(from_array(free, resolution=resolution), opts)
+    er, med = metres_to_px(opts.erosion_radius, resolution), metres_to_px(opts.median_size, resolution)
+    ref = free.astype(np.uint8)
+    if er > 0:
+        ref = cv2.erode(ref, disk(er), borderType=cv2.BORDER_CONSTANT, borderValue=0)
+    k = med if med % 2 else med + 1
+    np.testing.assert_array_equal(f, cv2.medianBlur(ref * 255, k) > 127)
