@@ -263,7 +263,7 @@ def _fill_pieces(pieces: np.ndarray, seed: np.ndarray, stats: np.ndarray, free: 
     n_rest = 0
     if open_.size:
         # the cells left, in 8-connected components, and the labels beside each component
-        comp, n_comp = _components(todo[open_], W)
+        comp, n_comp = _components(open_, pos, inside)
         near = np.where(inside[open_], val[pos[open_]], fixed[open_])
         hit = near > 0
         pairs = np.unique(np.stack([np.broadcast_to(comp[:, None], near.shape)[hit], near[hit]]), axis=1)
@@ -278,7 +278,7 @@ def _fill_pieces(pieces: np.ndarray, seed: np.ndarray, stats: np.ndarray, free: 
             val = out.ravel()[todo].astype(np.int32)
             open_ = np.flatnonzero(val == 0)
             if open_.size:
-                comp, n_comp = _components(todo[open_], W)
+                comp, n_comp = _components(open_, pos, inside)
         elif pairs.shape[1]:
             # one label beside a component: the watershed floods all of it with that label
             lab = np.zeros(n_comp + 1, np.int32)
@@ -326,15 +326,21 @@ def _fill_pieces(pieces: np.ndarray, seed: np.ndarray, stats: np.ndarray, free: 
     return labels, n_rooms
 
 
-def _components(cells: np.ndarray, W: int):
-    """8-connected components of the cells ``cells`` (flat indices in an image ``W`` wide):
-    the component (1..n) of each cell, and n."""
-    rr, cc = np.divmod(cells, W)
-    r0, c0 = rr.min(), cc.min()
-    box = np.zeros((rr.max() - r0 + 1, cc.max() - c0 + 1), bool)
-    box[rr - r0, cc - c0] = True
-    lab, n = ndi.label(box, structure=EIGHT)
-    return lab[rr - r0, cc - c0], int(n)
+def _components(cells: np.ndarray, pos: np.ndarray, inside: np.ndarray):
+    """8-connected components of the cells ``cells`` (indices into the unseeded cells, whose
+    8 neighbours are ``pos`` where ``inside``): the component (1..n) of each cell, and n."""
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    m = cells.size
+    at = np.full(pos.shape[0], -1, np.int64)
+    at[cells] = np.arange(m)
+    nbr = np.where(inside[cells], at[pos[cells]], -1)
+    ok = nbr >= 0
+    A = csr_matrix((np.ones(int(ok.sum()), np.int8), (np.repeat(np.arange(m), nbr.shape[1])[ok.ravel()], nbr[ok])),
+                   shape=(m, m))
+    n, comp = connected_components(A, directed=False)
+    return comp.astype(np.int32) + 1, int(n)
 
 
 def _rooms_first(labels: np.ndarray, min_cells: int):
