@@ -304,7 +304,7 @@ def close_wall_gaps(grid: OccupancyGrid, wall_gap: float):
         shut = _close_by_distance(free, r)
     closed = shut & free
     if closed.any():
-        grid = OccupancyGrid(np.where(closed, OCCUPIED, grid.cells).astype(np.int8), grid.resolution,
+        grid = OccupancyGrid(np.where(closed, np.int8(OCCUPIED), grid.cells), grid.resolution,
                              grid.origin, grid.source)
     return grid, closed
 
@@ -381,7 +381,7 @@ def without_clutter(grid: OccupancyGrid, min_wall_length: float, *, furniture_si
     clutter = clutter_mask(grid.free, min_wall_length / res, furniture_px=furniture_size / res,
                            wall_thickness_px=wall_thickness / res)
     if clutter.any():
-        grid = OccupancyGrid(np.where(clutter, FREE, grid.cells).astype(np.int8), grid.resolution,
+        grid = OccupancyGrid(np.where(clutter, np.int8(FREE), grid.cells), grid.resolution,
                              grid.origin, grid.source)
     return grid, clutter
 
