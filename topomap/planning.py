@@ -399,9 +399,11 @@ def _touching(a, b):
     """Label pairs of 8-adjacent cells, ``a`` the row above ``b`` (0 = no cell)."""
     out = []
     w = a.shape[1]
+    on_a, on_b = a > 0, b > 0
     for dc in (-1, 0, 1):
-        x, y = a[:, max(0, -dc):w - max(0, dc)], b[:, max(0, dc):w - max(0, -dc)]
-        ok = (x > 0) & (y > 0) & (x != y)
+        sa, sb = slice(max(0, -dc), w - max(0, dc)), slice(max(0, dc), w - max(0, -dc))
+        x, y = a[:, sa], b[:, sb]
+        ok = on_a[:, sa] & on_b[:, sb] & (x != y)
         x, y = x[ok], y[ok]
         keep = np.ones(len(x), bool)  # runs of the same pair along a block edge: keep one
         keep[1:] = (x[1:] != x[:-1]) | (y[1:] != y[:-1])
@@ -435,8 +437,9 @@ def _coarse_door_distances(mask, pts, f, sources=None):
     cr, ccol = cen[:, 0], cen[:, 1]
     nb = len(lab[f::f])
     pairs = _touching(lab[f - 1::f][:nb], lab[f::f])
-    nb = len(lab.T[f::f])
-    pairs += [p[:, ::-1] for p in _touching(lab.T[f - 1::f][:nb], lab.T[f::f])]
+    right = np.ascontiguousarray(lab[:, f::f].T)  # the columns at the blocks' edges, as rows
+    left = np.ascontiguousarray(lab[:, f - 1::f][:, :len(right)].T)
+    pairs += [p[:, ::-1] for p in _touching(left, right)]
     su, sv = [], []
     for i, (pr, pc) in enumerate(pts):
         r, c = int(pr), int(pc)
