@@ -363,7 +363,7 @@ def _block_components(mask, f):
     m = np.zeros((H * f, W * f), bool)
     m[:h, :w] = mask
     blocks = m.reshape(H, f, W, f)
-    R, C = np.nonzero(blocks.any(axis=(1, 3)))
+    R, C = np.nonzero(_block_any(m, f))
     if 3 * R.size > H * W:  # mostly full: all blocks at once, one empty cell apart both ways
         g = np.zeros((H, f + 1, W, f + 1), np.uint8)
         g[:, :f, :, :f] = blocks
@@ -393,6 +393,20 @@ def _block_components(mask, f):
     cen[0] = 0
     cen = cen - np.floor(cen / (f + 1))
     return lab[:h, :w], n - 1, cen
+
+
+def _block_any(m, f):
+    """(H, W) bool: the ``f`` x ``f`` blocks of ``m`` ((H f, W f) bool, C-contiguous) holding a True cell.
+
+    The rows of each block OR-ed together, then each block's ``f`` bytes read as one integer
+    when ``f`` is 1, 2, 4 or 8 (numpy's ``any`` over two axes of a 4-D view is 50 times slower).
+    """
+    Hf, Wf = m.shape
+    H, W = Hf // f, Wf // f
+    rows = np.bitwise_or.reduce(m.view(np.uint8).reshape(H, f, Wf), axis=1)  # (H, W f)
+    if f in (1, 2, 4, 8):
+        return rows.view(np.dtype(f"u{f}")).reshape(H, W) > 0
+    return rows.reshape(H, W, f).any(axis=2)
 
 
 def _touching(a, b):
