@@ -405,11 +405,14 @@ def classify_plan(gray, *, negate: bool = False, transparent=None) -> np.ndarray
     (M, N) ndarray of int8
         ``FREE`` (0), ``OCCUPIED`` (100) or ``UNKNOWN`` (-1).
     """
+    from ._fast import lookup
+
     v = np.asarray(gray, dtype=np.uint8)
+    lut = np.where(np.arange(256) >= FREE_GRAY, FREE, OCCUPIED).astype(np.int8)
+    lut[GRAY_UNKNOWN] = UNKNOWN
     if negate:
-        v = 255 - v
-    cells = np.where(v >= FREE_GRAY, FREE, OCCUPIED).astype(np.int8)
-    cells[v == GRAY_UNKNOWN] = UNKNOWN
+        lut = lut[::-1].copy()  # the class of 255 - v
+    cells = lookup(lut, v) if v.ndim == 2 else lut[v]
     if transparent is not None:
         cells[np.asarray(transparent, bool)] = UNKNOWN
     return cells
@@ -520,8 +523,9 @@ def _to_gray(name, img):
             img = img.convert("RGBA" if "A" in img.getbands() else "RGB")
             mode = img.mode
         a = np.asarray(img, dtype=np.uint8)
-        # map_server averages the colour channels
-        gray = np.rint(a[..., :3].astype(np.float64).mean(axis=-1)).astype(np.uint8)
+        # map_server averages the colour channels, rounded to the nearest (a third is never a half:
+        # rint((r + g + b) / 3) is (r + g + b + 1) // 3)
+        gray = ((a[..., 0].astype(np.uint16) + a[..., 1] + a[..., 2] + 1) // 3).astype(np.uint8)
         if mode == "RGBA":
             transparent = a[..., 3] == 0
     if gray.ndim != 2:

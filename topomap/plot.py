@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._fast import lookup
+
 __all__ = ["plot_map", "plot_rooms", "plot_doors", "plot_skeletons", "plot_room_graph",
            "plot_route", "plot_segmentation", "save_overlay", "room_colors", "overlay_image", "overlay_png"]
 
@@ -212,13 +214,16 @@ def _overlay_indexed(seg, skeletons=False, graph=False, alpha=0.75):
     lut[1:n + 1] = first + (np.arange(n) % max(k, 1))
     lut[n + 1:] = first - 1
     labels = np.asarray(seg.labels)
-    idx = np.take(lut, np.clip(labels, 0, n + nf))
-    off = labels == 0
-    cells = grid.cells
+    if labels.size and labels.min() >= 0 and labels.max() <= n + nf:
+        idx = lookup(lut, labels)
+    else:
+        idx = np.take(lut, np.clip(labels, 0, n + nf))
     from .io import FREE, OCCUPIED
 
-    idx[off & (cells == OCCUPIED)] = _WALL
-    idx[off & (cells != OCCUPIED) & (cells != FREE)] = _UNKNOWN
+    # cells without a label: walls black, unknown grey, free white (one lookup on the cell values)
+    by_cell = np.full(256, _UNKNOWN, np.uint8)
+    by_cell[np.uint8(OCCUPIED)], by_cell[np.uint8(FREE)] = _WALL, _FREE
+    np.copyto(idx, lookup(by_cell, np.ascontiguousarray(grid.cells).view(np.uint8)), where=labels == 0)
     t = max(1, int(round(min(H, W) / 400)))  # line width in pixels
     if skeletons:
         for G, col in ((seg.free_graph, _FREE_SKEL), (seg.occupied_graph, _OCC_SKEL)):

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy import ndimage as ndi
 
+from ._fast import lookup
 from .geometry import line_pixels
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -100,7 +101,7 @@ def relabel_sequential(labels: np.ndarray) -> np.ndarray:
     order = ids[np.argsort(first[ids], kind="stable")]
     lut = np.zeros(top + 1, np.int32)
     lut[order] = np.arange(1, order.size + 1, dtype=np.int32)
-    return lut[lab]
+    return lookup(lut, lab)
 
 
 def _grow(seeds: np.ndarray, todo: np.ndarray, max_steps: int = 8) -> np.ndarray:
@@ -173,37 +174,186 @@ def cut_rooms(grid: OccupancyGrid, segments, *, space=None, min_room_cells: int 
     n_rooms : int
         Number of rooms.
     """
-    from ._fast import label as cc_label
+    import cv2
 
     free = grid.free
     space = free if space is None else (space & free)
     cut = np.zeros_like(free)  # stage "cutting rooms" of the Voronoi methods
-    for p, q in segments:
-        cut[line_pixels(p, q, free.shape)] = True
-    pieces, n = cc_label(space & ~cut, 4)
-    if n:
-        area = np.bincount(pieces.ravel(), minlength=n + 1)
-        if min_room_cells > 0:
-            # a piece smaller than a room is never a room of its own: its
-            # cells join the room they are connected to, or become a fragment
-            small = area < min_room_cells
-            if wide is not None:
-                small |= np.bincount(pieces[wide], minlength=n + 1) == 0
-            small[0] = False
-            pieces = np.where(small[pieces], 0, pieces)
-            area[small] = 0
+    lines = [line_pixels(p, q, free.shape) for p, q in segments]
+    for rc in lines:
+        cut[rc] = True
+    whole = space & ~cut
+    try:  # 16-bit labels when they fit (OpenCV refuses more): the lookups on them are faster
+        n, pieces, stats, _ = cv2.connectedComponentsWithStats(whole.view(np.uint8), connectivity=4,
+                                                               ltype=cv2.CV_16U)
+    except cv2.error:
+        n, pieces, stats, _ = cv2.connectedComponentsWithStats(whole.view(np.uint8), connectivity=4,
+                                                               ltype=cv2.CV_32S)
+    n -= 1
+    area = stats[:, cv2.CC_STAT_AREA].astype(np.int64)
+    seed = np.arange(n + 1, dtype=np.int32)  # piece -> its seed label (0: none)
+    small = np.zeros(n + 1, bool)
+    if n and min_room_cells > 0:
+        # a piece smaller than a room is never a room of its own: its
+        # cells join the room they are connected to, or become a fragment
+        small = area < min_room_cells
+        if wide is not None:
+            small |= np.bincount(pieces[wide], minlength=n + 1) == 0
+        small[0] = False
+        seed[small] = 0
+        area[small] = 0
     if n > 1:
         # number pieces by area (largest = highest id): cut cells then go to
         # the larger neighbour, whatever the map's orientation
         area[0] = -1
         rank = np.empty(n + 1, np.int32)
         rank[np.argsort(area, kind="stable")] = np.arange(n + 1, dtype=np.int32)
-        pieces = rank[pieces]
-    labels, n_rooms = _rooms_first(fill_unlabeled(pieces, free), min_room_cells, wide)
-    doors = [d for d in doors_between_rooms(grid, labels, segments) if max(d.rooms) <= n_rooms]
+        seed = np.where(small, 0, rank).astype(np.int32)
+    labels, n_rooms = _fill_pieces(pieces, seed, stats, free, free > whole, min_room_cells, wide)
+    doors = [d for d in _doors_between(grid, labels, segments, lines) if max(d.rooms) <= n_rooms]
     for k, d in enumerate(doors):
         d.id = k
     return labels, doors, n_rooms
+
+
+def _fill_pieces(pieces: np.ndarray, seed: np.ndarray, stats: np.ndarray, free: np.ndarray, between: np.ndarray,
+                 min_cells: int, wide=None):
+    """``_rooms_first(fill_unlabeled(seed[pieces], free), min_cells, wide)``, cell for cell, touching only the
+    cells without a seed.
+
+    ``pieces``: the cut pieces (OpenCV components, ``stats`` their
+    statistics); ``seed``: each piece's seed label (0: none); ``between``:
+    the free cells in no piece. The seeds' label image is never made: the free cells without a seed (few: the
+    cuts, the small pieces, the closed gaps) are grown one 8-neighbourhood
+    step at a time as :func:`_grow` does (it dilates the whole image). Of
+    the cells left, an 8-connected component with one label beside it is
+    all that label (what the watershed of :func:`fill_unlabeled` makes of
+    it); only when a component lies between two labels does that watershed
+    run, on the whole map as there (its order of flooding decides). The
+    components no label touches become labels of their own; the
+    renumbering in order of first appearance (:func:`relabel_sequential`)
+    and rooms before fragments (:func:`_rooms_first`) are one lookup table
+    applied once.
+    """
+    H, W = free.shape
+    top = int(seed.max()) if seed.size else 0
+    if top == 0 or top >= 2 ** 24:  # no seed, or more than _grow handles: the general route
+        return _rooms_first(fill_unlabeled(lookup(seed, pieces), free), min_cells, wide)
+    # the free cells without a seed (flat indices, ascending)
+    parts = [np.flatnonzero(between)]
+    for i in np.flatnonzero(seed[1:] == 0) + 1:  # pieces too small to be rooms
+        c0, r0, w, h = (int(v) for v in stats[i, :4])
+        rr, cc = np.nonzero(pieces[r0:r0 + h, c0:c0 + w] == i)
+        parts.append((rr + r0) * W + (cc + c0))
+    todo = np.sort(np.concatenate(parts)) if len(parts) > 1 else parts[0]
+    val = np.zeros(todo.size, np.int32)
+    open_ = np.arange(todo.size)  # the cells still without a label
+    flat = pieces.ravel()
+    if todo.size:
+        r, c = np.divmod(todo, W)
+        rn, cn = r[:, None] + _NR, c[:, None] + _NC
+        ok = (rn >= 0) & (rn < H) & (cn >= 0) & (cn < W)
+        nb = np.where(ok, rn * W + cn, 0)
+        pos = np.minimum(np.searchsorted(todo, nb), todo.size - 1)
+        inside = ok & (todo[pos] == nb)  # the neighbour is itself a cell without a seed
+        fixed = np.where(ok & ~inside, seed[flat[nb]], 0)
+        del rn, cn, nb, r, c
+        for _ in range(8):  # _grow's steps
+            cur = np.where(inside[open_], val[pos[open_]], fixed[open_]).max(axis=1)
+            hit = cur > 0
+            if not hit.any():
+                break
+            val[open_[hit]] = cur[hit]
+            open_ = open_[~hit]
+            if not open_.size:
+                break
+    n_rest = 0
+    if open_.size:
+        # the cells left, in 8-connected components, and the labels beside each component
+        comp, n_comp = _components(open_, pos, inside)
+        near = np.where(inside[open_], val[pos[open_]], fixed[open_])
+        hit = near > 0
+        pairs = np.unique(np.stack([np.broadcast_to(comp[:, None], near.shape)[hit], near[hit]]), axis=1)
+        if pairs.shape[1] and np.bincount(pairs[0]).max() > 1:
+            # a component between two labels, 8 steps or more from their seeds: fill_unlabeled's
+            # watershed, on its very input
+            from skimage.segmentation import watershed
+
+            out = lookup(seed, pieces)
+            out.ravel()[todo] = val
+            out = watershed(np.zeros(free.shape, np.float32), markers=out, mask=free, connectivity=2)
+            val = out.ravel()[todo].astype(np.int32)
+            open_ = np.flatnonzero(val == 0)
+            if open_.size:
+                comp, n_comp = _components(open_, pos, inside)
+        elif pairs.shape[1]:
+            # one label beside a component: the watershed floods all of it with that label
+            lab = np.zeros(n_comp + 1, np.int32)
+            lab[pairs[0]] = pairs[1]
+            val[open_] = lab[comp]
+            keep = lab[comp] == 0
+            open_, comp = open_[keep], comp[keep]
+            if open_.size:
+                _, comp = np.unique(comp, return_inverse=True)
+                comp = comp.ravel() + 1
+                n_comp = int(comp.max())
+        if open_.size:
+            # free cells no seed reaches: one label per 8-connected component
+            val[open_] = comp + top
+            n_rest = n_comp
+    # first cell (row-major) and number of cells of every label
+    n_lab = top + n_rest + 1
+    first = np.full(n_lab, np.iinfo(np.int64).max, np.int64)
+    count = np.zeros(n_lab, np.int64)
+    kept = np.flatnonzero(seed)
+    left, row, width = (stats[kept, k].astype(np.int64) for k in (0, 1, 2))
+    # the first cell of a piece is on the top row of its box: the first of that row's cells in the piece
+    start = np.cumsum(width) - width
+    cells = np.repeat(row * W + left - start, width) + np.arange(int(width.sum()))
+    mine = pieces.ravel()[cells] == np.repeat(kept, width)
+    at = np.where(mine, cells, np.iinfo(np.int64).max)
+    first[seed[kept]] = np.minimum.reduceat(at, start) if kept.size else []
+    count[seed[kept]] = stats[kept, 4]
+    if todo.size:
+        np.minimum.at(first, val, todo)
+        count += np.bincount(val, minlength=n_lab)
+    ids = np.flatnonzero(count[1:]) + 1
+    order = ids[np.argsort(first[ids], kind="stable")]  # relabel_sequential's numbering
+    if min_cells > 0:  # _rooms_first: rooms, then fragments, each in that order
+        is_room = count[order] >= min_cells
+        if wide is not None:
+            n_wide = np.zeros(n_lab, np.int64)
+            np.add.at(n_wide, seed, np.bincount(pieces[wide], minlength=seed.size))
+            if todo.size:
+                n_wide += np.bincount(val[wide.ravel()[todo]], minlength=n_lab)
+            is_room &= n_wide[order] > 0
+        order = np.concatenate([order[is_room], order[~is_room]])
+        n_rooms = int(is_room.sum())
+    else:
+        n_rooms = int(order.size)
+    final = np.zeros(n_lab, np.int32)
+    final[order] = np.arange(1, order.size + 1, dtype=np.int32)
+    labels = lookup(final[seed], pieces)
+    if todo.size:
+        labels.ravel()[todo] = final[val]
+    return labels, n_rooms
+
+
+def _components(cells: np.ndarray, pos: np.ndarray, inside: np.ndarray):
+    """8-connected components of the cells ``cells`` (indices into the unseeded cells, whose
+    8 neighbours are ``pos`` where ``inside``): the component (1..n) of each cell, and n."""
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    m = cells.size
+    at = np.full(pos.shape[0], -1, np.int64)
+    at[cells] = np.arange(m)
+    nbr = np.where(inside[cells], at[pos[cells]], -1)
+    ok = nbr >= 0
+    A = csr_matrix((np.ones(int(ok.sum()), np.int8), (np.repeat(np.arange(m), nbr.shape[1])[ok.ravel()], nbr[ok])),
+                   shape=(m, m))
+    n, comp = connected_components(A, directed=False)
+    return comp.astype(np.int32) + 1, int(n)
 
 
 def _rooms_first(labels: np.ndarray, min_cells: int, wide=None):
@@ -224,7 +374,7 @@ def _rooms_first(labels: np.ndarray, min_cells: int, wide=None):
         lut = np.zeros(top + 1, np.int32)
         lut[ids[is_room[1:]]] = np.arange(1, n_rooms + 1, dtype=np.int32)
         lut[ids[~is_room[1:]]] = np.arange(n_rooms + 1, top + 1, dtype=np.int32)
-        labels = lut[labels]
+        labels = lookup(lut, labels)
     return labels, n_rooms
 
 
@@ -239,17 +389,35 @@ def doors_between_rooms(grid: OccupancyGrid, labels: np.ndarray, segments) -> li
     of its pixels; a segment with fewer than two labels around it separates
     nothing and is dropped, and so is a repeat of a kept segment.
     """
+    return _doors_between(grid, labels, segments, [line_pixels(p, q, labels.shape) for p, q in segments])
+
+
+def _doors_between(grid: OccupancyGrid, labels: np.ndarray, segments, lines) -> list:
+    """:func:`doors_between_rooms` given the cells of every segment (``lines``: ``(rows, cols)`` each)."""
     from .doors import Door
 
     H, W = labels.shape
     doors, seen = [], set()
-    for p, q in segments:
-        rr, cc = line_pixels(p, q, labels.shape)
-        labs = labels[np.clip(rr[:, None] + _NR, 0, H - 1), np.clip(cc[:, None] + _NC, 0, W - 1)].ravel()
-        vals, counts = np.unique(labs[labs > 0], return_counts=True)
-        if vals.size < 2:
+    if not len(segments):
+        return doors
+    sizes = np.array([len(rr) for rr, _ in lines])
+    rr = np.concatenate([rr for rr, _ in lines])
+    cc = np.concatenate([cc for _, cc in lines])
+    labs = labels[np.clip(rr[:, None] + _NR, 0, H - 1), np.clip(cc[:, None] + _NC, 0, W - 1)].ravel()
+    seg = np.repeat(np.repeat(np.arange(len(segments)), sizes), _NR.size)[labs > 0]
+    labs = labs[labs > 0].astype(np.int64)
+    # per segment its labels, the most frequent first (ties: the smaller label first)
+    span = int(labs.max()) + 1 if labs.size else 1
+    key, counts = np.unique(seg * span + labs, return_counts=True)
+    seg, labs = key // span, key % span
+    order = np.lexsort((labs, -counts, seg))
+    seg, labs = seg[order], labs[order]
+    start = np.searchsorted(seg, np.arange(len(segments)))
+    end = np.searchsorted(seg, np.arange(len(segments)), side="right")
+    for k, (p, q) in enumerate(segments):
+        if end[k] - start[k] < 2:
             continue
-        a, b = sorted(int(v) for v in vals[np.argsort(-counts, kind="stable")[:2]])
+        a, b = sorted(int(v) for v in labs[start[k]:start[k] + 2])
         p = tuple(float(v) for v in p)
         q = tuple(float(v) for v in q)
         key = (a, b) + tuple(int(round(v)) for v in p + q)

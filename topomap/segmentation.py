@@ -258,19 +258,23 @@ def preprocess_masks(grid: OccupancyGrid, opts, *, occupied=None):
     dil = metres_to_px(opts.dilation_size, res)
     band = metres_to_px(opts.wall_band, res, 1)
     free = grid.free
-    f = free.astype(np.uint8)
+    f = free.view(np.uint8)
     if er > 0:
         f = cv2.erode(f, disk(er), borderType=cv2.BORDER_CONSTANT, borderValue=0)
     if med >= 3:
         k = med if med % 2 else med + 1
-        f = cv2.medianBlur(f * 255, k) > 127
+        if k <= 5:
+            f = cv2.medianBlur(f, k).view(bool)  # the median of 0 / 1 values is 0 / 1
+        else:  # the same (a majority of the k x k cells, edges replicated), in time independent of k
+            f = cv2.boxFilter(f, cv2.CV_16U, (k, k), normalize=False, borderType=cv2.BORDER_REPLICATE) > k * k // 2
     else:
         f = f.astype(bool)
     d_free = edt(free)
-    dist_out = edt(~free, exact=False)  # only compared with the band width
-    occ = (~free if occupied is None else occupied & ~free) & (dist_out <= band)
+    solid = ~free
+    dist_out = edt(solid, exact=False)  # only compared with the band width
+    occ = (solid if occupied is None else occupied & solid) & (dist_out <= band)
     if dil > 1:
-        occ = cv2.dilate(occ.astype(np.uint8), np.ones((dil, dil), np.uint8)) > 0
+        occ = cv2.dilate(occ.view(np.uint8), np.ones((dil, dil), np.uint8)).view(bool)  # 0 / 1
     return f, d_free, occ
 
 
@@ -293,13 +297,36 @@ def close_wall_gaps(grid: OccupancyGrid, wall_gap: float):
     if r <= 0:
         return grid, None
     free = grid.free
-    shut = cv2.morphologyEx((~free).astype(np.uint8), cv2.MORPH_CLOSE, disk(r),
-                            borderType=cv2.BORDER_CONSTANT, borderValue=0) > 0
+    if r < _CLOSE_BY_DISTANCE:
+        shut = cv2.morphologyEx(np.logical_not(free).view(np.uint8), cv2.MORPH_CLOSE, disk(r),
+                                borderType=cv2.BORDER_CONSTANT, borderValue=0).view(bool)  # 0 / 1
+    else:
+        shut = _close_by_distance(free, r)
     closed = shut & free
     if closed.any():
-        grid = OccupancyGrid(np.where(closed, OCCUPIED, grid.cells).astype(np.int8), grid.resolution,
+        grid = OccupancyGrid(np.where(closed, np.int8(OCCUPIED), grid.cells), grid.resolution,
                              grid.origin, grid.source)
     return grid, closed
+
+
+#: Disk radius (cells) from which :func:`close_wall_gaps` closes with two exact distance transforms
+#: (time linear in the map's area) instead of OpenCV's closing (time growing with the radius too).
+_CLOSE_BY_DISTANCE = 12
+
+
+def _close_by_distance(free: np.ndarray, r: int) -> np.ndarray:
+    """The closing of the non-free cells with ``disk(r)`` (nothing outside the image), exactly:
+    dilated = within ``r`` of a non-free cell, then eroded = farther than ``r`` from every cell
+    not dilated or outside the image (exact Euclidean distances: ``d <= r`` iff ``d**2 <= r**2``)."""
+    import cv2
+
+    from ._fast import edt
+
+    if free.all():
+        return np.zeros(free.shape, bool)
+    grown = edt(free) <= r
+    pad = cv2.copyMakeBorder(grown.view(np.uint8), r + 1, r + 1, r + 1, r + 1, cv2.BORDER_CONSTANT, value=0)
+    return edt(pad)[r + 1:-(r + 1), r + 1:-(r + 1)] > r
 
 
 def clutter_mask(free: np.ndarray, max_extent_px: float, *, furniture_px: float = 0.0,
@@ -313,7 +340,10 @@ def clutter_mask(free: np.ndarray, max_extent_px: float, *, furniture_px: float 
     it touches a cell of ``keep`` (a long wall runs along it)."""
     import cv2
 
-    n, comp, stats, _ = cv2.connectedComponentsWithStats((~free).astype(np.uint8), connectivity=8)
+    from ._fast import lookup
+
+    solid = np.logical_not(free).view(np.uint8)
+    n, comp, stats, _ = cv2.connectedComponentsWithStats(solid, connectivity=8)
     extent = np.maximum(stats[:, cv2.CC_STAT_WIDTH], stats[:, cv2.CC_STAT_HEIGHT])
     small = extent < max_extent_px
     bulky = (extent < furniture_px) & ~small
@@ -322,14 +352,16 @@ def clutter_mask(free: np.ndarray, max_extent_px: float, *, furniture_px: float 
         on_wall = np.unique(comp[keep])
         small[on_wall] = False
         bulky[on_wall] = False
-    if bulky.any():
-        from scipy import ndimage
-
-        inside = cv2.distanceTransform((~free).astype(np.uint8), cv2.DIST_L2, 3)
-        radius = np.asarray(ndimage.maximum(inside, comp, index=np.arange(n)))
-        small |= bulky & (2 * radius >= wall_thickness_px)
+    H, W = free.shape
+    for i in np.flatnonzero(bulky):
+        # the largest inscribed radius: the distance transform on the component's box grown by one cell
+        # (every cell beside the component is free, so its distances are those of the whole map's)
+        c0, r0, w, h = (int(v) for v in stats[i, :4])
+        r0, c0, r1, c1 = max(r0 - 1, 0), max(c0 - 1, 0), min(r0 + h + 1, H), min(c0 + w + 1, W)
+        inside = cv2.distanceTransform(np.ascontiguousarray(solid[r0:r1, c0:c1]), cv2.DIST_L2, 3)
+        small[i] = 2 * inside[comp[r0:r1, c0:c1] == i].max() >= wall_thickness_px
     small[0] = False  # label 0: the free cells themselves
-    return small[comp]
+    return lookup(small.view(np.uint8), comp).view(bool)
 
 
 def without_clutter(grid: OccupancyGrid, min_wall_length: float, *, furniture_size: float = 0.0,
@@ -354,7 +386,7 @@ def without_clutter(grid: OccupancyGrid, min_wall_length: float, *, furniture_si
     clutter = clutter_mask(grid.free, min_wall_length / res, furniture_px=furniture_size / res,
                            wall_thickness_px=wall_thickness / res, keep=keep)
     if clutter.any():
-        grid = OccupancyGrid(np.where(clutter, FREE, grid.cells).astype(np.int8), grid.resolution,
+        grid = OccupancyGrid(np.where(clutter, np.int8(FREE), grid.cells), grid.resolution,
                              grid.origin, grid.source)
     return grid, clutter
 

@@ -1,0 +1,77 @@
+"""Mask helpers of the default method against their plain definitions.
+
+``clutter_mask`` measures a bulky piece's thickness on the piece's own box
+(grown by one cell); it must equal the definition on the whole map: the
+largest value of the distance transform of the obstacles over the piece.
+"""
+
+import cv2
+import numpy as np
+import pytest
+from scipy import ndimage as ndi
+
+from topomap.segmentation import clutter_mask
+
+
+def _reference(free, max_extent_px, furniture_px, wall_thickness_px):
+    n, comp, stats, _ = cv2.connectedComponentsWithStats((~free).astype(np.uint8), connectivity=8)
+    extent = np.maximum(stats[:, cv2.CC_STAT_WIDTH], stats[:, cv2.CC_STAT_HEIGHT])
+    small = extent < max_extent_px
+    bulky = (extent < furniture_px) & ~small
+    bulky[0] = False
+    inside = cv2.distanceTransform((~free).astype(np.uint8), cv2.DIST_L2, 3)
+    radius = np.asarray(ndi.maximum(inside, comp, index=np.arange(n)))
+    small |= bulky & (2 * radius >= wall_thickness_px)
+    small[0] = False
+    return small[comp]
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_clutter_mask_is_its_definition(seed):
+    rng = np.random.default_rng(seed)
+    free = np.ones((150, 170), bool)
+    for _ in range(60):  # blocks of every size and thickness, some touching each other or the border
+        r, c = rng.integers(-5, 150), rng.integers(-5, 170)
+        free[max(r, 0):r + rng.integers(1, 30), max(c, 0):c + rng.integers(1, 30)] = False
+    free[rng.random(free.shape) < 0.01] = False  # specks
+    for furniture_px, wall_px in ((25, 4), (40, 9), (0, np.inf), (200, 1)):
+        got = clutter_mask(free, 8, furniture_px=furniture_px, wall_thickness_px=wall_px)
+        want = _reference(free, 8, furniture_px, wall_px)
+        assert got.dtype == want.dtype == bool
+        np.testing.assert_array_equal(got, want)
+        assert got[free].sum() == 0
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_close_by_distance_is_the_closing(seed):
+    from topomap.geometry import disk
+    from topomap.segmentation import _close_by_distance
+
+    rng = np.random.default_rng(seed)
+    free = rng.random((130, 170)) < rng.uniform(0.6, 0.97)
+    free[:, :3] = seed % 2 == 0  # obstacles on the image edge, or free cells there
+    for r in (2, 6, 12, 19):
+        want = cv2.morphologyEx((~free).astype(np.uint8), cv2.MORPH_CLOSE, disk(r),
+                                borderType=cv2.BORDER_CONSTANT, borderValue=0) > 0
+        np.testing.assert_array_equal(_close_by_distance(free, r), want)
+    assert not _close_by_distance(np.ones((20, 20), bool), 13).any()
+
+
+@pytest.mark.parametrize("resolution", [0.05, 0.02, 0.01])
+def test_free_mask_median_is_medianblur(resolution):
+    # a fine map: median windows wider than 5 cells take the box-count route
+    from topomap.geometry import disk, metres_to_px
+    from topomap.io import from_array
+    from topomap.options import TopomapOptions
+    from topomap.segmentation import preprocess_masks
+
+    rng = np.random.default_rng(int(resolution * 1000))
+    free = ndi.binary_opening(rng.random((160, 190)) < 0.8)
+    opts = TopomapOptions()
+    f, _, _ = preprocess_masks(from_array(free, resolution=resolution), opts)
+    er, med = metres_to_px(opts.erosion_radius, resolution), metres_to_px(opts.median_size, resolution)
+    ref = free.astype(np.uint8)
+    if er > 0:
+        ref = cv2.erode(ref, disk(er), borderType=cv2.BORDER_CONSTANT, borderValue=0)
+    k = med if med % 2 else med + 1
+    np.testing.assert_array_equal(f, cv2.medianBlur(ref * 255, k) > 127)

@@ -1,0 +1,84 @@
+"""cut_rooms' fill of the cells between pieces, cell for cell the general route.
+
+``rooms._fill_pieces`` grows only the cells without a seed and renumbers with
+one lookup table; it must give exactly what ``_rooms_first(fill_unlabeled(
+seed[pieces], free), min_cells)`` gives (labels, dtype and room count),
+including the cases where fill_unlabeled's watershed decides (a gap between
+two labels wider than 8 steps), where one label floods a wide gap, and free
+regions no seed reaches. Also: the lookup helper equals numpy indexing.
+"""
+
+import cv2
+import numpy as np
+import pytest
+from scipy import ndimage as ndi
+
+from topomap._fast import lookup
+from topomap.rooms import _fill_pieces, _rooms_first, fill_unlabeled
+
+
+def _case(rng, shape, small_share):
+    """A random free mask, its 4-connected pieces with a band of free cells cut out, and seeds
+    (some pieces unseeded, as cut_rooms does with pieces smaller than a room)."""
+    free = ndi.binary_opening(rng.random(shape) < 0.72, iterations=1)
+    cut = np.zeros(shape, bool)
+    for _ in range(rng.integers(1, 6)):  # wide bands: gaps of more than 8 cells between pieces
+        if rng.random() < 0.5:
+            r = rng.integers(0, shape[0])
+            cut[r:r + rng.integers(1, 25), :] = True
+        else:
+            c = rng.integers(0, shape[1])
+            cut[:, c:c + rng.integers(1, 25)] = True
+    whole = free & ~cut
+    n, pieces, stats, _ = cv2.connectedComponentsWithStats(whole.view(np.uint8), connectivity=4,
+                                                           ltype=cv2.CV_16U)
+    seed = rng.permutation(n).astype(np.int32)  # any numbering, 0 kept on the background
+    seed[seed == 0] = seed[0]
+    seed[0] = 0
+    seed[1:][rng.random(n - 1) < small_share] = 0
+    return free, pieces, seed, stats, free > whole
+
+
+@pytest.mark.parametrize("small_share", [0.0, 0.3, 0.8])
+@pytest.mark.parametrize("min_cells", [0, 1, 40])
+def test_fill_pieces_is_the_general_route(small_share, min_cells):
+    rng = np.random.default_rng(int(small_share * 10) * 100 + min_cells)
+    kinds = set()
+    for _ in range(12):
+        shape = tuple(int(v) for v in rng.integers(40, 140, size=2))
+        free, pieces, seed, stats, between = _case(rng, shape, small_share)
+        want, want_rooms = _rooms_first(fill_unlabeled(seed[pieces], free), min_cells)
+        got, got_rooms = _fill_pieces(pieces, seed, stats, free, between, min_cells)
+        assert got.dtype == want.dtype
+        np.testing.assert_array_equal(got, want)
+        assert got_rooms == want_rooms
+        kinds.add(bool((want == 0)[free].any()))
+    assert kinds == {False}  # every free cell labelled, as fill_unlabeled guarantees
+
+
+def test_fill_pieces_wide_gap_between_two_labels():
+    # two rooms with a 30-cell band of unseeded free cells between them: the watershed decides
+    free = np.ones((30, 90), bool)
+    pieces = np.zeros(free.shape, np.uint16)
+    pieces[:, :30] = 1
+    pieces[:, 60:] = 2
+    n, pieces, stats, _ = cv2.connectedComponentsWithStats(((pieces == 1) | (pieces == 2)).view(np.uint8),
+                                                           connectivity=4, ltype=cv2.CV_16U)
+    seed = np.arange(n, dtype=np.int32)
+    between = free & (pieces == 0)
+    want, want_rooms = _rooms_first(fill_unlabeled(seed[pieces], free), 0)
+    got, got_rooms = _fill_pieces(pieces, seed, stats, free, between, 0)
+    np.testing.assert_array_equal(got, want)
+    assert got_rooms == want_rooms == 2
+    assert set(np.unique(got[:, 30:60])) == {1, 2}
+
+
+@pytest.mark.parametrize("dtype", [np.uint8, np.uint16, np.int32, np.int64])
+def test_lookup_is_indexing(dtype):
+    rng = np.random.default_rng(3)
+    labels = rng.integers(0, 256 if dtype == np.uint8 else 300, size=(120, 130)).astype(dtype)
+    for table in (rng.permutation(300).astype(np.int32), rng.random(300).astype(np.float32),
+                  rng.integers(0, 255, 300).astype(np.uint8)):
+        got = lookup(table, labels)
+        assert got.dtype == table.dtype
+        np.testing.assert_array_equal(got, table[labels])
