@@ -738,11 +738,12 @@ def across_corridor(accepted, walls: list, depth_px: float) -> list:
     walls by less than that — pillars, wall columns, radiators, cupboards —
     is the corridor's own; a door across a corridor sits in a wall across
     it, which stands out farther."""
-    from .walls import across_walls
+    from .walls import WallIndex, across_walls
 
+    index = WallIndex(walls)
     kept = []
     for width, c in accepted:
-        if across_walls(c.ip1, c.ip2, walls, tol_px=depth_px):
+        if across_walls(c.ip1, c.ip2, index, tol_px=depth_px):
             c.status = ACROSS_CORRIDOR
         else:
             kept.append((width, c))

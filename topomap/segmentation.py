@@ -728,7 +728,8 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
                 ops = ops + D.opening_candidates(W.long_wall_gaps(
                     walls, search.free, lw, min_gap_px=opts.min_door_width / res,
                     max_gap_px=opts.max_door_width / res, depth_px=opts.alcove_depth / res), res)
-                ops = [(w, c) for w, c in ops if not W.across_walls(c.ip1, c.ip2, lw, tol_px=opts.wall_wander / res)]
+                lwi = W.WallIndex(lw)
+                ops = [(w, c) for w, c in ops if not W.across_walls(c.ip1, c.ip2, lwi, tol_px=opts.wall_wander / res)]
             segs = segs + D.suppress_duplicates(ops, res, kept=segs)
             cands = cands + [c for _, c in ops]
     if prior is not None:

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["wall_faces", "wall_lines", "straight_share", "wall_openings", "wall_directions", "long_walls",
-           "across_walls", "long_wall_gaps", "wall_mask"]
+           "across_walls", "WallIndex", "long_wall_gaps", "wall_mask"]
 
 
 def wall_faces(obstacle: np.ndarray, free: np.ndarray) -> np.ndarray:
@@ -379,25 +379,52 @@ def wall_mask(walls: list, shape, *, width_px: int = 5) -> np.ndarray:
     return m > 0
 
 
-def across_walls(p, q, walls: list, *, tol_px: float, min_angle: float = np.deg2rad(60.0)) -> bool:
+class WallIndex:
+    """Long walls (:func:`long_walls`) sorted by their offset along each of
+    the two main directions, for :func:`across_walls`: a query looks only at
+    the walls within its tolerance (time logarithmic in the walls)."""
+
+    def __init__(self, walls: list):
+        groups: dict = {}
+        for origin, u, n, runs in walls:
+            key = (round(float(u[0]), 9), round(float(u[1]), 9))
+            g = groups.setdefault(key, (u, n, [], [], []))
+            g[2].append(float(origin @ n))
+            g[3].append(runs[0][0])
+            g[4].append(runs[-1][1])
+        self.classes = []
+        for u, n, rho, t0, t1 in groups.values():
+            order = np.argsort(rho)
+            self.classes.append((np.asarray(u, float), np.asarray(n, float), np.asarray(rho)[order],
+                                 np.asarray(t0)[order], np.asarray(t1)[order]))
+
+    def __len__(self):
+        return sum(len(c[2]) for c in self.classes)
+
+
+def across_walls(p, q, walls, *, tol_px: float, min_angle: float = np.deg2rad(60.0)) -> bool:
     """Whether both ends of the segment ``p``-``q`` lie on long walls
     (:func:`long_walls`, within ``tol_px``, inside their span) that it
     crosses at ``min_angle`` or steeper: it spans a passage between two
-    walls, such as a corridor between its side walls."""
+    walls, such as a corridor between its side walls.
+
+    ``walls`` is a :class:`WallIndex` (or the list of walls, indexed on
+    every call)."""
+    if not isinstance(walls, WallIndex):
+        walls = WallIndex(walls)
     p, q = np.asarray(p, float), np.asarray(q, float)
     v = q - p
     d = v / max(float(np.hypot(*v)), 1e-9)
     hit = [False, False]
-    for origin, u, n, runs in walls:
+    for u, n, rho, t0, t1 in walls.classes:
         if abs(float(d @ u)) > np.cos(min_angle):
             continue
         for k, x in enumerate((p, q)):
             if hit[k]:
                 continue
-            off = float((x - origin) @ n)
-            t = float((x - origin) @ u)
-            if abs(off) <= tol_px and runs[0][0] - tol_px <= t <= runs[-1][1] + tol_px:
-                hit[k] = True
+            r, t = float(x @ n), float(x @ u)
+            lo, hi = np.searchsorted(rho, r - tol_px), np.searchsorted(rho, r + tol_px, side="right")
+            hit[k] = bool(((t0[lo:hi] - tol_px <= t) & (t <= t1[lo:hi] + tol_px)).any())
     return hit[0] and hit[1]
 
 
