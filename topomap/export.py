@@ -154,15 +154,19 @@ def _rings_json(rings) -> list:
 
     The same texts, faster: a room's outline has its corners on the map's
     cell edges, so its coordinates take few distinct values; each distinct
-    value (bit pattern: ``-0.0`` is not ``0.0``) is written once by
-    ``json.dumps``, and the texts are put together from those.
+    value (bit pattern: ``-0.0`` is not ``0.0``) is written once as
+    ``json.dumps`` writes it, and the texts are put together from those.
     """
     arrs = [np.asarray(c, float).reshape(-1, 2) for c in rings]
     if not arrs:
         return []
     xy = np.concatenate(arrs)
     bits, inv = np.unique(xy.view(np.int64), return_inverse=True)
-    words = np.array([json.dumps(v) for v in bits.view(np.float64).tolist()], dtype=object)[inv.reshape(xy.shape)]
+    vals = bits.view(np.float64)
+    words = np.array([float.__repr__(v) for v in vals.tolist()], dtype=object)  # json's own float text
+    for i in np.flatnonzero(~np.isfinite(vals)):
+        words[i] = json.dumps(float(vals[i]))  # NaN, Infinity, -Infinity
+    words = words[inv.reshape(xy.shape)]
     pairs = (words[:, 0] + ", " + words[:, 1]).tolist() if len(xy) else []
     out, k = [], 0
     for a in arrs:
