@@ -370,6 +370,7 @@ def graph_from_topology(topo: SkeletonTopology, *, radius: np.ndarray | None = N
             attrs["x"], attrs["y"] = float(wx[u]), float(wy[u])
         G.add_node(u - 1, **attrs)
     seen_direct = set()  # the direct edges are listed twice
+    edges = []
     for u, v, path in topo.edges:
         if path.shape[0] == 2:
             key = (min(u, v), max(u, v))
@@ -379,10 +380,21 @@ def graph_from_topology(topo: SkeletonTopology, *, radius: np.ndarray | None = N
         if u > v:
             u, v = v, u
             path = path[::-1]
-        d = np.diff(path, axis=0)
-        attrs = dict(path=path, start=u - 1, length=float(np.sqrt((d * d).sum(1)).sum()) * res)
+        edges.append((u, v, path))
+    if edges:
+        # every path's step lengths and clearances at once; each edge's length is still the sum
+        # over its own steps (the same float sum as on its own array)
+        P = np.concatenate([path for _, _, path in edges])
+        first = np.cumsum([0] + [len(path) for _, _, path in edges])
+        d = np.diff(P, axis=0)
+        step = np.sqrt((d * d).sum(1))
         if radius is not None:
-            rad = radius[path[:, 0], path[:, 1]].astype(float) * res
+            rad_all = radius[P[:, 0], P[:, 1]].astype(float) * res
+    for k, (u, v, path) in enumerate(edges):
+        a, b = first[k], first[k + 1]
+        attrs = dict(path=path, start=u - 1, length=float(step[a:b - 1].sum() if b > a else 0.0) * res)
+        if radius is not None:
+            rad = rad_all[a:b].copy()
             attrs["radius"] = rad
             attrs["radius_min"] = float(rad.min())
         G.add_edge(u - 1, v - 1, **attrs)
