@@ -178,11 +178,11 @@ def cut_rooms(grid: OccupancyGrid, segments, *, space=None, min_room_cells: int 
 
     free = grid.free
     space = free if space is None else (space & free)
-    cut = np.zeros_like(free)  # stage "cutting rooms" of the Voronoi methods
+    # stage "cutting rooms" of the Voronoi methods: the door segments' cells taken out of the space
     lines = [line_pixels(p, q, free.shape) for p, q in segments]
+    whole = space.copy()
     for rc in lines:
-        cut[rc] = True
-    whole = space & ~cut
+        whole[rc] = False
     try:  # 16-bit labels when they fit (OpenCV refuses more): the lookups on them are faster
         n, pieces, stats, _ = cv2.connectedComponentsWithStats(whole.view(np.uint8), connectivity=4,
                                                                ltype=cv2.CV_16U)

@@ -36,7 +36,9 @@ def skeletonize(mask: np.ndarray) -> np.ndarray:
 
     Uses :func:`skimage.morphology.skeletonize` (Zhang's method, the closest
     available equivalent of MATLAB's ``bwskel`` the paper uses) on the
-    bounding box of the mask only.
+    bounding box of the mask only; a large mask with wide areas gets the
+    same thinning from :func:`_thin`, which visits only the pixels whose
+    neighbourhood changed.
     """
     from skimage.morphology import skeletonize as _sk
 
@@ -48,8 +50,72 @@ def skeletonize(mask: np.ndarray) -> np.ndarray:
     cols = np.flatnonzero(mask.any(axis=0))
     r0, r1 = max(rows[0] - 1, 0), min(rows[-1] + 2, mask.shape[0])
     c0, c1 = max(cols[0] - 1, 0), min(cols[-1] + 2, mask.shape[1])
-    out[r0:r1, c0:c1] = _sk(mask[r0:r1, c0:c1])
+    box = mask[r0:r1, c0:c1]
+    # a large mask with wide areas (free space: many passes, most of the image long finished)
+    # is thinned pixel by pixel from the boundary inwards; skimage scans the whole box every pass
+    wide = box.size >= _THIN_SPARSE_CELLS and np.count_nonzero(box) >= 0.15 * box.size
+    out[r0:r1, c0:c1] = _thin(box) if wide else _sk(box)
     return out
+
+
+#: Size (cells of its bounding box) from which a mask with wide areas is thinned by :func:`_thin`.
+_THIN_SPARSE_CELLS = 300_000
+#: The neighbourhood table of scikit-image's Zhang thinning (``skeletonize``): for the 8 neighbours
+#: coded NW 1, N 2, NE 4, E 8, SE 16, S 32, SW 64, W 128, whether a pixel goes in the first pass (1),
+#: the second (2) or both (3).
+_ZHANG = np.frombuffer(bytes.fromhex(
+    "0000000100000103000003010100010300000000000000000200020003000303000000000000000003000000000000000000"
+    "0000000000000200000003000202000000000000000000000000000000000000000000000000000000000000000002000000"
+    "0000000002000000020000000300000000000000030000000300020000000301000001030000000000000001000000000000"
+    "0000000000000000000103010000000000000000000000000000020000000000000000000000000000000203010300000103"
+    "0000000000000001000000000000000000000000000000000203000100000001000000000000000003030001000000000202"
+    "000002000000"), np.uint8)
+_KERNEL = np.array([[1, 2, 4], [128, 0, 8], [64, 32, 16]], np.float32)
+
+
+def _thin(mask: np.ndarray) -> np.ndarray:
+    """:func:`skimage.morphology.skeletonize` of ``mask`` (Zhang's two-pass thinning, its table),
+    visiting only the pixels whose neighbourhood changed.
+
+    Each pass removes, all at once, the set pixels whose neighbourhood code (kept up to date as
+    pixels go) the pass's table marks; a pixel is looked at again in a pass of either kind only
+    after one of its neighbours went, so the passes remove exactly what skimage's full scans
+    remove, and the thinning ends when nothing can change any more.
+    """
+    import cv2
+
+    H, W = mask.shape
+    Wp = W + 2
+    img = np.zeros((H + 2, W + 2), np.uint8)
+    img[1:-1, 1:-1] = mask
+    flat = img.ravel()
+    code = cv2.filter2D(img, cv2.CV_8U, _KERNEL, borderType=cv2.BORDER_CONSTANT)
+    start = np.flatnonzero((code != 255) & (img > 0))
+    code = code.ravel()
+    offs = np.array([-Wp - 1, -Wp, -Wp + 1, 1, Wp + 1, Wp, Wp - 1, -1])  # NW N NE E SE S SW W
+    back = np.array([16, 32, 64, 128, 1, 2, 4, 8], np.uint8)  # a pixel's bit in that neighbour's code
+    remove = (np.isin(_ZHANG, (1, 3)), np.isin(_ZHANG, (2, 3)))
+    slot = np.zeros(flat.size, np.int32)
+    queue = [start, start]  # per kind of pass, the pixels to look at in its next pass
+    kind = 0
+    while queue[0].size or queue[1].size:
+        c, queue[kind] = queue[kind], start[:0]
+        if c.size:
+            k = np.arange(c.size, dtype=np.int32)
+            slot[c] = k
+            c = c[slot[c] == k]  # each pixel once
+            c = c[flat[c] == 1]
+            gone = c[remove[kind][code[c]]]
+            if gone.size:
+                flat[gone] = 0
+                nb = gone[:, None] + offs
+                for i in range(8):
+                    code[nb[:, i]] -= back[i]
+                nb = nb.ravel()
+                nb = nb[flat[nb] == 1]
+                queue = [np.concatenate([queue[0], nb]), np.concatenate([queue[1], nb])]
+        kind ^= 1
+    return img[1:-1, 1:-1].astype(bool)
 
 
 def neighbour_count(mask: np.ndarray) -> np.ndarray:
@@ -304,6 +370,7 @@ def graph_from_topology(topo: SkeletonTopology, *, radius: np.ndarray | None = N
             attrs["x"], attrs["y"] = float(wx[u]), float(wy[u])
         G.add_node(u - 1, **attrs)
     seen_direct = set()  # the direct edges are listed twice
+    edges = []
     for u, v, path in topo.edges:
         if path.shape[0] == 2:
             key = (min(u, v), max(u, v))
@@ -313,10 +380,21 @@ def graph_from_topology(topo: SkeletonTopology, *, radius: np.ndarray | None = N
         if u > v:
             u, v = v, u
             path = path[::-1]
-        d = np.diff(path, axis=0)
-        attrs = dict(path=path, start=u - 1, length=float(np.sqrt((d * d).sum(1)).sum()) * res)
+        edges.append((u, v, path))
+    if edges:
+        # every path's step lengths and clearances at once; each edge's length is still the sum
+        # over its own steps (the same float sum as on its own array)
+        P = np.concatenate([path for _, _, path in edges])
+        first = np.cumsum([0] + [len(path) for _, _, path in edges])
+        d = np.diff(P, axis=0)
+        step = np.sqrt((d * d).sum(1))
         if radius is not None:
-            rad = radius[path[:, 0], path[:, 1]].astype(float) * res
+            rad_all = radius[P[:, 0], P[:, 1]].astype(float) * res
+    for k, (u, v, path) in enumerate(edges):
+        a, b = first[k], first[k + 1]
+        attrs = dict(path=path, start=u - 1, length=float(step[a:b - 1].sum() if b > a else 0.0) * res)
+        if radius is not None:
+            rad = rad_all[a:b].copy()
             attrs["radius"] = rad
             attrs["radius_min"] = float(rad.min())
         G.add_edge(u - 1, v - 1, **attrs)
