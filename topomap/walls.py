@@ -97,59 +97,67 @@ def _sample_cells(shape, starts, dirs, n, offsets):
     return np.clip(r, 0, H - 1), np.clip(c, 0, W - 1), inside
 
 
-def _samples(shape, start, d, n, offsets):
-    """:func:`_sample_cells` from one ``start`` along one ``d``: ``(len(offsets), n)``."""
-    r, c, inside = _sample_cells(shape, np.asarray(start, float)[None], np.asarray(d, float)[None], n, offsets)
-    return r[0], c[0], inside[0]
+def _perp(d):
+    """The normals ``(-d_c, d_r)`` of the rows of ``d``."""
+    return np.stack([-d[:, 1], d[:, 0]], 1)
 
 
-def _depth_ok(obstacle, p, q, depth_px) -> bool:
-    """Whether the space on both sides of the segment ``p``-``q`` reaches at
-    least ``depth_px`` from it, perpendicular to it, along one of three
-    probes (at a quarter, half and three quarters of its length)."""
-    d = (q - p) / max(np.hypot(*(q - p)), 1e-9)
-    n = np.array([-d[1], d[0]])
-    k = max(int(np.ceil(depth_px)), 1)
-    return all(any(_free_run(obstacle, p + f * (q - p), side, k) == k for f in (0.25, 0.5, 0.75))
-               for side in (n, -n))
+def _free_runs(obstacle, starts, dirs, n):
+    """Samples from each row of ``starts`` along the row of ``dirs`` (at most
+    ``n``) before the first obstacle cell or the map's edge: ``(E,)``."""
+    r, c, inside = _sample_cells(obstacle.shape, starts, dirs, n, [0])
+    stop = obstacle[r[:, 0], c[:, 0]] | ~inside[:, 0]
+    return np.where(stop.any(axis=1), np.argmax(stop, axis=1), n)
 
 
-def _free_run(obstacle, start, d, n) -> int:
-    """Samples from ``start`` along ``d`` (at most ``n``) before the first
-    obstacle cell or the map's edge."""
-    rr, cc, inside = _samples(obstacle.shape, start, d, n, [0])
-    stop = np.flatnonzero(obstacle[rr[0], cc[0]] | ~inside[0])
-    return int(stop[0]) if stop.size else n
+def _face_runs(faces, starts, dirs, n, offsets):
+    """Whether a wall face runs on past each row of ``starts`` along the row
+    of ``dirs`` for ``n`` samples (within the band of ``offsets``), at 70 %
+    of them at least: ``(E,)`` bool."""
+    r, c, inside = _sample_cells(faces.shape, starts, dirs, n, offsets)
+    return (faces[r, c] & inside).any(axis=1).mean(axis=1) >= 0.7
 
 
-def _spans_passage(obstacle, p, q, depth_px, slack: float = 1.25) -> bool:
-    """Whether the segment ``p``-``q`` lies across a passage as wide as it:
-    on both sides, somewhere within ``depth_px`` of it, the free space along
-    the segment's direction is at most ``slack`` times its length (a
-    corridor running on through the gap; a room opening off a corridor's
-    wall has the whole corridor beside it)."""
+def _depth_ok(obstacle, p, q, depth_px):
+    """Whether the space on both sides of each segment ``p``-``q`` (rows of
+    ``(E, 2)`` arrays) reaches at least ``depth_px`` from it, perpendicular
+    to it, along one of three probes (at a quarter, half and three quarters
+    of its length): ``(E,)`` bool."""
+    p, q = np.atleast_2d(np.asarray(p, float)), np.atleast_2d(np.asarray(q, float))
     v = q - p
-    L = float(np.hypot(*v))
-    d = v / max(L, 1e-9)
-    n = np.array([-d[1], d[0]])
-    mid = (p + q) / 2
-    cap = int(np.ceil(slack * L)) + 2
+    n = _perp(v / np.maximum(np.hypot(*v.T), 1e-9)[:, None])
+    k = max(int(np.ceil(depth_px)), 1)
+    ok = np.ones(len(p), bool)
     for side in (n, -n):
-        narrow = False
+        ok &= np.any([_free_runs(obstacle, p + f * v, side, k) == k for f in (0.25, 0.5, 0.75)], axis=0)
+    return ok
+
+
+def _spans_passage(obstacle, p, q, depth_px, slack: float = 1.25):
+    """Whether each segment ``p``-``q`` (rows of ``(E, 2)`` arrays) lies
+    across a passage as wide as it: on both sides, somewhere within
+    ``depth_px`` of it, the free space along the segment's direction is at
+    most ``slack`` times its length (a corridor running on through the gap;
+    a room opening off a corridor's wall has the whole corridor beside it):
+    ``(E,)`` bool."""
+    p, q = np.atleast_2d(np.asarray(p, float)), np.atleast_2d(np.asarray(q, float))
+    v = q - p
+    L = np.hypot(*v.T)
+    d = v / np.maximum(L, 1e-9)[:, None]
+    n = _perp(d)
+    mid = (p + q) / 2
+    cap = np.ceil(slack * L).astype(int) + 2
+    top = int(cap.max()) if cap.size else 1
+    out = np.ones(len(p), bool)
+    for side in (n, -n):
+        narrow = np.zeros(len(p), bool)
         for t in (0.25 * depth_px, 0.5 * depth_px, 0.75 * depth_px, depth_px):
             c = mid + t * side
-            w = _free_run(obstacle, c - d, -d, cap) + _free_run(obstacle, c, d, cap) + 1
+            w = (np.minimum(_free_runs(obstacle, c - d, -d, top), cap)
+                 + np.minimum(_free_runs(obstacle, c, d, top), cap) + 1)
             narrow |= w <= slack * L
-        if not narrow:
-            return False
-    return True
-
-
-def _face_runs(faces, start, d, n, offsets) -> bool:
-    """Whether a wall face runs on past ``start`` along ``d`` for ``n``
-    samples (within the band of ``offsets``), at 70 % of them at least."""
-    rr, cc, inside = _samples(faces.shape, start, d, n, offsets)
-    return bool((faces[rr, cc] & inside).any(axis=0).mean() >= 0.7)
+        out &= narrow
+    return out
 
 
 def _gaps(obstacle, free, segs, back, n_gap, offsets, min_gap_px, max_gap_px, chunk: int = 1024):
@@ -255,32 +263,38 @@ def wall_openings(obstacle: np.ndarray, free: np.ndarray, *, min_wall_px: float,
     n_gap = int(np.ceil(max_gap_px)) + back + 1
     n_side = max(int(np.ceil(side_px)), 1)
     offsets = np.arange(-band_px, band_px + 1)
+    found = list(_gaps(obstacle, free, segs, back, n_gap, offsets, min_gap_px, max_gap_px))
+    if not found:
+        return []
+    end = np.array([g[0] for g in found])
+    d = np.array([g[1] for g in found])
+    s0 = np.array([g[2] for g in found])
+    e0 = np.array([g[3] for g in found])
+    start = end - (back + 1) * d
+    gap = e0 - s0 + 1
+    p = start + s0[:, None] * d            # last wall sample before each gap
+    far = start + (e0 + 1)[:, None] * d    # first wall sample after it
+    perp = _perp(d)
+    crossed = [_face_runs(faces, x - perp, perp, n_side, offsets) & _face_runs(faces, x + perp, -perp, n_side, offsets)
+               for x in (p, far)]
+    goes_on = _face_runs(faces, far - d, d, n_side, offsets)
+    # no wall end where the piece's end lies on a wall crossing its line; where
+    # the wall goes on, a far end on a crossing wall makes the gap a passage's
+    # width; where it does not, only a door-wide gap ending on a wall is kept
+    ok = ~crossed[0] & np.where(goes_on, ~crossed[1], crossed[1] & (gap <= beside_px))
+    if depth_px > 0 and ok.any():
+        k = np.flatnonzero(ok)
+        ok[k] = _depth_ok(obstacle, p[k], far[k], depth_px)
+        k = np.flatnonzero(ok)
+        if k.size:
+            ok[k] = ~_spans_passage(obstacle, p[k], far[k], depth_px)
     out, seen = [], set()
-    for end, d, s0, e0 in _gaps(obstacle, free, segs, back, n_gap, offsets, min_gap_px, max_gap_px):
-        start = end - (back + 1) * d
-        gap = e0 - s0 + 1
-        p = start + s0 * d            # last wall sample before the gap
-        far = start + (e0 + 1) * d    # first wall sample after it
-        perp = np.array([-d[1], d[0]])
-        crossed = [_face_runs(faces, q - perp, perp, n_side, offsets)
-                   and _face_runs(faces, q + perp, -perp, n_side, offsets) for q in (p, far)]
-        if crossed[0]:
-            continue  # the wall piece's end lies on a wall that crosses its line: no wall end
-        if _face_runs(faces, far - d, d, n_side, offsets):
-            if crossed[1]:
-                # the far end lies on a wall face that crosses the line
-                # too: the gap is the width of a passage, not a doorway
-                continue
-        elif not (crossed[1] and gap <= beside_px):
-            continue  # neither does the wall go on, nor does a door-wide gap end on a wall
-        if depth_px > 0 and (not _depth_ok(obstacle, p, far, depth_px)
-                             or _spans_passage(obstacle, p, far, depth_px)):
-            continue
-        key = tuple(np.rint(np.concatenate([np.minimum(p, far), np.maximum(p, far)])).astype(int))
+    for i in np.flatnonzero(ok):
+        key = tuple(np.rint(np.concatenate([np.minimum(p[i], far[i]), np.maximum(p[i], far[i])])).astype(int))
         if key in seen:
             continue
         seen.add(key)
-        out.append((p, far))
+        out.append((p[i], far[i]))
     return out
 
 
@@ -463,7 +477,7 @@ def long_wall_gaps(obstacle: np.ndarray, free: np.ndarray, walls: list, *, min_g
                 continue
             k = np.flatnonzero(fr)
             p, q = origin + (ts[k[0]] - 1) * u, origin + (ts[k[-1]] + 1) * u
-            if np.hypot(*(q - p)) < min_gap_px or not _depth_ok(obstacle, p, q, depth_px):
+            if np.hypot(*(q - p)) < min_gap_px or not _depth_ok(obstacle, p, q, depth_px)[0]:
                 continue
             out.append((p, q))
     return out
