@@ -477,7 +477,9 @@ def long_wall_gaps(obstacle: np.ndarray, free: np.ndarray, walls: list, *, min_g
                 continue
             k = np.flatnonzero(fr)
             p, q = origin + (ts[k[0]] - 1) * u, origin + (ts[k[-1]] + 1) * u
-            if np.hypot(*(q - p)) < min_gap_px or not _depth_ok(obstacle, p, q, depth_px)[0]:
-                continue
-            out.append((p, q))
-    return out
+            if np.hypot(*(q - p)) >= min_gap_px:
+                out.append((p, q))
+    if not out:
+        return out
+    deep = _depth_ok(obstacle, np.array([p for p, _ in out]), np.array([q for _, q in out]), depth_px)
+    return [pq for pq, ok in zip(out, deep) if ok]
