@@ -86,7 +86,9 @@ class Intermediates:
     Notes
     -----
     For ``"topomap"`` the masks and clearances are those of the map with the
-    clutter made free (the map doors are searched in).
+    clutter made free (the map doors are searched in). The default method
+    works on the bounding box of the free space; its images are placed on
+    the whole map when first read.
     """
 
     free_mask: np.ndarray
@@ -98,6 +100,24 @@ class Intermediates:
     closed_gaps: Optional[np.ndarray] = None
     wall_lines: Optional[np.ndarray] = None
     straight_share: Optional[float] = None
+
+    #: The images that :func:`uncrop` places back on the whole map.
+    IMAGES = ("free_mask", "occupied_mask", "clearance", "occupied_clearance", "clutter", "closed_gaps")
+
+    def _place_later(self, shape, box) -> None:
+        """Hold the images as crops ``box`` of a map of ``shape``: each is
+        placed on the whole map when first read (most jobs never read them)."""
+        self.__dict__["_crops"] = {n: self.__dict__.pop(n) for n in self.IMAGES}
+        self.__dict__["_box"] = (shape, box)
+
+    def __getattr__(self, name):
+        crops = self.__dict__.get("_crops")
+        if crops is None or name not in crops:
+            raise AttributeError(name)
+        shape, box = self.__dict__["_box"]
+        value = _paste(crops.pop(name), shape, box)
+        self.__dict__[name] = value
+        return value
 
 
 @dataclass
@@ -527,8 +547,7 @@ def uncrop(seg: Segmentation, full: OccupancyGrid, box) -> Segmentation:
                 setattr(c, name, np.asarray(val, float) + off)
     if seg.intermediates is not None:
         im = seg.intermediates
-        for name in ("free_mask", "occupied_mask", "clearance", "occupied_clearance", "clutter", "closed_gaps"):
-            setattr(im, name, _paste(getattr(im, name), full.shape, box))
+        im._place_later(full.shape, box)
         if im.wall_lines is not None:
             im.wall_lines = im.wall_lines + np.array([r0, c0, r0, c0], float)
     seg.grid = full
