@@ -69,7 +69,7 @@ UNKNOWN = -1
 #: header before any pixel is decoded; larger maps raise
 #: :class:`~topomap.errors.MapTooLargeError`. Read at call time, so it can be
 #: changed (``topomap.io.MAX_CELLS = ...``).
-MAX_CELLS = 75_000_000
+MAX_CELLS = 55_000_000
 
 #: Smallest and largest cell size accepted, metres per cell (1 mm and 10 m).
 #: The methods' options are lengths in metres, so their kernels grow as
