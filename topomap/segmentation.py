@@ -641,6 +641,22 @@ def _wall_stage(search: OccupancyGrid, opts):
     return faces, lines, lw
 
 
+def _straight_share(search: OccupancyGrid, faces, lines, opts) -> float:
+    """Stage "walls": the share of wall faces on straight lines
+    (:func:`topomap.walls.straight_share`), measured on a grid of
+    ``opts.wall_cell`` cells when the map's cells are smaller (``faces`` and
+    ``lines`` are the map's own, used as they are otherwise)."""
+    from . import skeleton as S
+    from . import walls as W
+
+    k = skeleton_factor(opts.wall_cell, search.resolution)
+    if k == 1:
+        return W.straight_share(faces, lines)
+    free = S.downsample(search.free, k, keep="all")
+    coarse = W.wall_faces(~free, free)
+    return W.straight_share(coarse, W.wall_lines(coarse, min_length_px=opts.min_wall_length / (search.resolution * k)))
+
+
 def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, *, prior=None,
                     **kwargs) -> Segmentation:
     """Segment ``grid`` with topomap's default method.
@@ -706,7 +722,7 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
         search, closed = close_wall_gaps(looked, opts.wall_gap)
     with T("walls"):
         faces, lines, lw = _wall_stage(search, opts)
-        straight = W.straight_share(faces, lines)
+        straight = _straight_share(search, faces, lines, opts)
         opts = opts.resolved(res, straight)  # rise and furniture measured on the map
     if opts.furniture_size > furniture:
         with T("furniture"):
