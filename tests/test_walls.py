@@ -189,11 +189,7 @@ def test_wall_directions_follow_a_rotated_building():
     assert min(abs(th - 20), abs(th - 70)) <= 2.5
 
 
-@pytest.mark.parametrize("factor", [
-    2, pytest.param(4, marks=pytest.mark.xfail(strict=True, reason=(
-        "at 0.0125 m/px the example office gives 9 rooms instead of 8: an 'opening in a wall' of 2.36 m at "
-        "(2.7, 1.4) m cuts the corridor; the opening search samples in cells (a one-cell band, Hough bins of "
-        "2 cells), so on a grid four times finer it sees a gap the 0.05 m map does not have")))])
+@pytest.mark.parametrize("factor", [2, 4])
 def test_the_same_rooms_at_a_finer_resolution(factor):
     import topomap
     from topomap.io import OccupancyGrid

@@ -171,13 +171,16 @@ class TopomapOptions(_Options):
         floor plans of the benchmark (0.77-0.98, furnished or not) and its
         laser SLAM maps (0.14-0.67).
     wall_cell : float
-        The share of straight wall faces is measured on a grid of cells this
-        size (m) when the map's own cells are smaller: 0.05 m, the cell size
-        of the maps the ``straight_walls`` threshold was measured on. A
-        straight wall is straight to within a cell of that size whatever the
-        map's resolution, while a finer map draws every step of a diagonal
-        and every bump of a wall a laser scanner saw (the same plan at
-        0.0125 m/px measured 0.63 on its own grid, 0.92 at 0.05 m).
+        Walls — their straight faces and the share of them on lines, the
+        openings in them and the long walls — are found on a grid of cells
+        this size (m) when the map's own cells are smaller: 0.05 m, the cell
+        size of the maps the ``straight_walls`` threshold and the openings
+        were measured on. A straight wall is straight to within a cell of
+        that size whatever the map's resolution, while a finer map draws
+        every step of a diagonal and every bump of a wall a laser scanner
+        saw (the same plan at 0.0125 m/px measured 0.63 on its own grid,
+        0.89 on 0.05 m cells). Door posts, bottlenecks and rooms stay on the
+        map's own cells.
     reach : float
         How far (m) along the skeleton the rise is looked for: 1.5 m, a
         door's frame and the first step into the room behind it.

@@ -626,35 +626,72 @@ def segment_paper(grid: OccupancyGrid, options: PaperOptions | None = None, **kw
     return seg
 
 
-def _wall_stage(search: OccupancyGrid, opts):
-    """Stage "walls": the wall faces of ``search`` (every non-free cell
-    bounds free space), their straight lines (:func:`topomap.walls.wall_lines`)
-    and the long walls among them (:func:`topomap.walls.long_walls`; none
-    when ``opts.long_wall`` is 0)."""
-    from . import walls as W
+class _Walls:
+    """Stage "walls" of the default method on the grid walls are measured on:
+    the map's own cells, or cells of ``opts.wall_cell`` when the map's are
+    smaller (``k`` map cells per side), so that a wall's straightness, its
+    gaps and its lines are judged in metres whatever the resolution.
 
-    res = search.resolution
-    faces = W.wall_faces(~search.free, search.free)
-    lines = W.wall_lines(faces, min_length_px=opts.min_wall_length / res)
-    lw = (W.long_walls(lines, max_gap_px=opts.max_door_width / res, offset_px=opts.wall_wander / res,
-                       min_span_px=opts.long_wall / res) if opts.long_wall > 0 else [])
-    return faces, lines, lw
+    ``faces``, ``lines`` and ``lw`` (:func:`topomap.walls.long_walls`) are in
+    the cells of that grid; :meth:`fine` turns its points into map cells."""
 
+    def __init__(self, search: OccupancyGrid, opts):
+        from . import skeleton as S
+        from . import walls as W
 
-def _straight_share(search: OccupancyGrid, faces, lines, opts) -> float:
-    """Stage "walls": the share of wall faces on straight lines
-    (:func:`topomap.walls.straight_share`), measured on a grid of
-    ``opts.wall_cell`` cells when the map's cells are smaller (``faces`` and
-    ``lines`` are the map's own, used as they are otherwise)."""
-    from . import skeleton as S
-    from . import walls as W
+        self.k = k = skeleton_factor(opts.wall_cell, search.resolution)
+        self.res = res = search.resolution * k
+        self.free = S.downsample(search.free, k, keep="all") if k > 1 else search.free
+        self.obstacle = ~self.free
+        self.faces = W.wall_faces(self.obstacle, self.free)
+        self.lines = W.wall_lines(self.faces, min_length_px=opts.min_wall_length / res)
+        self.lw = (W.long_walls(self.lines, max_gap_px=opts.max_door_width / res,
+                                offset_px=opts.wall_wander / res, min_span_px=opts.long_wall / res)
+                   if opts.long_wall > 0 else [])
+        self.straight = W.straight_share(self.faces, self.lines)
 
-    k = skeleton_factor(opts.wall_cell, search.resolution)
-    if k == 1:
-        return W.straight_share(faces, lines)
-    free = S.downsample(search.free, k, keep="all")
-    coarse = W.wall_faces(~free, free)
-    return W.straight_share(coarse, W.wall_lines(coarse, min_length_px=opts.min_wall_length / (search.resolution * k)))
+    def fine(self, pts):
+        """Points ``(..., 2)`` of the wall grid in the map's cells."""
+        return np.asarray(pts, float) * self.k + (self.k - 1) / 2
+
+    def fine_lines(self):
+        """The straight wall faces ``(r1, c1, r2, c2)`` in the map's cells."""
+        return self.fine(np.asarray(self.lines, float).reshape(-1, 2, 2)).reshape(-1, 4)
+
+    def fine_walls(self):
+        """The long walls in the map's cells."""
+        from . import walls as W
+
+        return W.scale_walls(self.lw, self.k)
+
+    def mask(self, shape):
+        """The long walls' cells (:func:`topomap.walls.wall_mask`) on a map grid of ``shape``."""
+        from . import walls as W
+
+        m = W.wall_mask(self.lw, self.free.shape)
+        if self.k > 1:
+            m = np.kron(m, np.ones((self.k, self.k), bool))[:shape[0], :shape[1]]
+        return m
+
+    def openings(self, opts) -> list:
+        """Openings in walls (:func:`topomap.walls.wall_openings`) and, with
+        long walls, their gaps (:func:`topomap.walls.long_wall_gaps`), without
+        those across a corridor, as segments in the map's cells."""
+        from . import walls as W
+
+        res = self.res
+        ops = W.wall_openings(self.obstacle, self.free, min_wall_px=opts.min_wall_length / res,
+                              min_gap_px=opts.min_door_width / res, max_gap_px=opts.max_door_width / res,
+                              side_px=opts.min_door_width / res, depth_px=opts.alcove_depth / res, faces=self.faces,
+                              lines=self.lines, beside_px=opts.beside_wall / res)
+        if self.lw:
+            # long straight walls: the gaps in them are openings, and an
+            # opening from one of them to another spans a corridor
+            ops = ops + W.long_wall_gaps(self.obstacle, self.free, self.lw, min_gap_px=opts.min_door_width / res,
+                                         max_gap_px=opts.max_door_width / res, depth_px=opts.alcove_depth / res)
+            index = W.WallIndex(self.lw)
+            ops = [(p, q) for p, q in ops if not W.across_walls(p, q, index, tol_px=opts.wall_wander / res)]
+        return [(self.fine(p), self.fine(q)) for p, q in ops]
 
 
 def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, *, prior=None,
@@ -721,8 +758,8 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
                                           wall_thickness=opts.wall_thickness)
         search, closed = close_wall_gaps(looked, opts.wall_gap)
     with T("walls"):
-        faces, lines, lw = _wall_stage(search, opts)
-        straight = _straight_share(search, faces, lines, opts)
+        wl = _Walls(search, opts)
+        straight = wl.straight
         opts = opts.resolved(res, straight)  # rise and furniture measured on the map
     if opts.furniture_size > furniture:
         with T("furniture"):
@@ -731,11 +768,12 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
             looked2, clutter2 = without_clutter(rooms_grid, opts.min_wall_length,
                                                 furniture_size=opts.furniture_size,
                                                 wall_thickness=opts.wall_thickness,
-                                                keep=W.wall_mask(_wall_stage(looked, opts)[2], looked.free.shape))
+                                                keep=_Walls(looked, opts).mask(looked.free.shape))
             if clutter2 is not None and (clutter is None or not np.array_equal(clutter2, clutter)):
                 looked, clutter = looked2, clutter2
                 search, closed = close_wall_gaps(looked, opts.wall_gap)
-                faces, lines, lw = _wall_stage(search, opts)
+                wl = _Walls(search, opts)
+    lw = wl.fine_walls()
     with T("preprocess"):
         space = search.free if clutter is None else search.free & ~clutter
         f, d_free, occ = preprocess_masks(search, opts)
@@ -754,20 +792,7 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
         segs = D.suppress_duplicates(accepted, res)
     if opts.openings:
         with T("openings"):
-            ops = D.opening_candidates(W.wall_openings(
-                walls, search.free, min_wall_px=opts.min_wall_length / res,
-                min_gap_px=opts.min_door_width / res, max_gap_px=opts.max_door_width / res,
-                side_px=opts.min_door_width / res, depth_px=opts.alcove_depth / res, faces=faces, lines=lines,
-                beside_px=opts.beside_wall / res),
-                res)
-            if lw:
-                # long straight walls: the gaps in them are openings, and an
-                # opening from one of them to another spans a corridor
-                ops = ops + D.opening_candidates(W.long_wall_gaps(
-                    walls, search.free, lw, min_gap_px=opts.min_door_width / res,
-                    max_gap_px=opts.max_door_width / res, depth_px=opts.alcove_depth / res), res)
-                lwi = W.WallIndex(lw)
-                ops = [(w, c) for w, c in ops if not W.across_walls(c.ip1, c.ip2, lwi, tol_px=opts.wall_wander / res)]
+            ops = D.opening_candidates(wl.openings(opts), res)
             segs = segs + D.suppress_duplicates(ops, res, kept=segs)
             cands = cands + [c for _, c in ops]
     if prior is not None:
@@ -778,7 +803,7 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
         wide = d_free >= 0.5 * opts.wall_gap / res - 1e-6 if opts.wall_gap > 0 else None
         labels, door_objs, n_rooms = cut_rooms(rooms_grid, segs, space=space, min_room_cells=min_cells, wide=wide)
     im = Intermediates(free_mask=f, occupied_mask=occ, clearance=d_free, occupied_clearance=d_occ,
-                       clutter=clutter, skeleton_factor=factor, closed_gaps=closed, wall_lines=lines,
+                       clutter=clutter, skeleton_factor=factor, closed_gaps=closed, wall_lines=wl.fine_lines(),
                        straight_share=straight)
     seg = Segmentation(grid=rooms_grid, labels=labels, doors=door_objs, method="topomap",
                        params=opts.as_params(), threshold=thr_px * res, free_graph=Gf, occupied_graph=Go,

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["wall_faces", "wall_lines", "straight_share", "wall_openings", "wall_directions", "long_walls",
-           "across_walls", "WallIndex", "long_wall_gaps", "wall_mask"]
+           "across_walls", "WallIndex", "long_wall_gaps", "wall_mask", "scale_walls"]
 
 
 def wall_faces(obstacle: np.ndarray, free: np.ndarray) -> np.ndarray:
@@ -377,6 +377,21 @@ def long_walls(lines: np.ndarray, *, max_gap_px: float, offset_px: float, min_sp
                 span = runs[-1][1] - runs[0][0]
                 if span >= min_span_px and sum(r[1] - r[0] for r in runs) >= support * span:
                     out.append((r0 * n, u, n, runs))
+    return out
+
+
+def scale_walls(walls: list, k: int) -> list:
+    """Long walls (:func:`long_walls`) found on a grid ``k`` times coarser,
+    in the cells of the fine grid (a coarse cell's centre is the centre of
+    its ``k x k`` fine cells)."""
+    if k == 1:
+        return walls
+    h = (k - 1) / 2
+    out = []
+    for origin, u, n, runs in walls:
+        rho = k * float(origin @ n) + h * float(n.sum())
+        dt = h * float(u.sum())
+        out.append((rho * n, u, n, [[k * a + dt, k * b + dt] for a, b in runs]))
     return out
 
 
