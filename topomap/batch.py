@@ -96,8 +96,8 @@ SUMMARY_EVERY = 10.0
 #: segmentation call (its stages before it); ``write`` is travel distances, overlay and every
 #: ``write_<file>``; ``job`` is the map from loading to the last file; ``start``, ``import`` and
 #: ``warmup`` are the command's own, before the first map.
-_STAGES = ("start", "import", "warmup", "load", "preprocess", "walls", "skeletons", "graphs", "doors", "openings",
-           "rooms", "segment", "total", "room_graph", "travel", "overlay", "write_labels", "write_label_map_pgm",
+_STAGES = ("start", "import", "warmup", "load", "previous", "preprocess", "walls", "furniture", "skeletons",
+           "graphs", "doors", "openings", "prior doors", "rooms", "match", "segment", "total", "room_graph", "travel", "overlay", "write_labels", "write_label_map_pgm",
            "write_label_map", "write_graphml", "write_json", "write_geojson", "write_overlay", "write", "job")
 
 

@@ -885,16 +885,21 @@ def segment(grid: OccupancyGrid, *, method: str = None, previous=None, **params)
     if not isinstance(grid, OccupancyGrid):
         raise ParameterError(f"segment() needs an OccupancyGrid (see topomap.load_map), got {type(grid).__name__}")
     t0 = time.perf_counter()
+    t_prev = 0.0
     if previous is not None:
         from .identity import DoorPrior
 
         previous = DoorPrior(previous)  # read once, for the door stage and the matching
+        t_prev = time.perf_counter() - t0
         if method == "topomap":
             params = {**params, "prior": previous}
     seg = METHODS[method](grid, **params)
     if previous is not None:
         from .identity import match_rooms
 
+        t1 = time.perf_counter()
         seg, _ = match_rooms(previous.previous, seg)
+        seg.timings["previous"] = t_prev
+        seg.timings["match"] = time.perf_counter() - t1
     seg.timings["total"] = time.perf_counter() - t0
     return seg
