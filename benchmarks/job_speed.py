@@ -200,7 +200,7 @@ def _load():
 #: Every stage --profile reports (topomap.batch's list), but the sums (segment/total, write, job).
 WRITES = ["write_labels", "write_label_map_pgm", "write_label_map", "write_graphml", "write_json", "write_geojson",
           "write_overlay"]
-TOPO_STAGES = ["start", "import", "warmup", "load", "preprocess", "walls", "skeletons", "graphs", "doors",
+TOPO_STAGES = ["start", "import", "warmup", "load", "preprocess", "walls", "furniture", "skeletons", "graphs", "doors",
                "openings", "rooms", "room_graph", "travel", "overlay"] + WRITES
 
 
