@@ -729,10 +729,12 @@ def _wall_ends_at_posts(tree, c, threshold_px: float) -> bool:
     return bool(d1 <= threshold_px and d2 <= threshold_px)
 
 
-def across_corridor(accepted, walls: list, depth_px: float) -> list:
+def across_corridor(accepted, walls, depth_px: float) -> list:
     """Stage "door judging": the accepted ``(width, Candidate)`` whose posts
     do not both lie within ``depth_px`` of two long walls the door crosses
-    (:func:`topomap.walls.across_walls`); those get :data:`ACROSS_CORRIDOR`.
+    (:func:`topomap.walls.across_walls`; ``walls`` a
+    :class:`~topomap.walls.WallIndex` or a list of long walls); those get
+    :data:`ACROSS_CORRIDOR`.
 
     A narrowing between two things that stand out of a corridor's side
     walls by less than that — pillars, wall columns, radiators, cupboards —
@@ -740,7 +742,7 @@ def across_corridor(accepted, walls: list, depth_px: float) -> list:
     it, which stands out farther."""
     from .walls import WallIndex, across_walls
 
-    index = WallIndex(walls)
+    index = walls if isinstance(walls, WallIndex) else WallIndex(walls)
     kept = []
     for width, c in accepted:
         if across_walls(c.ip1, c.ip2, index, tol_px=depth_px):

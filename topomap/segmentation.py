@@ -633,7 +633,8 @@ class _Walls:
     gaps and its lines are judged in metres whatever the resolution.
 
     ``faces``, ``lines`` and ``lw`` (:func:`topomap.walls.long_walls`) are in
-    the cells of that grid; :meth:`fine` turns its points into map cells."""
+    the cells of that grid; :meth:`fine` turns its points into map cells and
+    :attr:`index` holds the long walls in map cells."""
 
     def __init__(self, search: OccupancyGrid, opts):
         from . import skeleton as S
@@ -648,7 +649,13 @@ class _Walls:
         self.lw = (W.long_walls(self.lines, max_gap_px=opts.max_door_width / res,
                                 offset_px=opts.wall_wander / res, min_span_px=opts.long_wall / res)
                    if opts.long_wall > 0 else [])
-        self.straight = W.straight_share(self.faces, self.lines)
+        self.index = W.WallIndex(W.scale_walls(self.lw, k))
+
+    def straight_share(self) -> float:
+        """The share of wall faces on straight lines (:func:`topomap.walls.straight_share`)."""
+        from . import walls as W
+
+        return W.straight_share(self.faces, self.lines)
 
     def fine(self, pts):
         """Points ``(..., 2)`` of the wall grid in the map's cells."""
@@ -657,12 +664,6 @@ class _Walls:
     def fine_lines(self):
         """The straight wall faces ``(r1, c1, r2, c2)`` in the map's cells."""
         return self.fine(np.asarray(self.lines, float).reshape(-1, 2, 2)).reshape(-1, 4)
-
-    def fine_walls(self):
-        """The long walls in the map's cells."""
-        from . import walls as W
-
-        return W.scale_walls(self.lw, self.k)
 
     def mask(self, shape):
         """The long walls' cells (:func:`topomap.walls.wall_mask`) on a map grid of ``shape``."""
@@ -689,9 +690,11 @@ class _Walls:
             # opening from one of them to another spans a corridor
             ops = ops + W.long_wall_gaps(self.obstacle, self.free, self.lw, min_gap_px=opts.min_door_width / res,
                                          max_gap_px=opts.max_door_width / res, depth_px=opts.alcove_depth / res)
-            index = W.WallIndex(self.lw)
-            ops = [(p, q) for p, q in ops if not W.across_walls(p, q, index, tol_px=opts.wall_wander / res)]
-        return [(self.fine(p), self.fine(q)) for p, q in ops]
+        ops = [(self.fine(p), self.fine(q)) for p, q in ops]
+        if self.lw:
+            tol = opts.wall_wander / (res / self.k)
+            ops = [(p, q) for p, q in ops if not W.across_walls(p, q, self.index, tol_px=tol)]
+        return ops
 
 
 def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, *, prior=None,
@@ -759,7 +762,7 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
         search, closed = close_wall_gaps(looked, opts.wall_gap)
     with T("walls"):
         wl = _Walls(search, opts)
-        straight = wl.straight
+        straight = wl.straight_share()
         opts = opts.resolved(res, straight)  # rise and furniture measured on the map
     if opts.furniture_size > furniture:
         with T("furniture"):
@@ -773,7 +776,6 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
                 looked, clutter = looked2, clutter2
                 search, closed = close_wall_gaps(looked, opts.wall_gap)
                 wl = _Walls(search, opts)
-    lw = wl.fine_walls()
     with T("preprocess"):
         space = search.free if clutter is None else search.free & ~clutter
         f, d_free, occ = preprocess_masks(search, opts)
@@ -787,8 +789,8 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
         thr_px = D.wall_threshold(d_occ, S.graph_pixels(Go))
         cands = D.find_bottlenecks(Gf, walls, opts, res, thr_px)
         accepted = D.judge_doors(cands, search.free, S.graph_endpoints(Go), thr_px, opts, res)
-        if lw and opts.pillar_depth > 0:
-            accepted = D.across_corridor(accepted, lw, opts.pillar_depth / res)
+        if wl.lw and opts.pillar_depth > 0:
+            accepted = D.across_corridor(accepted, wl.index, opts.pillar_depth / res)
         segs = D.suppress_duplicates(accepted, res)
     if opts.openings:
         with T("openings"):

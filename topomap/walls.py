@@ -298,7 +298,6 @@ def wall_openings(obstacle: np.ndarray, free: np.ndarray, *, min_wall_px: float,
     return out
 
 
-
 def wall_directions(lines: np.ndarray) -> float:
     """The building's main wall direction (radians, in [0, pi/2)): the peak
     of the segments' directions modulo a right angle, weighted by length
@@ -313,7 +312,6 @@ def wall_directions(lines: np.ndarray) -> float:
     h = np.bincount(np.floor(np.degrees(th)).astype(int) % 90, weights=L, minlength=90)
     hs = sum(np.roll(h, k) for k in range(-3, 4))
     return float(np.radians(bins[int(np.argmax(hs))] + 0.5))
-
 
 
 def long_walls(lines: np.ndarray, *, max_gap_px: float, offset_px: float, min_span_px: float,
@@ -427,9 +425,6 @@ class WallIndex:
             self.classes.append((np.asarray(u, float), np.asarray(n, float), np.asarray(rho)[order],
                                  np.asarray(t0)[order], np.asarray(t1)[order]))
 
-    def __len__(self):
-        return sum(len(c[2]) for c in self.classes)
-
 
 def across_walls(p, q, walls, *, tol_px: float, min_angle: float = np.deg2rad(60.0)) -> bool:
     """Whether both ends of the segment ``p``-``q`` lie on long walls
@@ -455,7 +450,6 @@ def across_walls(p, q, walls, *, tol_px: float, min_angle: float = np.deg2rad(60
             lo, hi = np.searchsorted(rho, r - tol_px), np.searchsorted(rho, r + tol_px, side="right")
             hit[k] = bool(((t0[lo:hi] - tol_px <= t) & (t <= t1[lo:hi] + tol_px)).any())
     return hit[0] and hit[1]
-
 
 
 def long_wall_gaps(obstacle: np.ndarray, free: np.ndarray, walls: list, *, min_gap_px: float,
