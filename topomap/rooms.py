@@ -193,12 +193,14 @@ def cut_rooms(grid: OccupancyGrid, segments, *, space=None, min_room_cells: int 
     area = stats[:, cv2.CC_STAT_AREA].astype(np.int64)
     seed = np.arange(n + 1, dtype=np.int32)  # piece -> its seed label (0: none)
     small = np.zeros(n + 1, bool)
+    # cells where a robot fits, per piece
+    piece_wide = np.bincount(pieces[wide], minlength=n + 1) if wide is not None and min_room_cells > 0 else None
     if n and min_room_cells > 0:
         # a piece smaller than a room is never a room of its own: its
         # cells join the room they are connected to, or become a fragment
         small = area < min_room_cells
-        if wide is not None:
-            small |= np.bincount(pieces[wide], minlength=n + 1) == 0
+        if piece_wide is not None:
+            small |= piece_wide == 0
         small[0] = False
         seed[small] = 0
         area[small] = 0
@@ -209,7 +211,7 @@ def cut_rooms(grid: OccupancyGrid, segments, *, space=None, min_room_cells: int 
         rank = np.empty(n + 1, np.int32)
         rank[np.argsort(area, kind="stable")] = np.arange(n + 1, dtype=np.int32)
         seed = np.where(small, 0, rank).astype(np.int32)
-    labels, n_rooms = _fill_pieces(pieces, seed, stats, free, free > whole, min_room_cells, wide)
+    labels, n_rooms = _fill_pieces(pieces, seed, stats, free, free > whole, min_room_cells, wide, piece_wide)
     doors = [d for d in _doors_between(grid, labels, segments, lines) if max(d.rooms) <= n_rooms]
     for k, d in enumerate(doors):
         d.id = k
@@ -217,13 +219,14 @@ def cut_rooms(grid: OccupancyGrid, segments, *, space=None, min_room_cells: int 
 
 
 def _fill_pieces(pieces: np.ndarray, seed: np.ndarray, stats: np.ndarray, free: np.ndarray, between: np.ndarray,
-                 min_cells: int, wide=None):
+                 min_cells: int, wide=None, piece_wide=None):
     """``_rooms_first(fill_unlabeled(seed[pieces], free), min_cells, wide)``, cell for cell, touching only the
     cells without a seed.
 
     ``pieces``: the cut pieces (OpenCV components, ``stats`` their
     statistics); ``seed``: each piece's seed label (0: none); ``between``:
-    the free cells in no piece. The seeds' label image is never made: the free cells without a seed (few: the
+    the free cells in no piece; ``wide``, ``piece_wide``: the cells where a
+    robot fits and their number in each piece. The seeds' label image is never made: the free cells without a seed (few: the
     cuts, the small pieces, the closed gaps) are grown one 8-neighbourhood
     step at a time as :func:`_grow` does (it dilates the whole image). Of
     the cells left, an 8-connected component with one label beside it is
@@ -323,7 +326,7 @@ def _fill_pieces(pieces: np.ndarray, seed: np.ndarray, stats: np.ndarray, free: 
         is_room = count[order] >= min_cells
         if wide is not None:
             n_wide = np.zeros(n_lab, np.int64)
-            np.add.at(n_wide, seed, np.bincount(pieces[wide], minlength=seed.size))
+            np.add.at(n_wide, seed, piece_wide)
             if todo.size:
                 n_wide += np.bincount(val[wide.ravel()[todo]], minlength=n_lab)
             is_room &= n_wide[order] > 0
