@@ -384,5 +384,38 @@ def noisy_corridor_with_pillars(seed: int = 13) -> TestMap:
     return TestMap("noisy_corridor_with_pillars", a, 2, base.doors, base.door_widths)
 
 
+def partition_mapped_in_part(specks: bool = True) -> TestMap:
+    """Two 4 m x 5 m rooms whose dividing wall the laser saw only in part.
+
+    The 0.2 m partition stands on the south wall and is drawn 2.5 m long;
+    on the remaining 2.5 m of its line to the north wall the laser saw only
+    five single hits (0.05 m specks, 0.35-0.45 m apart), as a glass
+    partition or a wall seen edge-on leaves them: a wall seen in pieces,
+    the gap cut as the door between the rooms (2 rooms, 1 door).
+    ``specks=False`` (:func:`partition_end_in_a_room`) leaves the line empty.
+    108 x 172 px.
+    """
+    a = np.zeros((108, 172), bool)
+    a[4:104, 4:168] = True
+    a[54:104, 84:88] = False                       # partition, 2.5 m from the south wall
+    if specks:
+        for r in (14, 22, 31, 40, 47):
+            a[r, 85] = False                       # laser hits on its line
+    door = (4, 54, 84, 88)
+    return TestMap("partition_mapped_in_part", a, 2, [_centre_m(a.shape, *door)], [2.5])
+
+
+def partition_end_in_a_room() -> TestMap:
+    """:func:`partition_mapped_in_part` with nothing seen past the wall's end.
+
+    A wall that ends 2.5 m short of the wall across, with no laser hit on
+    its line beyond: the way round its end in one U-shaped room (a cupboard
+    row, a half-height divider), not a door: 1 room, 0 doors.
+    """
+    base = partition_mapped_in_part(specks=False)
+    return TestMap("partition_end_in_a_room", base.array, 1)
+
+
 REAL_WORLD = [corridor_with_pillars, corridor_with_niches, room_with_desks,
-              specks_outside_building, free_strip_at_edge, noisy_corridor_with_pillars]
+              specks_outside_building, free_strip_at_edge, noisy_corridor_with_pillars,
+              partition_mapped_in_part, partition_end_in_a_room]

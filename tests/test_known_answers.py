@@ -32,6 +32,8 @@ CASES = [
     pytest.param(T.specks_outside_building, 2, 1, id="specks_outside_building"),
     pytest.param(T.free_strip_at_edge, 2, 1, id="free_strip_at_edge"),
     pytest.param(T.noisy_corridor_with_pillars, 2, 1, id="noisy_corridor_with_pillars"),
+    pytest.param(T.partition_mapped_in_part, 2, 1, id="partition_mapped_in_part"),
+    pytest.param(T.partition_end_in_a_room, 1, 0, id="partition_end_in_a_room"),
 ]
 
 ALL_MAPS = [T.room_with_furniture, T.door_beside_wall] + T.REAL_WORLD

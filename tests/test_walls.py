@@ -199,3 +199,40 @@ def test_the_same_rooms_at_a_finer_resolution(factor):
                          g.source)
     a, b = topomap.segment(g), topomap.segment(fine)
     assert (b.n_rooms, len(b.doors)) == (a.n_rooms, len(a.doors))
+
+
+def _partition(hits_on_line):
+    """A 5 m x 8 m room (rows 4..103) with a 0.2 m partition (cols 84..87)
+    standing 2.5 m up from the south wall; the laser's hits on the rest of
+    its line are given as occupied cells of a separate ``hits`` mask (specks
+    that the obstacle mask looks through as clutter)."""
+    free = np.zeros((108, 172), bool)
+    free[4:104, 4:168] = True
+    free[54:104, 84:88] = False
+    hits = ~free
+    for r in hits_on_line:
+        hits[r, 85] = True
+    return free, hits
+
+
+@pytest.mark.parametrize("hits_on_line, found", [((14, 22, 31, 40, 47), True), ((), False), ((30,), False)])
+def test_partition_gap_needs_hits_on_its_line(hits_on_line, found):
+    free, hits = _partition(hits_on_line)
+    faces = W.wall_faces(~free, free)
+    lines = W.wall_lines(faces, min_length_px=20)
+    ops = W.partition_gaps(~free, free, lines, min_wall_px=30, min_gap_px=10, max_gap_px=60, min_hits_px=4,
+                           depth_px=24, hits=hits)
+    assert bool(ops) == found
+    for p, q in ops:
+        # from the partition's end up to the north wall's first cell, on its line
+        assert sorted([round(p[0]), round(q[0])]) == [3, 54]
+        assert 83 <= p[1] <= 88 and 83 <= q[1] <= 88
+
+
+def test_short_wall_piece_is_no_partition():
+    # the same gap seen from a piece shorter than min_wall_px: a cupboard's side
+    free, hits = _partition((14, 22, 31, 40, 47))
+    faces = W.wall_faces(~free, free)
+    lines = W.wall_lines(faces, min_length_px=20)
+    assert W.partition_gaps(~free, free, lines, min_wall_px=60, min_gap_px=10, max_gap_px=60, min_hits_px=4,
+                            depth_px=24, hits=hits) == []

@@ -293,6 +293,22 @@ class TopomapOptions(_Options):
         stands out from a corridor's side wall. A door across a corridor
         sits in a wall across it, which stands out farther (in a 2 m
         corridor, 0.5 m either side of a 1 m door). 0 turns this off.
+    partition_wall : float
+        With ``openings``, a straight wall face at least this long (m) on
+        one of the building's main directions that ends in free space
+        pointing at a wall across its line, ``min_door_width`` to
+        ``max_door_width`` away, is a partition mapped only in part
+        (:func:`topomap.walls.partition_gaps`): the gap is cut when the laser
+        saw the partition go on (``partition_hits``). 1.5 m: longer than a
+        cupboard or a desk stands out from a wall (0.6-1.2 m), as long as the
+        shortest stretch of a room's dividing wall seen from a corridor
+        door. 0 turns this off.
+    partition_hits : float
+        Obstacle cells along at least this length (m) of such a gap's line
+        show the partition going on: 0.2 m, a few laser hits (glass, a wall
+        seen edge-on, an open door leaf). A gap the laser saw nothing in is
+        the way past the end of a wall or a cupboard and stays open (a door
+        beside a wall, ``beside_wall``, needs no hits).
     wall_wander : float
         Pieces of one long wall lie within this distance (m) of its line:
         0.2 m. A laser SLAM map draws a straight wall a few cells off its
@@ -375,6 +391,8 @@ class TopomapOptions(_Options):
     long_wall: float = _opt(4.0, "length")
     wall_wander: float = _opt(0.2, "length")
     pillar_depth: float = _opt(0.5, "length")
+    partition_wall: float = _opt(1.5, "length")
+    partition_hits: float = _opt(0.2, "length")
     furniture_size: Optional[float] = _opt(None, "optional length")
     scan_furniture_size: float = _opt(3.0, "length")
     wall_thickness: float = _opt(0.5, "length")

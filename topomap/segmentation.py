@@ -674,10 +674,14 @@ class _Walls:
             m = np.kron(m, np.ones((self.k, self.k), bool))[:shape[0], :shape[1]]
         return m
 
-    def openings(self, opts) -> list:
-        """Openings in walls (:func:`topomap.walls.wall_openings`) and, with
+    def openings(self, opts, hits=None) -> list:
+        """Openings in walls (:func:`topomap.walls.wall_openings`), at the
+        ends of partitions (:func:`topomap.walls.partition_gaps`) and, with
         long walls, their gaps (:func:`topomap.walls.long_wall_gaps`), without
-        those across a corridor, as segments in the map's cells."""
+        those across a corridor, as segments in the map's cells. ``hits``:
+        the map's occupied cells (laser hits, clutter included), the
+        evidence of a partition going on."""
+        from . import skeleton as S
         from . import walls as W
 
         res = self.res
@@ -690,6 +694,13 @@ class _Walls:
             # opening from one of them to another spans a corridor
             ops = ops + W.long_wall_gaps(self.obstacle, self.free, self.lw, min_gap_px=opts.min_door_width / res,
                                          max_gap_px=opts.max_door_width / res, depth_px=opts.alcove_depth / res)
+        if opts.partition_wall > 0:
+            # partitions mapped in part: the gap from a partition's end to the
+            # wall it points at, with laser hits along it
+            ops = ops + W.partition_gaps(self.obstacle, self.free, self.lines, min_wall_px=opts.partition_wall / res,
+                                         min_gap_px=opts.min_door_width / res, max_gap_px=opts.max_door_width / res,
+                                         min_hits_px=opts.partition_hits / res, depth_px=opts.alcove_depth / res,
+                                         hits=None if hits is None else S.downsample(hits, self.k, keep="any"))
         ops = [(self.fine(p), self.fine(q)) for p, q in ops]
         if self.lw:
             tol = opts.wall_wander / (res / self.k)
@@ -794,7 +805,7 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
         segs = D.suppress_duplicates(accepted, res)
     if opts.openings:
         with T("openings"):
-            ops = D.opening_candidates(wl.openings(opts), res)
+            ops = D.opening_candidates(wl.openings(opts, hits=rooms_grid.occupied), res)
             segs = segs + D.suppress_duplicates(ops, res, kept=segs)
             cands = cands + [c for _, c in ops]
     if prior is not None:

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["wall_faces", "wall_lines", "straight_share", "wall_openings", "wall_directions", "long_walls",
-           "across_walls", "WallIndex", "long_wall_gaps", "wall_mask", "scale_walls"]
+           "across_walls", "WallIndex", "long_wall_gaps", "partition_gaps", "wall_mask", "scale_walls"]
 
 
 def wall_faces(obstacle: np.ndarray, free: np.ndarray) -> np.ndarray:
@@ -314,6 +314,21 @@ def wall_directions(lines: np.ndarray) -> float:
     return float(np.radians(bins[int(np.argmax(hs))] + 0.5))
 
 
+def _main_classes(segs: np.ndarray, angle_tol: float):
+    """The segments ``(K, 4)`` within ``angle_tol`` of each of the
+    building's two main directions (:func:`wall_directions`): for each, its
+    unit vector ``u`` (row, col) and the indices of its segments."""
+    th0 = wall_directions(segs)
+    v = segs[:, 2:] - segs[:, :2]
+    th = np.mod(np.arctan2(v[:, 0], v[:, 1]), np.pi)
+    out = []
+    for k in range(2):
+        tk = th0 + k * np.pi / 2
+        dth = np.abs(np.mod(th - tk + np.pi / 2, np.pi) - np.pi / 2)
+        out.append((np.array([np.sin(tk), np.cos(tk)]), np.flatnonzero(dth <= angle_tol)))
+    return out
+
+
 def long_walls(lines: np.ndarray, *, max_gap_px: float, offset_px: float, min_span_px: float,
                angle_tol: float = np.deg2rad(12.0), support: float = 0.5) -> list:
     """Long straight walls along the building's main directions.
@@ -331,17 +346,10 @@ def long_walls(lines: np.ndarray, *, max_gap_px: float, offset_px: float, min_sp
     out = []
     if segs.shape[0] < 2:
         return out
-    th0 = wall_directions(segs)
-    v = segs[:, 2:] - segs[:, :2]
-    L = np.hypot(*v.T)
-    th = np.mod(np.arctan2(v[:, 0], v[:, 1]), np.pi)
-    for k in range(2):
-        tk = th0 + k * np.pi / 2
-        dth = np.abs(np.mod(th - tk + np.pi / 2, np.pi) - np.pi / 2)
-        sel = np.flatnonzero(dth <= angle_tol)
+    L = np.hypot(*(segs[:, 2:] - segs[:, :2]).T)
+    for u, sel in _main_classes(segs, angle_tol):
         if sel.size < 2:
             continue
-        u = np.array([np.sin(tk), np.cos(tk)])
         n = np.array([-u[1], u[0]])
         mid = (segs[sel, :2] + segs[sel, 2:]) / 2
         rho = mid @ n
@@ -375,6 +383,105 @@ def long_walls(lines: np.ndarray, *, max_gap_px: float, offset_px: float, min_sp
                 span = runs[-1][1] - runs[0][0]
                 if span >= min_span_px and sum(r[1] - r[0] for r in runs) >= support * span:
                     out.append((r0 * n, u, n, runs))
+    return out
+
+
+def partition_gaps(obstacle: np.ndarray, free: np.ndarray, lines: np.ndarray, *, min_wall_px: float,
+                   min_gap_px: float, max_gap_px: float, min_hits_px: float, depth_px: float,
+                   hits: np.ndarray | None = None, angle_tol: float = np.deg2rad(12.0),
+                   band_px: int = 1) -> list:
+    """Openings between the free end of a partition and the wall it points at.
+
+    A partition between two rooms is often mapped only in part: the laser
+    saw its face near one end, and along the rest of its line it returned
+    only scattered hits (glass, a wall seen edge-on, an open door leaf). From
+    the end of every straight wall face (:func:`wall_lines`) at least
+    ``min_wall_px`` long and on one of the building's main directions, the
+    line is followed outwards; where it meets a straight wall face of the
+    other main direction (a wall crossing it) after a gap of
+    ``min_gap_px``-``max_gap_px``, the gap is an opening when
+
+    - cells of ``hits`` (within ``band_px`` of the line) lie along at
+      least ``min_hits_px`` of it: the partition goes on, seen in pieces (a
+      gap the laser saw nothing in is the way past a cupboard's end, not a
+      wall's),
+    - at least half the cells on its line are free (not a wall seen at a
+      grazing angle),
+    - the space on both sides is ``depth_px`` deep (not a niche's mouth),
+      and it does not lie across a passage as wide as itself (the rules of
+      :func:`wall_openings`).
+
+    Parameters
+    ----------
+    obstacle, free : (M, N) ndarray of bool
+        As for :func:`wall_openings`.
+    lines : (K, 4) ndarray
+        :func:`wall_lines` of their faces.
+    hits : (M, N) ndarray of bool, optional
+        The cells the laser hit: the map's occupied cells, specks that
+        ``obstacle`` looks through as clutter included. Default
+        ``obstacle``.
+
+    Returns
+    -------
+    list of ((r1, c1), (r2, c2))
+        Opening segments in pixels, from the partition's end to the crossing
+        wall.
+    """
+    import cv2
+
+    if hits is None:
+        hits = obstacle
+    segs = np.asarray(lines, float).reshape(-1, 4)
+    if segs.shape[0] < 2:
+        return []
+    classes = _main_classes(segs, angle_tol)
+    crossing = []
+    for _, sel in classes:
+        m = np.zeros(obstacle.shape, np.uint8)
+        for r1, c1, r2, c2 in segs[sel]:
+            cv2.line(m, (int(round(c1)), int(round(r1))), (int(round(c2)), int(round(r2))), 1, 3)
+        crossing.append(m > 0)
+    back = 3  # samples start inside the piece, as in wall_openings
+    n_gap = int(np.ceil(max_gap_px)) + back + 1
+    offsets = np.arange(-band_px, band_px + 1)
+    j = np.arange(n_gap)[None, :]
+    out = []
+    for k, (u, sel) in enumerate(classes):
+        a, b = segs[sel, :2], segs[sel, 2:]
+        keep = np.hypot(*(b - a).T) >= min_wall_px
+        if not keep.any():
+            continue
+        a, b = a[keep], b[keep]
+        d = np.sign((b - a) @ u)[:, None] * u
+        ends, dirs = np.concatenate([b, a]), np.concatenate([d, -d])
+        start = ends - (back + 1) * dirs
+        r, c, inside = _sample_cells(obstacle.shape, start, dirs, n_gap, offsets)
+        hit = (obstacle[r, c] & inside).any(axis=1)
+        s0 = np.argmax(~hit, axis=1)
+        ok = (~hit).any(axis=1) & (s0 != 0) & (s0 <= back + 2)
+        met = (crossing[1 - k][r, c] & inside).any(axis=1) & (j >= s0[:, None])
+        e0 = np.argmax(met, axis=1)
+        ok &= met.any(axis=1)
+        # the gap ends at the crossing wall's first cell on the line
+        wall = obstacle[r[:, band_px], c[:, band_px]] & inside[:, band_px] & (j >= e0[:, None])
+        e1 = np.argmax(wall, axis=1)
+        ok &= wall.any(axis=1) & (e1 - e0 <= 2 * band_px + 1)
+        gap = e1 - s0
+        ok &= (gap >= min_gap_px) & (gap <= max_gap_px)
+        within = (j >= s0[:, None]) & (j < e1[:, None])
+        seen = (hits[r, c] & inside).any(axis=1)
+        ok &= (seen & within).sum(axis=1) >= min_hits_px
+        line_free = free[r[:, band_px], c[:, band_px]] & inside[:, band_px]
+        ok &= (line_free & within).sum(axis=1) >= 0.5 * np.maximum(gap, 1)
+        i = np.flatnonzero(ok)
+        if not i.size:
+            continue
+        p = start[i] + s0[i, None] * dirs[i]
+        q = start[i] + (e1[i] + 1)[:, None] * dirs[i]
+        good = _depth_ok(obstacle, p, q, depth_px)
+        good[good] = ~_spans_passage(obstacle, p[good], q[good], depth_px)
+        out.extend((p[t], q[t]) for t in np.flatnonzero(good))
     return out
 
 
