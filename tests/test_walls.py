@@ -236,3 +236,25 @@ def test_short_wall_piece_is_no_partition():
     lines = W.wall_lines(faces, min_length_px=20)
     assert W.partition_gaps(~free, free, lines, min_wall_px=60, min_gap_px=10, max_gap_px=60, min_hits_px=4,
                             depth_px=24, hits=hits) == []
+
+
+def test_face_runs_follow_the_main_directions():
+    faces = np.zeros((60, 120), bool)
+    faces[20, 10:60] = True          # 50 cells
+    faces[20, 62:80] = True          # after a 2-cell gap: the same run
+    faces[40, 10:25] = True          # 15 cells: shorter than the minimum
+    faces[5:50, 100] = True          # 45 cells, the other direction
+    faces[30, 30:45:3] = True        # dots 3 cells apart: no run
+    lines = np.array([[20, 10, 20, 80], [5, 100, 50, 100]], float)
+    runs = W.face_runs(faces, min_length_px=20, lines=lines)
+    def covers(a_lo, a_hi, b0, b1, axis):
+        # a run within the band a_lo..a_hi across it, from b0 to b1 along it (to a cell)
+        for seg in runs:
+            a, b = (seg[[0, 2]], seg[[1, 3]]) if axis == "row" else (seg[[1, 3]], seg[[0, 2]])
+            if a.min() >= a_lo and a.max() <= a_hi and b.min() <= b0 + 1 and b.max() >= b1 - 1:
+                return True
+        return False
+    assert covers(18.5, 21.5, 10, 79, "row")     # row 20, across its 2-cell gap
+    assert covers(98.5, 101.5, 5, 49, "col")     # column 100
+    # nothing on row 40 (too short) nor row 30 (dots 3 cells apart)
+    assert not any(25 <= min(r1, r2) and max(r1, r2) <= 45 and abs(r1 - r2) < 3 for r1, c1, r2, c2 in runs)

@@ -329,6 +329,54 @@ def _main_classes(segs: np.ndarray, angle_tol: float):
     return out
 
 
+def face_runs(faces: np.ndarray, *, min_length_px: float, band_px: int = 1, max_gap_px: int = 2,
+              angle_tol: float = np.deg2rad(12.0), lines: np.ndarray | None = None) -> np.ndarray:
+    """Straight runs of wall faces along the building's two main directions.
+
+    The face cells are projected onto each main direction (:func:`wall_directions`
+    of ``lines``, or of the faces' own Hough lines): the cells within
+    ``band_px`` of a line along it, following each other with gaps of at
+    most ``max_gap_px``, for at least ``min_length_px``, are a run. Unlike
+    the Hough transform of :func:`wall_lines`, which on a large map may miss
+    a short wall (its cells vote for lines across the whole map), every run
+    is found, in time linear in the faces.
+
+    Returns
+    -------
+    (K, 4) ndarray
+        Segments ``(r1, c1, r2, c2)`` in pixels.
+    """
+    if lines is None:
+        lines = wall_lines(faces, min_length_px=min_length_px)
+    segs = np.asarray(lines, float).reshape(-1, 4)
+    th0 = wall_directions(segs) if len(segs) else 0.0
+    rr, cc = np.nonzero(faces)
+    if rr.size == 0:
+        return np.zeros((0, 4))
+    pts = np.stack([rr, cc], 1).astype(float)
+    out = []
+    for k in range(2):
+        tk = th0 + k * np.pi / 2
+        u = np.array([np.sin(tk), np.cos(tk)])
+        n = np.array([-u[1], u[0]])
+        t = np.rint(pts @ u).astype(np.int64)
+        rb = np.rint(pts @ n).astype(np.int64)
+        key = np.concatenate([rb + o for o in range(-band_px, band_px + 1)])
+        tt = np.tile(t, 2 * band_px + 1)
+        order = np.lexsort((tt, key))
+        key, tt = key[order], tt[order]
+        new = np.ones(key.size, bool)
+        new[1:] = (key[1:] != key[:-1]) | (tt[1:] - tt[:-1] > max_gap_px + 1)
+        start = np.flatnonzero(new)
+        end = np.r_[start[1:], key.size] - 1
+        t0, t1 = tt[start], tt[end]
+        keep = t1 - t0 >= min_length_px
+        for kb, a, b in zip(key[start][keep], t0[keep], t1[keep]):
+            p, q = kb * n + a * u, kb * n + b * u
+            out.append((p[0], p[1], q[0], q[1]))
+    return np.array(out, float).reshape(-1, 4)
+
+
 def long_walls(lines: np.ndarray, *, max_gap_px: float, offset_px: float, min_span_px: float,
                angle_tol: float = np.deg2rad(12.0), support: float = 0.5) -> list:
     """Long straight walls along the building's main directions.
