@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["wall_faces", "wall_lines", "straight_share", "wall_openings", "wall_directions", "long_walls",
-           "across_walls", "WallIndex", "long_wall_gaps", "partition_gaps", "wall_mask", "scale_walls"]
+           "across_walls", "WallIndex", "long_wall_gaps", "partition_gaps", "face_runs", "wall_mask", "scale_walls"]
 
 
 def wall_faces(obstacle: np.ndarray, free: np.ndarray) -> np.ndarray:
