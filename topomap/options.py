@@ -304,9 +304,9 @@ class TopomapOptions(_Options):
         shortest stretch of a room's dividing wall seen from a corridor
         door. 0 turns this off.
     partition_hits : float
-        Obstacle cells along at least this length (m) of such a gap's line
-        show the partition going on: 0.2 m, a few laser hits (glass, a wall
-        seen edge-on, an open door leaf). A gap the laser saw nothing in is
+        Occupied cells (within ``wall_wander`` of its line) along at least
+        this length (m) of such a gap show the partition going on: 0.2 m, a
+        few laser hits (glass, a wall seen edge-on, an open door leaf). A gap the laser saw nothing in is
         the way past the end of a wall or a cupboard and stays open (a door
         beside a wall, ``beside_wall``, needs no hits).
     wall_wander : float

@@ -436,8 +436,8 @@ def long_walls(lines: np.ndarray, *, max_gap_px: float, offset_px: float, min_sp
 
 def partition_gaps(obstacle: np.ndarray, free: np.ndarray, lines: np.ndarray, *, min_wall_px: float,
                    min_gap_px: float, max_gap_px: float, min_hits_px: float, depth_px: float,
-                   hits: np.ndarray | None = None, angle_tol: float = np.deg2rad(12.0),
-                   band_px: int = 1) -> list:
+                   hits: np.ndarray | None = None, hits_band_px: float = 1.0,
+                   angle_tol: float = np.deg2rad(12.0), band_px: int = 1) -> list:
     """Openings between the free end of a partition and the wall it points at.
 
     A partition between two rooms is often mapped only in part: the laser
@@ -449,9 +449,10 @@ def partition_gaps(obstacle: np.ndarray, free: np.ndarray, lines: np.ndarray, *,
     other main direction (a wall crossing it) after a gap of
     ``min_gap_px``-``max_gap_px``, the gap is an opening when
 
-    - cells of ``hits`` (within ``band_px`` of the line) lie along at
-      least ``min_hits_px`` of it: the partition goes on, seen in pieces (a
-      gap the laser saw nothing in is the way past a cupboard's end, not a
+    - cells of ``hits`` (within ``hits_band_px`` of the line: a wall's
+      thickness and wander about the line of its face) lie along at least
+      ``min_hits_px`` of it: the partition goes on, seen in pieces (a gap
+      the laser saw nothing in is the way past a cupboard's end, not a
       wall's),
     - at least half the cells on its line are free (not a wall seen at a
       grazing angle),
@@ -518,7 +519,9 @@ def partition_gaps(obstacle: np.ndarray, free: np.ndarray, lines: np.ndarray, *,
         gap = e1 - s0
         ok &= (gap >= min_gap_px) & (gap <= max_gap_px)
         within = (j >= s0[:, None]) & (j < e1[:, None])
-        seen = (hits[r, c] & inside).any(axis=1)
+        hb = max(int(round(hits_band_px)), band_px)
+        rh, ch, inh = _sample_cells(obstacle.shape, start, dirs, n_gap, np.arange(-hb, hb + 1))
+        seen = (hits[rh, ch] & inh).any(axis=1)
         ok &= (seen & within).sum(axis=1) >= min_hits_px
         line_free = free[r[:, band_px], c[:, band_px]] & inside[:, band_px]
         ok &= (line_free & within).sum(axis=1) >= 0.5 * np.maximum(gap, 1)
