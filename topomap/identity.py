@@ -497,7 +497,7 @@ class DoorPrior:
             ``segments`` without the dropped new cuts, then the previous
             doors cut again.
         """
-        from .geometry import point_segment_distances
+        from .geometry import line_pixels
 
         res = grid.resolution
         K = self.xy1.shape[0]
@@ -506,23 +506,20 @@ class DoorPrior:
         P, Q = np.stack([r1, c1], 1).reshape(K, 2), np.stack([r2, c2], 1).reshape(K, 2)
         S = np.asarray([np.r_[p, q] for p, q in segments], float).reshape(-1, 4)
         A, B = S[:, :2], S[:, 2:]
-        # a new cut and a previous door are the same door when the midpoint of
-        # one lies within half its width of the other (as duplicates are found)
-        same = np.zeros((len(segments), K), bool)
-        if K and len(segments):
-            wn = np.hypot(*(B - A).T)
-            wp = np.hypot(*(Q - P).T)
-            mn, mp = (A + B) / 2, (P + Q) / 2
-            same = ((point_segment_distances(mn[:, None], P[None], Q[None]) <= 0.5 * wn[:, None])
-                    | (point_segment_distances(mp[None], A[:, None], B[:, None]) <= 0.5 * wp[None]))
+        same = _same_doors(A, B, P, Q, 0.5 * opts.min_door_width / res)
         kept = list(segments)
         if opts.prior_changed_area > 0:
             kept = [s for j, s in enumerate(segments) if same[j].any() or not self._unchanged_room(grid, s, opts)]
         again = []
-        if opts.prior_post_shift > 0:
-            for k in np.flatnonzero(~same.any(0)):
+        if opts.prior_post_shift > 0 and K:
+            # the free cells rooms are cut from, with the new cuts taken out
+            open_ = space.copy()
+            for a, b in kept:
+                open_[line_pixels(a, b, open_.shape)] = False
+            for k in range(K):
                 s = _passage_along(walls, space, P[k], Q[k], opts.prior_post_shift / res)
-                if s is not None and opts.min_door_width <= np.hypot(*(s[1] - s[0])) * res <= opts.max_door_width:
+                if (s is not None and np.hypot(*(s[1] - s[0])) * res <= opts.max_door_width
+                        and not _closed(open_, s, opts.min_door_width / 2 / res, opts.reach / res)):
                     again.append(s)
         if len(kept) < len(segments) or again:
             log.info("%s: %d doors of %s cut again, %d new cuts inside its unchanged rooms dropped", grid.name,
@@ -557,7 +554,60 @@ class DoorPrior:
         return float(changed.sum()) * res ** 2 <= opts.prior_changed_area
 
 
-def _passage_along(walls: np.ndarray, space: np.ndarray, p, q, tol_px: float):
+def _same_doors(A, B, P, Q, tol_px: float) -> np.ndarray:
+    """``(len(A), len(P))`` bool: new cut ``A[j]``-``B[j]`` and previous door
+    ``P[k]``-``Q[k]`` (pixels) close the same opening.
+
+    They do when each passes through the middle of the other: the midpoint of
+    each lies within ``tol_px`` (half the narrowest door) of the other
+    segment. Two different openings side by side in one wall are each at
+    least a door wide, so the middle of one is more than half a door from
+    the other; a cut that only shares one post with a previous door and
+    runs off in another direction (across a corridor instead of along the
+    doorway) closes another opening, and the previous door is then still
+    to be cut.
+    """
+    from .geometry import point_segment_distances
+
+    if not (len(A) and len(P)):
+        return np.zeros((len(A), len(P)), bool)
+    mn, mp = (A + B) / 2, (P + Q) / 2
+    return ((point_segment_distances(mn[:, None], P[None], Q[None]) <= tol_px)
+            & (point_segment_distances(mp[None], A[:, None], B[:, None]) <= tol_px))
+
+
+def _closed(open_: np.ndarray, s, side_px: float, reach_px: float) -> bool:
+    """Whether door line ``s`` (pixels) is already closed in ``open_`` (the free
+    cells with the new run's cuts taken out): the cells ``side_px`` either side
+    of its midpoint are both open and not joined within ``reach_px`` of it
+    (a new cut found the door and reaches its walls). A side that is not open
+    (a wall, clutter, a cut) cannot show it, and the door counts as open."""
+    from scipy import ndimage
+
+    p, q = np.asarray(s[0], float), np.asarray(s[1], float)
+    v = q - p
+    n = np.hypot(*v)
+    if n == 0:
+        return False
+    mid, nrm = (p + q) / 2, np.array([-v[1], v[0]]) / n
+    H, W = open_.shape
+    R = int(np.ceil(reach_px + side_px)) + 1
+    r0, c0 = max(int(mid[0]) - R, 0), max(int(mid[1]) - R, 0)
+    r1, c1 = min(int(mid[0]) + R + 1, H), min(int(mid[1]) + R + 1, W)
+    win = open_[r0:r1, c0:c1]
+    rr, cc = np.ogrid[r0:r1, c0:c1]
+    win = win & ((rr - mid[0]) ** 2 + (cc - mid[1]) ** 2 <= (reach_px + side_px) ** 2)
+    ends = []
+    for sgn in (1.0, -1.0):
+        r, c = np.rint(mid + sgn * side_px * nrm).astype(int)
+        if not (r0 <= r < r1 and c0 <= c < c1) or not win[r - r0, c - c0]:
+            return False
+        ends.append((r - r0, c - c0))
+    lab, _ = ndimage.label(win)  # 4-connected, as rooms are cut
+    return lab[ends[0]] != lab[ends[1]]
+
+
+def _passage_along(walls: np.ndarray, space: np.ndarray, p, q, tol_px: float, *, narrowed: bool = True):
     """The door line between the posts met along ``p``–``q`` (pixels), from its
     midpoint outwards: ``(a, b)``, the first cell each way that is a wall, or
     that is out of ``space`` (clutter) near the end, when the midpoint is not
@@ -584,7 +634,10 @@ def _passage_along(walls: np.ndarray, space: np.ndarray, p, q, tol_px: float):
         if stop.size == 0 or not inside[stop[0]]:
             return None
         hit = rc[stop[0]].astype(float)
-        if np.hypot(*(hit - end)) > tol_px + np.sqrt(2) / 2:
+        if narrowed:
+            if steps[stop[0]] > L / 2 + tol_px + np.sqrt(2) / 2:  # the wall moved away from the post
+                return None
+        elif np.hypot(*(hit - end)) > tol_px + np.sqrt(2) / 2:
             return None
         ends.append(hit)
     return ends[1], ends[0]
