@@ -518,8 +518,7 @@ class DoorPrior:
                 open_[line_pixels(a, b, open_.shape)] = False
             for k in range(K):
                 s = _passage_along(walls, space, P[k], Q[k], opts.prior_post_shift / res)
-                if (s is not None and np.hypot(*(s[1] - s[0])) * res <= opts.max_door_width
-                        and not _closed(open_, s, opts.min_door_width / 2 / res, opts.reach / res)):
+                if s is not None and not _closed(open_, s, opts.min_door_width / 2 / res, opts.reach / res):
                     again.append(s)
         if len(kept) < len(segments) or again:
             log.info("%s: %d doors of %s cut again, %d new cuts inside its unchanged rooms dropped", grid.name,
@@ -607,37 +606,50 @@ def _closed(open_: np.ndarray, s, side_px: float, reach_px: float) -> bool:
     return lab[ends[0]] != lab[ends[1]]
 
 
-def _passage_along(walls: np.ndarray, space: np.ndarray, p, q, tol_px: float, *, narrowed: bool = True):
-    """The door line between the posts met along ``p``–``q`` (pixels), from its
-    midpoint outwards: ``(a, b)``, the first cell each way that is a wall, or
-    that is out of ``space`` (clutter) near the end, when the midpoint is not
-    a wall and each lies within ``tol_px`` (plus half a cell's diagonal) of
-    ``p`` and ``q``; else None. Clutter well inside the passage (a pillar in
-    a wide opening) is looked through, as the door stage does."""
+def _passage_along(walls: np.ndarray, space: np.ndarray, p, q, tol_px: float):
+    """The door line between the walls met along ``p``–``q`` (pixels), or None.
+
+    The line is sampled from ``tol_px`` before ``p`` to ``tol_px`` beyond
+    ``q`` (plus half a cell's diagonal). A sample is *blocked* where it is a
+    wall, or out of ``space`` (clutter) within ``tol_px`` of an end: clutter
+    well inside the passage (a pillar in a wide opening) is looked through,
+    as the door stage does. The door is still there when a blocked sample
+    lies on each side of the middle (a wall met within ``tol_px`` beyond each
+    post, or anywhere inside them: an opening that narrowed is still the
+    same door) with free samples between them; it runs from the last blocked
+    sample before the first free one to the first blocked sample after the
+    last free one, across any wall in between (a wall piece now standing in
+    the doorway leaves two openings, and both still join the rooms).
+
+    Returns
+    -------
+    (a, b) or None
+        The door's end points (pixels, the wall cells met), or None when a
+        wall is gone (no wall within ``tol_px`` beyond a post) or the line is
+        all wall.
+    """
     p, q = np.asarray(p, float), np.asarray(q, float)
     v = q - p
     L = np.hypot(*v)
-    H, W = walls.shape
-    mid = (p + q) / 2
-    mr, mc = int(np.rint(mid[0])), int(np.rint(mid[1]))
-    if L == 0 or not (0 <= mr < H and 0 <= mc < W) or walls[mr, mc]:
+    if L == 0:
         return None
+    H, W = walls.shape
     u = v / L
-    steps = np.arange(0.5, L / 2 + tol_px + 1.0, 0.5)
-    near = steps >= L / 2 - tol_px - np.sqrt(2) / 2
-    ends = []
-    for end, sgn in ((q, 1.0), (p, -1.0)):
-        rc = np.rint(mid[None] + sgn * steps[:, None] * u[None]).astype(np.int64)
-        inside = (rc[:, 0] >= 0) & (rc[:, 0] < H) & (rc[:, 1] >= 0) & (rc[:, 1] < W)
-        r, c = np.clip(rc[:, 0], 0, H - 1), np.clip(rc[:, 1], 0, W - 1)
-        stop = np.flatnonzero(~inside | walls[r, c] | (near & ~space[r, c]))
-        if stop.size == 0 or not inside[stop[0]]:
-            return None
-        hit = rc[stop[0]].astype(float)
-        if narrowed:
-            if steps[stop[0]] > L / 2 + tol_px + np.sqrt(2) / 2:  # the wall moved away from the post
-                return None
-        elif np.hypot(*(hit - end)) > tol_px + np.sqrt(2) / 2:
-            return None
-        ends.append(hit)
-    return ends[1], ends[0]
+    reach = tol_px + np.sqrt(2) / 2
+    t = np.arange(-reach, L + reach + 1e-9, 0.5)  # along the line from p
+    rc = np.rint(p[None] + t[:, None] * u[None]).astype(np.int64)
+    inside = (rc[:, 0] >= 0) & (rc[:, 0] < H) & (rc[:, 1] >= 0) & (rc[:, 1] < W)
+    r, c = np.clip(rc[:, 0], 0, H - 1), np.clip(rc[:, 1], 0, W - 1)
+    near = (t <= reach) | (t >= L - reach)
+    blocked = ~inside | walls[r, c] | (near & ~space[r, c])
+    half = t < L / 2
+    if not (blocked & half).any() or not (blocked & ~half).any():
+        return None  # no wall on one side: it has moved away from the post
+    first, last = np.flatnonzero(blocked & half)[0], np.flatnonzero(blocked & ~half)[-1]
+    free = np.flatnonzero(~blocked[first:last + 1]) + first
+    if free.size == 0:
+        return None
+    a, b = free[0] - 1, free[-1] + 1
+    if not (inside[a] and inside[b]):
+        return None
+    return rc[a].astype(float), rc[b].astype(float)
