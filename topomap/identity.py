@@ -297,7 +297,8 @@ def _rasterised(G, ids):
 # Matching and relabelling
 # --------------------------------------------------------------------------
 
-def match_rooms(previous, seg: Segmentation, *, min_overlap: float = DEFAULT_MIN_OVERLAP):
+def match_rooms(previous, seg: Segmentation, *, min_overlap: float = DEFAULT_MIN_OVERLAP,
+                min_room_area: Optional[float] = None):
     """Give the rooms of ``seg`` the IDs of the matching rooms of ``previous``.
 
     Parameters
@@ -337,6 +338,13 @@ def match_rooms(previous, seg: Segmentation, *, min_overlap: float = DEFAULT_MIN
     if _check_fraction("min_overlap", min_overlap) == 0:
         raise ParameterError(f"min_overlap must be a share in (0, 1], got {min_overlap!r}")
     min_overlap = float(min_overlap)
+    if min_room_area is None:
+        from .options import TopomapOptions
+
+        opts = seg.options if isinstance(seg.options, TopomapOptions) else TopomapOptions()
+        min_room_area = opts.min_room_area
+    if not (isinstance(min_room_area, (int, float)) and np.isfinite(min_room_area) and min_room_area > 0):
+        raise ParameterError(f"min_room_area must be an area > 0 (m²), got {min_room_area!r}")
     if not isinstance(seg, Segmentation):
         raise ParameterError(f"match_rooms() needs a Segmentation, got {type(seg).__name__}")
     prev = _Previous(previous)
@@ -364,7 +372,10 @@ def match_rooms(previous, seg: Segmentation, *, min_overlap: float = DEFAULT_MIN
     known = np.minimum.outer(O.sum(1), O.sum(0))
     whole = np.minimum.outer(np.array([area_cur[j] for j in cur], float).reshape(-1),
                              np.array([prev.area[i] for i in prev.ids], float).reshape(-1))
-    sig = (O > 0) & (O >= min_overlap * known) & (O >= _MIN_SHARE * whole)
+    # a sliver along a moved door is no link: an overlap must also be a tenth
+    # of the smaller room, or at least a room's area (the part of a room just
+    # uncovered that the previous map knew as part of another room)
+    sig = (O > 0) & (O >= min_overlap * known) & ((O >= _MIN_SHARE * whole) | (O >= min_room_area))
     W = np.where(sig, O, 0.0)
     ids = {}
     if W.size and sig.any():
