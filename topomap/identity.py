@@ -15,7 +15,10 @@ same map-frame point (both maps' ``origin`` and ``resolution`` are used, so
 the maps may differ in size, extent and cell size; a previous room graph is
 read from its room polygons). The overlap of a new room ``j`` and a previous
 room ``i`` (m²) is *significant* when it is at least ``min_overlap`` of the
-smaller of the two rooms. Among the significant pairs a one-to-one
+smaller of the two rooms' parts the other map knows, and at least a tenth of
+the smaller room or ``min_room_area`` (a sliver along a moved door is no
+link; the doorway of a room just uncovered, which the previous map knew as
+part of another room, is). Among the significant pairs a one-to-one
 assignment of largest total overlap (:func:`scipy.optimize.linear_sum_assignment`)
 decides which new room keeps which previous ID. Every other new room gets a
 new ID, counted up from the previous ``next_room_id`` (one more than the
@@ -33,8 +36,9 @@ Doors that last
 ---------------
 Before the rooms are matched, ``topomap.segment(grid, previous=...)`` hands the
 previous doors to the default method's door stage (:class:`DoorPrior`): a
-previous door whose place is still a narrow passage is cut again, and a new
-cut inside a previous room whose surroundings did not change is dropped, so
+previous door whose place is still a narrow passage is cut again unless a
+new cut already closes it, and a new cut inside a previous room whose
+surroundings did not change is dropped, so
 that a door does not come and go between two versions of a map for reasons
 measured far from it (the wall threshold, the clearance's noise).
 
@@ -313,6 +317,12 @@ def match_rooms(previous, seg: Segmentation, *, min_overlap: float = DEFAULT_MIN
     min_overlap : float
         Share (0..1] of the smaller of two rooms they must have in common
         (in the map frame) to count as the same room, a split or a merge.
+    min_room_area : float, optional
+        An overlap (m²) of at least this area is no sliver, even when it is
+        less than a tenth of the smaller room: the part of a room the robot
+        has just uncovered that the previous map knew. Default: the
+        ``min_room_area`` of ``seg.options`` (the smallest room), or of
+        :class:`~topomap.options.TopomapOptions` for the other methods.
 
     Returns
     -------
@@ -326,7 +336,8 @@ def match_rooms(previous, seg: Segmentation, *, min_overlap: float = DEFAULT_MIN
     ------
     ParameterError
         ``previous`` is not a segmentation or room graph, a previous room
-        has no polygon, or ``min_overlap`` is not in (0, 1].
+        has no polygon, ``min_overlap`` is not in (0, 1] or ``min_room_area``
+        is not an area > 0.
     GraphFormatError, MapFileError
         ``previous`` is a file that cannot be loaded.
     """
@@ -462,15 +473,20 @@ class DoorPrior:
     after. :meth:`adjust` gives the cuts hysteresis:
 
     * a previous door whose place is still a narrow passage — along its
-      line, walls within ``prior_post_shift`` of both previous posts, no
-      wall between them, a width between ``min_door_width`` and
-      ``max_door_width`` — is cut again (between the walls found) even when
-      the new run did not find it;
+      line, a wall within ``prior_post_shift`` beyond each previous post or
+      anywhere inside them (an opening that narrowed is the same door) — is
+      cut again between the walls met, across any
+      wall now standing in the doorway, unless the new run's cuts already
+      keep its two sides (``min_door_width / 2`` from its middle) apart
+      within ``reach`` of it: a new cut that shares only a
+      post with it, or stops short of a wall, leaves the rooms joined;
     * a new cut that lies inside a room the previous map had whole (the
       previous room on both sides of it, ``min_door_width / 2`` away, is the
-      same) is dropped when the map within ``reach`` of it did not change
-      (at most ``prior_changed_area`` of cells free in one map and not in
-      the other): the same walls give the same rooms.
+      same), and that is not the same door as a previous one (each passes
+      through the middle of the other, within ``min_door_width / 2``), is
+      dropped when the map within ``reach`` of it did not change (at most
+      ``prior_changed_area`` of cells free in one map and not in the
+      other): the same walls give the same rooms.
 
     Parameters
     ----------
@@ -495,7 +511,7 @@ class DoorPrior:
             The new run's door segments, pixels of ``grid``.
         opts : TopomapOptions
             The options that ran (``prior_post_shift``, ``prior_changed_area``,
-            ``reach``, ``min_door_width``, ``max_door_width``).
+            ``reach``, ``min_door_width``).
         walls : (M, N) ndarray of bool
             The cells door posts lie on (the non-free cells of the map doors
             are searched in, where free-standing clutter is looked through).
@@ -506,7 +522,7 @@ class DoorPrior:
         -------
         list of ((r1, c1), (r2, c2))
             ``segments`` without the dropped new cuts, then the previous
-            doors cut again.
+            doors cut again (those still a passage that no new cut closes).
         """
         from .geometry import line_pixels
 
