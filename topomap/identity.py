@@ -633,7 +633,7 @@ def _closed(open_: np.ndarray, s, side_px: float, reach_px: float) -> bool:
     return lab[ends[0]] != lab[ends[1]]
 
 
-def _passage_along(walls: np.ndarray, space: np.ndarray, p, q, tol_px: float):
+def _passage_along(walls: np.ndarray, space: np.ndarray, p, q, tol_px: float, *, moved: bool = False):
     """The door line between the walls met along ``p``–``q`` (pixels), or None.
 
     The line is sampled from ``tol_px`` before ``p`` to ``tol_px`` beyond
@@ -670,8 +670,17 @@ def _passage_along(walls: np.ndarray, space: np.ndarray, p, q, tol_px: float):
     near = (t <= reach) | (t >= L - reach)
     blocked = ~inside | walls[r, c] | (near & ~space[r, c])
     half = t < L / 2
-    if not (blocked & half).any() or not (blocked & ~half).any():
-        return None  # no wall on one side: it has moved away from the post
+    ends = (blocked & half).any(), (blocked & ~half).any()
+    if not all(ends):
+        # no wall along the line beyond a post: a wall cell beside it (the
+        # wall's end redrawn a cell off the line) is the post; none within
+        # tol_px: the wall has moved away from the post
+        if not moved:
+            p2 = p if ends[0] else _nearest_wall(walls, p, reach)
+            q2 = q if ends[1] else _nearest_wall(walls, q, reach)
+            if p2 is not None and q2 is not None:
+                return _passage_along(walls, space, p2, q2, tol_px, moved=True)
+        return None
     first, last = np.flatnonzero(blocked & half)[0], np.flatnonzero(blocked & ~half)[-1]
     free = np.flatnonzero(~blocked[first:last + 1]) + first
     if free.size == 0:
@@ -680,3 +689,19 @@ def _passage_along(walls: np.ndarray, space: np.ndarray, p, q, tol_px: float):
     if not (inside[a] and inside[b]):
         return None
     return rc[a].astype(float), rc[b].astype(float)
+
+
+def _nearest_wall(walls: np.ndarray, p, radius: float):
+    """The wall cell nearest to point ``p`` (pixels) within ``radius``, as floats; None if none."""
+    H, W = walls.shape
+    R = int(np.ceil(radius))
+    r0, c0 = max(int(np.floor(p[0])) - R, 0), max(int(np.floor(p[1])) - R, 0)
+    r1, c1 = min(int(np.ceil(p[0])) + R + 1, H), min(int(np.ceil(p[1])) + R + 1, W)
+    if r0 >= r1 or c0 >= c1:
+        return None
+    rr, cc = np.nonzero(walls[r0:r1, c0:c1])
+    if rr.size == 0:
+        return None
+    d = np.hypot(rr + r0 - p[0], cc + c0 - p[1])
+    k = int(np.argmin(d))
+    return None if d[k] > radius else np.array([rr[k] + r0, cc[k] + c0], float)
