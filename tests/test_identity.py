@@ -391,3 +391,28 @@ def test_a_piece_of_a_room_is_a_link_from_a_room_area_up():
             assert ch.split == {} and ch.new == (2,) and not ch.explains(1, 2)
     with pytest.raises(ParameterError, match="min_room_area"):
         match_rooms(prev, prev, min_room_area=0)
+
+
+def test_a_post_redrawn_beside_the_door_line_is_still_a_post():
+    from topomap.identity import _passage_along
+
+    walls = np.zeros((30, 40), bool)
+    walls[:, :6] = walls[:, 20:] = True  # the door: row 10 from col 5 to col 20
+    walls[8:11, 20:25] = False  # the right wall's end redrawn: no wall on the line within 0.2 m of the post
+    (a, b) = _passage_along(walls, ~walls, (10.0, 5.0), (10.0, 20.0), 3.0)
+    assert np.hypot(*(b - (11.0, 20.0))) <= 1.5 and walls[int(b[0]), int(b[1])]  # the wall cell beside it
+    assert np.hypot(*(a - (10.0, 5.0))) <= 1.0
+    walls[4:17, 20:25] = False  # no wall within 0.15 m of the post: the wall moved away
+    assert _passage_along(walls, ~walls, (10.0, 5.0), (10.0, 20.0), 3.0) is None
+
+
+def test_a_door_ending_on_clutter_goes_on_to_the_wall():
+    from topomap.identity import _through_clutter
+
+    walls = np.zeros((40, 40), bool)
+    walls[:, :3] = walls[:, 37:] = True
+    door = ((20.0, 2.0), (20.0, 25.0))  # from the left wall to a piece of furniture at col 25
+    a, b = _through_clutter(walls, door, 40.0)
+    assert tuple(a) == (20.0, 2.0) and tuple(b) == (20.0, 37.0)  # on to the right wall
+    a, b = _through_clutter(walls, door, 30.0)  # the wall farther than the widest door: the end stays
+    assert tuple(a) == (20.0, 2.0) and tuple(b) == (20.0, 25.0)

@@ -545,7 +545,10 @@ class DoorPrior:
                 open_[line_pixels(a, b, open_.shape)] = False
             for k in range(K):
                 s = _passage_along(walls, space, P[k], Q[k], opts.prior_post_shift / res)
-                if s is not None and not _closed(open_, s, opts.min_door_width / 2 / res, opts.reach / res):
+                if s is None:
+                    continue
+                s = _through_clutter(walls, s, opts.max_door_width / res)
+                if not _closed(open_, s, opts.min_door_width / 2 / res, opts.reach / res):
                     again.append(s)
         if len(kept) < len(segments) or again:
             log.info("%s: %d doors of %s cut again, %d new cuts inside its unchanged rooms dropped", grid.name,
@@ -689,6 +692,39 @@ def _passage_along(walls: np.ndarray, space: np.ndarray, p, q, tol_px: float, *,
     if not (inside[a] and inside[b]):
         return None
     return rc[a].astype(float), rc[b].astype(float)
+
+
+def _through_clutter(walls: np.ndarray, s, max_px: float):
+    """Door line ``s`` (pixels) carried on through clutter at its ends.
+
+    A post that is not a wall is clutter (free-standing furniture, which the
+    door stage looks through): now that the robot has seen more, free space
+    may show beside it and the rooms join around it. From such a post the
+    line goes on, straight, through the clutter and any free cells after it,
+    to the next wall, as long as the door stays at most ``max_px`` long (the
+    widest door); with no wall that near, the end stays on the clutter.
+    """
+    a, b = np.asarray(s[0], float), np.asarray(s[1], float)
+    v = b - a
+    n = np.hypot(*v)
+    if n == 0:
+        return s
+    u = v / n
+    H, W = walls.shape
+    ends = [a, b]
+    d = np.arange(0.5, max_px, 0.5)
+    for k, sgn in ((0, -1.0), (1, 1.0)):
+        e, other = ends[k], ends[1 - k]
+        if walls[int(np.rint(e[0])), int(np.rint(e[1]))]:
+            continue
+        rc = np.rint(e[None] + sgn * d[:, None] * u[None]).astype(np.int64)
+        ok = ((rc[:, 0] >= 0) & (rc[:, 0] < H) & (rc[:, 1] >= 0) & (rc[:, 1] < W)
+              & (np.hypot(*(rc - other).T) <= max_px))
+        n_ok = int(np.argmin(ok)) if not ok.all() else ok.size
+        hit = np.flatnonzero(walls[rc[:n_ok, 0], rc[:n_ok, 1]])
+        if hit.size:
+            ends[k] = rc[hit[0]].astype(float)
+    return ends[0], ends[1]
 
 
 def _nearest_wall(walls: np.ndarray, p, radius: float):
