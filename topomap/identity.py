@@ -475,8 +475,10 @@ class DoorPrior:
     * a previous door whose place is still a narrow passage — along its
       line, a wall within ``prior_post_shift`` beyond each previous post or
       anywhere inside them (an opening that narrowed is the same door) — is
-      cut again between the walls met, across any
-      wall now standing in the doorway, unless the new run's cuts already
+      cut again between the walls met (or a wall cell within
+      ``prior_post_shift`` beside a post), across any wall now standing in
+      the doorway, and from a post that is clutter on through it to the next
+      wall (at most ``max_door_width`` in all), unless the new run's cuts already
       keep its two sides (``min_door_width / 2`` from its middle) apart
       within ``reach`` of it: a new cut that shares only a
       post with it, or stops short of a wall, leaves the rooms joined;
@@ -511,7 +513,7 @@ class DoorPrior:
             The new run's door segments, pixels of ``grid``.
         opts : TopomapOptions
             The options that ran (``prior_post_shift``, ``prior_changed_area``,
-            ``reach``, ``min_door_width``).
+            ``reach``, ``min_door_width``, ``max_door_width``).
         walls : (M, N) ndarray of bool
             The cells door posts lie on (the non-free cells of the map doors
             are searched in, where free-standing clutter is looked through).
@@ -649,7 +651,10 @@ def _passage_along(walls: np.ndarray, space: np.ndarray, p, q, tol_px: float, *,
     same door) with free samples between them; it runs from the last blocked
     sample before the first free one to the first blocked sample after the
     last free one, across any wall in between (a wall piece now standing in
-    the doorway leaves two openings, and both still join the rooms).
+    the doorway leaves two openings, and both still join the rooms). Where
+    no sample beyond a post is blocked, the nearest wall cell within
+    ``tol_px`` of the post (a wall's end redrawn a cell beside the line) is
+    the post, and the line is searched again to it (``moved``: once).
 
     Returns
     -------
