@@ -561,14 +561,10 @@ class DoorPrior:
         """Whether cut ``seg`` (pixels of ``grid``) lies inside one previous room
         and the map within ``opts.reach`` of it is the same in both maps."""
         res = grid.resolution
-        p, q = np.asarray(seg[0], float), np.asarray(seg[1], float)
-        v = q - p
-        n = np.hypot(*v)
-        if n == 0:
+        found = _door_sides(seg, opts.min_door_width / 2 / res)
+        if found is None:
             return False
-        mid, nrm = (p + q) / 2, np.array([-v[1], v[0]]) / n
-        side = opts.min_door_width / 2 / res
-        sides = np.stack([mid + side * nrm, mid - side * nrm])
+        mid, sides = found
         x, y = grid.pixel_to_world(sides[:, 0], sides[:, 1])
         a, b = self.previous.rooms_at(np.asarray(x, float), np.asarray(y, float))
         if a == 0 or a != b:
@@ -607,6 +603,18 @@ def _same_doors(A, B, P, Q, tol_px: float) -> np.ndarray:
             & (point_segment_distances(mp[None], A[:, None], B[:, None]) <= tol_px))
 
 
+def _door_sides(s, side_px: float):
+    """``(mid, sides)``: the middle of segment ``s`` (pixels) and the ``(2, 2)``
+    points ``side_px`` either side of it, across it; None for a segment of no length."""
+    p, q = np.asarray(s[0], float), np.asarray(s[1], float)
+    v = q - p
+    n = np.hypot(*v)
+    if n == 0:
+        return None
+    mid, nrm = (p + q) / 2, np.array([-v[1], v[0]]) / n
+    return mid, np.stack([mid + side_px * nrm, mid - side_px * nrm])
+
+
 def _closed(open_: np.ndarray, s, side_px: float, reach_px: float) -> bool:
     """Whether door line ``s`` (pixels) is already closed in ``open_`` (the free
     cells with the new run's cuts taken out): the cells ``side_px`` either side
@@ -615,12 +623,10 @@ def _closed(open_: np.ndarray, s, side_px: float, reach_px: float) -> bool:
     (a wall, clutter, a cut) cannot show it, and the door counts as open."""
     from scipy import ndimage
 
-    p, q = np.asarray(s[0], float), np.asarray(s[1], float)
-    v = q - p
-    n = np.hypot(*v)
-    if n == 0:
+    found = _door_sides(s, side_px)
+    if found is None:
         return False
-    mid, nrm = (p + q) / 2, np.array([-v[1], v[0]]) / n
+    mid, sides = found
     H, W = open_.shape
     R = int(np.ceil(reach_px + side_px)) + 1
     r0, c0 = max(int(mid[0]) - R, 0), max(int(mid[1]) - R, 0)
@@ -629,8 +635,7 @@ def _closed(open_: np.ndarray, s, side_px: float, reach_px: float) -> bool:
     rr, cc = np.ogrid[r0:r1, c0:c1]
     win = win & ((rr - mid[0]) ** 2 + (cc - mid[1]) ** 2 <= (reach_px + side_px) ** 2)
     ends = []
-    for sgn in (1.0, -1.0):
-        r, c = np.rint(mid + sgn * side_px * nrm).astype(int)
+    for r, c in np.rint(sides).astype(int):
         if not (r0 <= r < r1 and c0 <= c < c1) or not win[r - r0, c - c0]:
             return False
         ends.append((r - r0, c - c0))
