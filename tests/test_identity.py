@@ -306,3 +306,113 @@ def test_previous_with_a_method_without_door_stage():
     again = segment(grid, method="watershed", previous=first)
     assert again.changes.kept == tuple(range(1, first.n_rooms + 1)) and "prior doors" not in again.timings
     assert "prior doors" in segment(grid, previous=segment(grid)).timings
+
+
+def test_a_narrowed_door_is_still_cut():
+    a = segment(_two_rooms())
+    # the upper post redrawn 0.35 m inwards (the opening now 0.55 m): the same
+    # door between the same walls, cut again although no wall is where its post was
+    narrow = segment(_two_rooms(fill=[(26, 33, 65, 69)]), previous=a, **REFUSE)
+    assert narrow.n_rooms == 2 and narrow.changes.kept == (1, 2)
+    (d,) = narrow.doors
+    assert d.width == pytest.approx(0.6, abs=0.06)  # between the walls met, not the old posts
+    # widened by 0.3 m instead: the wall moved away from the post, no door kept
+    assert segment(_two_rooms(carve=[(20, 26, 65, 69)]), previous=a, **REFUSE).n_rooms == 1
+
+
+def test_a_wall_piece_in_a_previous_doorway_leaves_both_openings_cut():
+    wide = [(16, 55, 65, 69)]  # a 1.9 m opening
+    a = segment(_two_rooms(carve=wide))
+    assert a.n_rooms == 2
+    # a 0.2 m wall drawn from the middle of it 1.5 m into the right room (a
+    # wall, not clutter: longer than min_wall_length): two openings of 0.85 m, both cut
+    pillar = _two_rooms(carve=wide, fill=[(34, 38, 65, 95)])
+    assert segment(pillar, **REFUSE).n_rooms == 1  # what a run without the prior gives
+    b = segment(pillar, previous=a, **REFUSE)
+    assert b.n_rooms == 2 and b.changes.kept == (1, 2)
+    assert id_at(b, *LEFT) == id_at(a, *LEFT) and id_at(b, *RIGHT) == id_at(a, *RIGHT)
+
+
+def _adjusted(segments):
+    """DoorPrior.adjust on the two rooms with the door of a first run as the prior."""
+    from topomap.identity import DoorPrior
+    from topomap.options import TopomapOptions
+
+    grid = _two_rooms()
+    prior = DoorPrior(segment(grid))
+    return prior.adjust(grid, segments, TopomapOptions(), walls=~grid.free, space=grid.free)
+
+
+def test_a_previous_door_is_added_unless_a_new_cut_closes_it():
+    door = ((25.0, 66.5), (44.0, 66.5))  # the first run's door, pixels
+    # the new run found it: nothing added
+    assert _adjusted([door]) == [door]
+    # a new cut at the door that stops 0.2 m short of the lower post leaves the
+    # rooms joined: the previous door is cut again beside it
+    short = ((25.0, 66.5), (40.0, 66.5))
+    out = _adjusted([short])
+    assert len(out) == 2 and out[0] == short
+    (r1, c1), (r2, c2) = out[1]
+    assert abs(c1 - 66.5) <= 1 and abs(c2 - 66.5) <= 1 and {round(r1), round(r2)} == {25, 44}
+    # a cut that shares one post with the door but runs off into the right room
+    # is not that door: the door is cut again, and the cut, inside a room the
+    # previous map had whole and that did not change, is dropped
+    out = _adjusted([((25.0, 66.5), (25.0, 100.0))])
+    assert len(out) == 1 and np.allclose(out[0], [(25, 66), (44, 66)])
+
+
+def test_same_door_needs_each_through_the_middle_of_the_other():
+    from topomap.identity import _same_doors
+
+    P, Q = np.array([[0.0, 0.0]]), np.array([[20.0, 0.0]])  # a previous door, 20 px
+    cuts = [((0.0, 3.0), (20.0, 3.0)),    # the same door redrawn 3 px away
+            ((0.0, 0.0), (5.0, 20.0)),    # one post shared, then another way
+            ((30.0, 0.0), (50.0, 0.0))]   # the next opening along the wall
+    A = np.array([c[0] for c in cuts])
+    B = np.array([c[1] for c in cuts])
+    assert _same_doors(A, B, P, Q, 5.0)[:, 0].tolist() == [True, False, False]
+    assert _same_doors(A, B, P, Q, 2.0)[:, 0].tolist() == [False, False, False]
+
+
+def test_a_piece_of_a_room_is_a_link_from_a_room_area_up():
+    # one room of 9 m²; the new map (130 rows) has 60 more rows below it, the same frame
+    prev = seg_of(boxes((70, 62), [(1, 61, 1, 61)]), origin=(0.0, 60 * RES, 0.0))
+    for strip_cols, linked in (((6, 56), True), ((6, 26), False)):
+        L = np.zeros((130, 62), np.int32)
+        L[1:61, 1:61] = 1
+        c0, c1 = strip_cols
+        L[53:61, c0:c1] = 2  # 8 x 50 cells = 1.0 m² (8 x 20 = 0.4 m²) of the old room ...
+        L[61:128, 1:61] = 2  # ... and 10 m² the previous map did not know: under a tenth of the new room
+        out, ch = match_rooms(prev, seg_of(L))
+        assert id_at(out, 5, 5) == 1 and id_at(out, 100, 30) == 2  # the old room keeps its ID
+        if linked:
+            assert ch.split == {1: (1, 2)} and ch.new == () and ch.explains(1, 2)
+        else:
+            assert ch.split == {} and ch.new == (2,) and not ch.explains(1, 2)
+    with pytest.raises(ParameterError, match="min_room_area"):
+        match_rooms(prev, prev, min_room_area=0)
+
+
+def test_a_post_redrawn_beside_the_door_line_is_still_a_post():
+    from topomap.identity import _passage_along
+
+    walls = np.zeros((30, 40), bool)
+    walls[:, :6] = walls[:, 20:] = True  # the door: row 10 from col 5 to col 20
+    walls[8:11, 20:25] = False  # the right wall's end redrawn: no wall on the line within 0.2 m of the post
+    (a, b) = _passage_along(walls, ~walls, (10.0, 5.0), (10.0, 20.0), 3.0)
+    assert np.hypot(*(b - (11.0, 20.0))) <= 1.5 and walls[int(b[0]), int(b[1])]  # the wall cell beside it
+    assert np.hypot(*(a - (10.0, 5.0))) <= 1.0
+    walls[4:17, 20:25] = False  # no wall within 0.15 m of the post: the wall moved away
+    assert _passage_along(walls, ~walls, (10.0, 5.0), (10.0, 20.0), 3.0) is None
+
+
+def test_a_door_ending_on_clutter_goes_on_to_the_wall():
+    from topomap.identity import _through_clutter
+
+    walls = np.zeros((40, 40), bool)
+    walls[:, :3] = walls[:, 37:] = True
+    door = ((20.0, 2.0), (20.0, 25.0))  # from the left wall to a piece of furniture at col 25
+    a, b = _through_clutter(walls, door, 40.0)
+    assert tuple(a) == (20.0, 2.0) and tuple(b) == (20.0, 37.0)  # on to the right wall
+    a, b = _through_clutter(walls, door, 30.0)  # the wall farther than the widest door: the end stays
+    assert tuple(a) == (20.0, 2.0) and tuple(b) == (20.0, 25.0)

@@ -15,7 +15,10 @@ same map-frame point (both maps' ``origin`` and ``resolution`` are used, so
 the maps may differ in size, extent and cell size; a previous room graph is
 read from its room polygons). The overlap of a new room ``j`` and a previous
 room ``i`` (m²) is *significant* when it is at least ``min_overlap`` of the
-smaller of the two rooms. Among the significant pairs a one-to-one
+smaller of the two rooms' parts the other map knows, and at least a tenth of
+the smaller room or ``min_room_area`` (a sliver along a moved door is no
+link; the doorway of a room just uncovered, which the previous map knew as
+part of another room, is). Among the significant pairs a one-to-one
 assignment of largest total overlap (:func:`scipy.optimize.linear_sum_assignment`)
 decides which new room keeps which previous ID. Every other new room gets a
 new ID, counted up from the previous ``next_room_id`` (one more than the
@@ -33,8 +36,9 @@ Doors that last
 ---------------
 Before the rooms are matched, ``topomap.segment(grid, previous=...)`` hands the
 previous doors to the default method's door stage (:class:`DoorPrior`): a
-previous door whose place is still a narrow passage is cut again, and a new
-cut inside a previous room whose surroundings did not change is dropped, so
+previous door whose place is still a narrow passage is cut again unless a
+new cut already closes it, and a new cut inside a previous room whose
+surroundings did not change is dropped, so
 that a door does not come and go between two versions of a map for reasons
 measured far from it (the wall threshold, the clearance's noise).
 
@@ -297,7 +301,8 @@ def _rasterised(G, ids):
 # Matching and relabelling
 # --------------------------------------------------------------------------
 
-def match_rooms(previous, seg: Segmentation, *, min_overlap: float = DEFAULT_MIN_OVERLAP):
+def match_rooms(previous, seg: Segmentation, *, min_overlap: float = DEFAULT_MIN_OVERLAP,
+                min_room_area: Optional[float] = None):
     """Give the rooms of ``seg`` the IDs of the matching rooms of ``previous``.
 
     Parameters
@@ -312,6 +317,12 @@ def match_rooms(previous, seg: Segmentation, *, min_overlap: float = DEFAULT_MIN
     min_overlap : float
         Share (0..1] of the smaller of two rooms they must have in common
         (in the map frame) to count as the same room, a split or a merge.
+    min_room_area : float, optional
+        An overlap (m²) of at least this area is no sliver, even when it is
+        less than a tenth of the smaller room: the part of a room the robot
+        has just uncovered that the previous map knew. Default: the
+        ``min_room_area`` of ``seg.options`` (the smallest room), or of
+        :class:`~topomap.options.TopomapOptions` for the other methods.
 
     Returns
     -------
@@ -325,7 +336,8 @@ def match_rooms(previous, seg: Segmentation, *, min_overlap: float = DEFAULT_MIN
     ------
     ParameterError
         ``previous`` is not a segmentation or room graph, a previous room
-        has no polygon, or ``min_overlap`` is not in (0, 1].
+        has no polygon, ``min_overlap`` is not in (0, 1] or ``min_room_area``
+        is not an area > 0.
     GraphFormatError, MapFileError
         ``previous`` is a file that cannot be loaded.
     """
@@ -337,6 +349,13 @@ def match_rooms(previous, seg: Segmentation, *, min_overlap: float = DEFAULT_MIN
     if _check_fraction("min_overlap", min_overlap) == 0:
         raise ParameterError(f"min_overlap must be a share in (0, 1], got {min_overlap!r}")
     min_overlap = float(min_overlap)
+    if min_room_area is None:
+        from .options import TopomapOptions
+
+        opts = seg.options if isinstance(seg.options, TopomapOptions) else TopomapOptions()
+        min_room_area = opts.min_room_area
+    if not (isinstance(min_room_area, (int, float)) and np.isfinite(min_room_area) and min_room_area > 0):
+        raise ParameterError(f"min_room_area must be an area > 0 (m²), got {min_room_area!r}")
     if not isinstance(seg, Segmentation):
         raise ParameterError(f"match_rooms() needs a Segmentation, got {type(seg).__name__}")
     prev = _Previous(previous)
@@ -364,7 +383,10 @@ def match_rooms(previous, seg: Segmentation, *, min_overlap: float = DEFAULT_MIN
     known = np.minimum.outer(O.sum(1), O.sum(0))
     whole = np.minimum.outer(np.array([area_cur[j] for j in cur], float).reshape(-1),
                              np.array([prev.area[i] for i in prev.ids], float).reshape(-1))
-    sig = (O > 0) & (O >= min_overlap * known) & (O >= _MIN_SHARE * whole)
+    # a sliver along a moved door is no link: an overlap must also be a tenth
+    # of the smaller room, or at least a room's area (the part of a room just
+    # uncovered that the previous map knew as part of another room)
+    sig = (O > 0) & (O >= min_overlap * known) & ((O >= _MIN_SHARE * whole) | (O >= min_room_area))
     W = np.where(sig, O, 0.0)
     ids = {}
     if W.size and sig.any():
@@ -451,15 +473,22 @@ class DoorPrior:
     after. :meth:`adjust` gives the cuts hysteresis:
 
     * a previous door whose place is still a narrow passage — along its
-      line, walls within ``prior_post_shift`` of both previous posts, no
-      wall between them, a width between ``min_door_width`` and
-      ``max_door_width`` — is cut again (between the walls found) even when
-      the new run did not find it;
+      line, a wall within ``prior_post_shift`` beyond each previous post or
+      anywhere inside them (an opening that narrowed is the same door) — is
+      cut again between the walls met (or a wall cell within
+      ``prior_post_shift`` beside a post), across any wall now standing in
+      the doorway, and from a post that is clutter on through it to the next
+      wall (at most ``max_door_width`` in all), unless the new run's cuts already
+      keep its two sides (``min_door_width / 2`` from its middle) apart
+      within ``reach`` of it: a new cut that shares only a
+      post with it, or stops short of a wall, leaves the rooms joined;
     * a new cut that lies inside a room the previous map had whole (the
       previous room on both sides of it, ``min_door_width / 2`` away, is the
-      same) is dropped when the map within ``reach`` of it did not change
-      (at most ``prior_changed_area`` of cells free in one map and not in
-      the other): the same walls give the same rooms.
+      same), and that is not the same door as a previous one (each passes
+      through the middle of the other, within ``min_door_width / 2``), is
+      dropped when the map within ``reach`` of it did not change (at most
+      ``prior_changed_area`` of cells free in one map and not in the
+      other): the same walls give the same rooms.
 
     Parameters
     ----------
@@ -495,9 +524,9 @@ class DoorPrior:
         -------
         list of ((r1, c1), (r2, c2))
             ``segments`` without the dropped new cuts, then the previous
-            doors cut again.
+            doors cut again (those still a passage that no new cut closes).
         """
-        from .geometry import point_segment_distances
+        from .geometry import line_pixels
 
         res = grid.resolution
         K = self.xy1.shape[0]
@@ -506,23 +535,22 @@ class DoorPrior:
         P, Q = np.stack([r1, c1], 1).reshape(K, 2), np.stack([r2, c2], 1).reshape(K, 2)
         S = np.asarray([np.r_[p, q] for p, q in segments], float).reshape(-1, 4)
         A, B = S[:, :2], S[:, 2:]
-        # a new cut and a previous door are the same door when the midpoint of
-        # one lies within half its width of the other (as duplicates are found)
-        same = np.zeros((len(segments), K), bool)
-        if K and len(segments):
-            wn = np.hypot(*(B - A).T)
-            wp = np.hypot(*(Q - P).T)
-            mn, mp = (A + B) / 2, (P + Q) / 2
-            same = ((point_segment_distances(mn[:, None], P[None], Q[None]) <= 0.5 * wn[:, None])
-                    | (point_segment_distances(mp[None], A[:, None], B[:, None]) <= 0.5 * wp[None]))
+        same = _same_doors(A, B, P, Q, 0.5 * opts.min_door_width / res)
         kept = list(segments)
         if opts.prior_changed_area > 0:
             kept = [s for j, s in enumerate(segments) if same[j].any() or not self._unchanged_room(grid, s, opts)]
         again = []
-        if opts.prior_post_shift > 0:
-            for k in np.flatnonzero(~same.any(0)):
+        if opts.prior_post_shift > 0 and K:
+            # the free cells rooms are cut from, with the new cuts taken out
+            open_ = space.copy()
+            for a, b in kept:
+                open_[line_pixels(a, b, open_.shape)] = False
+            for k in range(K):
                 s = _passage_along(walls, space, P[k], Q[k], opts.prior_post_shift / res)
-                if s is not None and opts.min_door_width <= np.hypot(*(s[1] - s[0])) * res <= opts.max_door_width:
+                if s is None:
+                    continue
+                s = _through_clutter(walls, s, opts.max_door_width / res)
+                if not _closed(open_, s, opts.min_door_width / 2 / res, opts.reach / res):
                     again.append(s)
         if len(kept) < len(segments) or again:
             log.info("%s: %d doors of %s cut again, %d new cuts inside its unchanged rooms dropped", grid.name,
@@ -533,14 +561,10 @@ class DoorPrior:
         """Whether cut ``seg`` (pixels of ``grid``) lies inside one previous room
         and the map within ``opts.reach`` of it is the same in both maps."""
         res = grid.resolution
-        p, q = np.asarray(seg[0], float), np.asarray(seg[1], float)
-        v = q - p
-        n = np.hypot(*v)
-        if n == 0:
+        found = _door_sides(seg, opts.min_door_width / 2 / res)
+        if found is None:
             return False
-        mid, nrm = (p + q) / 2, np.array([-v[1], v[0]]) / n
-        side = opts.min_door_width / 2 / res
-        sides = np.stack([mid + side * nrm, mid - side * nrm])
+        mid, sides = found
         x, y = grid.pixel_to_world(sides[:, 0], sides[:, 1])
         a, b = self.previous.rooms_at(np.asarray(x, float), np.asarray(y, float))
         if a == 0 or a != b:
@@ -557,34 +581,173 @@ class DoorPrior:
         return float(changed.sum()) * res ** 2 <= opts.prior_changed_area
 
 
-def _passage_along(walls: np.ndarray, space: np.ndarray, p, q, tol_px: float):
-    """The door line between the posts met along ``p``–``q`` (pixels), from its
-    midpoint outwards: ``(a, b)``, the first cell each way that is a wall, or
-    that is out of ``space`` (clutter) near the end, when the midpoint is not
-    a wall and each lies within ``tol_px`` (plus half a cell's diagonal) of
-    ``p`` and ``q``; else None. Clutter well inside the passage (a pillar in
-    a wide opening) is looked through, as the door stage does."""
+def _same_doors(A, B, P, Q, tol_px: float) -> np.ndarray:
+    """``(len(A), len(P))`` bool: new cut ``A[j]``-``B[j]`` and previous door
+    ``P[k]``-``Q[k]`` (pixels) close the same opening.
+
+    They do when each passes through the middle of the other: the midpoint of
+    each lies within ``tol_px`` (half the narrowest door) of the other
+    segment. Two different openings side by side in one wall are each at
+    least a door wide, so the middle of one is more than half a door from
+    the other; a cut that only shares one post with a previous door and
+    runs off in another direction (across a corridor instead of along the
+    doorway) closes another opening, and the previous door is then still
+    to be cut.
+    """
+    from .geometry import point_segment_distances
+
+    if not (len(A) and len(P)):
+        return np.zeros((len(A), len(P)), bool)
+    mn, mp = (A + B) / 2, (P + Q) / 2
+    return ((point_segment_distances(mn[:, None], P[None], Q[None]) <= tol_px)
+            & (point_segment_distances(mp[None], A[:, None], B[:, None]) <= tol_px))
+
+
+def _door_sides(s, side_px: float):
+    """``(mid, sides)``: the middle of segment ``s`` (pixels) and the ``(2, 2)``
+    points ``side_px`` either side of it, across it; None for a segment of no length."""
+    p, q = np.asarray(s[0], float), np.asarray(s[1], float)
+    v = q - p
+    n = np.hypot(*v)
+    if n == 0:
+        return None
+    mid, nrm = (p + q) / 2, np.array([-v[1], v[0]]) / n
+    return mid, np.stack([mid + side_px * nrm, mid - side_px * nrm])
+
+
+def _closed(open_: np.ndarray, s, side_px: float, reach_px: float) -> bool:
+    """Whether door line ``s`` (pixels) is already closed in ``open_`` (the free
+    cells with the new run's cuts taken out): the cells ``side_px`` either side
+    of its midpoint are both open and not joined within ``reach_px`` of it
+    (a new cut found the door and reaches its walls). A side that is not open
+    (a wall, clutter, a cut) cannot show it, and the door counts as open."""
+    from scipy import ndimage
+
+    found = _door_sides(s, side_px)
+    if found is None:
+        return False
+    mid, sides = found
+    H, W = open_.shape
+    R = int(np.ceil(reach_px + side_px)) + 1
+    r0, c0 = max(int(mid[0]) - R, 0), max(int(mid[1]) - R, 0)
+    r1, c1 = min(int(mid[0]) + R + 1, H), min(int(mid[1]) + R + 1, W)
+    win = open_[r0:r1, c0:c1]
+    rr, cc = np.ogrid[r0:r1, c0:c1]
+    win = win & ((rr - mid[0]) ** 2 + (cc - mid[1]) ** 2 <= (reach_px + side_px) ** 2)
+    ends = []
+    for r, c in np.rint(sides).astype(int):
+        if not (r0 <= r < r1 and c0 <= c < c1) or not win[r - r0, c - c0]:
+            return False
+        ends.append((r - r0, c - c0))
+    lab, _ = ndimage.label(win)  # 4-connected, as rooms are cut
+    return lab[ends[0]] != lab[ends[1]]
+
+
+def _passage_along(walls: np.ndarray, space: np.ndarray, p, q, tol_px: float, *, moved: bool = False):
+    """The door line between the walls met along ``p``–``q`` (pixels), or None.
+
+    The line is sampled from ``tol_px`` before ``p`` to ``tol_px`` beyond
+    ``q`` (plus half a cell's diagonal). A sample is *blocked* where it is a
+    wall, or out of ``space`` (clutter) within ``tol_px`` of an end: clutter
+    well inside the passage (a pillar in a wide opening) is looked through,
+    as the door stage does. The door is still there when a blocked sample
+    lies on each side of the middle (a wall met within ``tol_px`` beyond each
+    post, or anywhere inside them: an opening that narrowed is still the
+    same door) with free samples between them; it runs from the last blocked
+    sample before the first free one to the first blocked sample after the
+    last free one, across any wall in between (a wall piece now standing in
+    the doorway leaves two openings, and both still join the rooms). Where
+    no sample beyond a post is blocked, the nearest wall cell within
+    ``tol_px`` of the post (a wall's end redrawn a cell beside the line) is
+    the post, and the line is searched again to it (``moved``: once).
+
+    Returns
+    -------
+    (a, b) or None
+        The door's end points (pixels, the wall cells met), or None when a
+        wall is gone (no wall within ``tol_px`` beyond a post) or the line is
+        all wall.
+    """
     p, q = np.asarray(p, float), np.asarray(q, float)
     v = q - p
     L = np.hypot(*v)
-    H, W = walls.shape
-    mid = (p + q) / 2
-    mr, mc = int(np.rint(mid[0])), int(np.rint(mid[1]))
-    if L == 0 or not (0 <= mr < H and 0 <= mc < W) or walls[mr, mc]:
+    if L == 0:
         return None
+    H, W = walls.shape
     u = v / L
-    steps = np.arange(0.5, L / 2 + tol_px + 1.0, 0.5)
-    near = steps >= L / 2 - tol_px - np.sqrt(2) / 2
-    ends = []
-    for end, sgn in ((q, 1.0), (p, -1.0)):
-        rc = np.rint(mid[None] + sgn * steps[:, None] * u[None]).astype(np.int64)
-        inside = (rc[:, 0] >= 0) & (rc[:, 0] < H) & (rc[:, 1] >= 0) & (rc[:, 1] < W)
-        r, c = np.clip(rc[:, 0], 0, H - 1), np.clip(rc[:, 1], 0, W - 1)
-        stop = np.flatnonzero(~inside | walls[r, c] | (near & ~space[r, c]))
-        if stop.size == 0 or not inside[stop[0]]:
-            return None
-        hit = rc[stop[0]].astype(float)
-        if np.hypot(*(hit - end)) > tol_px + np.sqrt(2) / 2:
-            return None
-        ends.append(hit)
-    return ends[1], ends[0]
+    reach = tol_px + np.sqrt(2) / 2
+    t = np.arange(-reach, L + reach + 1e-9, 0.5)  # along the line from p
+    rc = np.rint(p[None] + t[:, None] * u[None]).astype(np.int64)
+    inside = (rc[:, 0] >= 0) & (rc[:, 0] < H) & (rc[:, 1] >= 0) & (rc[:, 1] < W)
+    r, c = np.clip(rc[:, 0], 0, H - 1), np.clip(rc[:, 1], 0, W - 1)
+    near = (t <= reach) | (t >= L - reach)
+    blocked = ~inside | walls[r, c] | (near & ~space[r, c])
+    half = t < L / 2
+    ends = (blocked & half).any(), (blocked & ~half).any()
+    if not all(ends):
+        # no wall along the line beyond a post: a wall cell beside it (the
+        # wall's end redrawn a cell off the line) is the post; none within
+        # tol_px: the wall has moved away from the post
+        if not moved:
+            p2 = p if ends[0] else _nearest_wall(walls, p, reach)
+            q2 = q if ends[1] else _nearest_wall(walls, q, reach)
+            if p2 is not None and q2 is not None:
+                return _passage_along(walls, space, p2, q2, tol_px, moved=True)
+        return None
+    first, last = np.flatnonzero(blocked & half)[0], np.flatnonzero(blocked & ~half)[-1]
+    free = np.flatnonzero(~blocked[first:last + 1]) + first
+    if free.size == 0:
+        return None
+    a, b = free[0] - 1, free[-1] + 1
+    if not (inside[a] and inside[b]):
+        return None
+    return rc[a].astype(float), rc[b].astype(float)
+
+
+def _through_clutter(walls: np.ndarray, s, max_px: float):
+    """Door line ``s`` (pixels) carried on through clutter at its ends.
+
+    A post that is not a wall is clutter (free-standing furniture, which the
+    door stage looks through): now that the robot has seen more, free space
+    may show beside it and the rooms join around it. From such a post the
+    line goes on, straight, through the clutter and any free cells after it,
+    to the next wall, as long as the door stays at most ``max_px`` long (the
+    widest door); with no wall that near, the end stays on the clutter.
+    """
+    a, b = np.asarray(s[0], float), np.asarray(s[1], float)
+    v = b - a
+    n = np.hypot(*v)
+    if n == 0:
+        return s
+    u = v / n
+    H, W = walls.shape
+    ends = [a, b]
+    d = np.arange(0.5, max_px, 0.5)
+    for k, sgn in ((0, -1.0), (1, 1.0)):
+        e, other = ends[k], ends[1 - k]
+        if walls[int(np.rint(e[0])), int(np.rint(e[1]))]:
+            continue
+        rc = np.rint(e[None] + sgn * d[:, None] * u[None]).astype(np.int64)
+        ok = ((rc[:, 0] >= 0) & (rc[:, 0] < H) & (rc[:, 1] >= 0) & (rc[:, 1] < W)
+              & (np.hypot(*(rc - other).T) <= max_px))
+        n_ok = int(np.argmin(ok)) if not ok.all() else ok.size
+        hit = np.flatnonzero(walls[rc[:n_ok, 0], rc[:n_ok, 1]])
+        if hit.size:
+            ends[k] = rc[hit[0]].astype(float)
+    return ends[0], ends[1]
+
+
+def _nearest_wall(walls: np.ndarray, p, radius: float):
+    """The wall cell nearest to point ``p`` (pixels) within ``radius``, as floats; None if none."""
+    H, W = walls.shape
+    R = int(np.ceil(radius))
+    r0, c0 = max(int(np.floor(p[0])) - R, 0), max(int(np.floor(p[1])) - R, 0)
+    r1, c1 = min(int(np.ceil(p[0])) + R + 1, H), min(int(np.ceil(p[1])) + R + 1, W)
+    if r0 >= r1 or c0 >= c1:
+        return None
+    rr, cc = np.nonzero(walls[r0:r1, c0:c1])
+    if rr.size == 0:
+        return None
+    d = np.hypot(rr + r0 - p[0], cc + c0 - p[1])
+    k = int(np.argmin(d))
+    return None if d[k] > radius else np.array([rr[k] + r0, cc[k] + c0], float)

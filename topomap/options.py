@@ -338,15 +338,15 @@ class TopomapOptions(_Options):
         ``furniture_size`` is furniture.
     prior_post_shift : float
         With a previous result (``segment(grid, previous=...)``), a previous
-        door the new run did not find is cut again where walls still meet
-        its line within this distance (m) of both its posts, with no wall
-        between them (free-standing clutter is looked through, as when doors
-        are searched): 0.15 m, as far as a laser SLAM map redraws a wall
+        door no new cut closes is cut again where walls still meet its line
+        within this distance (m) beyond both its posts, or inside them (the
+        opening narrowed; free-standing clutter is looked through, as when
+        doors are searched): 0.15 m, as far as a laser SLAM map redraws a wall
         between two versions (a cell or two, 0.05-0.1 m, and half a cell of
         rounding; on the exploration sequences of the benchmark, the posts
         of a door found in two consecutive maps moved by at most 0.05 m in
-        75 % of the cases, 0.15 m in 94 %); farther, the wall has moved or a
-        wall stands in the doorway. 0 turns this off (see
+        75 % of the cases, 0.15 m in 94 %); farther, the wall has moved
+        away from the post. 0 turns this off (see
         :class:`topomap.identity.DoorPrior`).
     prior_changed_area : float
         With a previous result, a new cut inside a room the previous map had
