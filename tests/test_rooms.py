@@ -82,3 +82,24 @@ def test_lookup_is_indexing(dtype):
         got = lookup(table, labels)
         assert got.dtype == table.dtype
         np.testing.assert_array_equal(got, table[labels])
+
+
+@pytest.mark.parametrize("short", [0, 2])
+def test_a_cut_reaches_the_walls_it_was_rounded_short_of(short):
+    # two 2 m x 2 m rooms joined by a 1 m doorway in a 0.2 m wall (cols 40..43);
+    # the door segment across the doorway ends `short` cells before its lower
+    # post (2: on the free cell above the doorway's last row, which a cut
+    # rounded onto the cell beside a wall leaves): still two rooms, no
+    # 4-connected way round its end
+    from topomap.io import from_array
+    from topomap.rooms import cut_rooms
+
+    free = np.zeros((44, 84), bool)
+    free[2:42, 2:40] = True
+    free[2:42, 44:82] = True
+    free[12:32, 40:44] = True                       # doorway rows 12..31
+    grid = from_array(free, resolution=0.05)
+    seg = ((11.0, 41.5), (32.0 - short, 41.5))      # posts at rows 11 and 32 (wall cells)
+    labels, doors, n = cut_rooms(grid, [seg])
+    assert n == 2 and len(doors) == 1
+    assert (labels > 0)[free].all()

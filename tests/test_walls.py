@@ -258,3 +258,16 @@ def test_face_runs_follow_the_main_directions():
     assert covers(98.5, 101.5, 5, 49, "col")     # column 100
     # nothing on row 40 (too short) nor row 30 (dots 3 cells apart)
     assert not any(25 <= min(r1, r2) and max(r1, r2) <= 45 and abs(r1 - r2) < 3 for r1, c1, r2, c2 in runs)
+
+
+def test_partition_face_on_a_free_standing_table_is_no_partition():
+    # the partition's lower part cut off the south wall: a free-standing
+    # obstacle 1.6 m long (rows 54..85), a table's side, with the same hits
+    free, hits = _partition((14, 22, 31, 40, 47))
+    free[86:104, 84:88] = True
+    hits[86:104, 84:88] = False
+    faces = W.wall_faces(~free, free)
+    lines = W.wall_lines(faces, min_length_px=20)
+    kw = dict(min_wall_px=30, min_gap_px=10, max_gap_px=60, min_hits_px=4, depth_px=24, hits=hits)
+    assert W.partition_gaps(~free, free, lines, **kw)                       # any obstacle: found
+    assert W.partition_gaps(~free, free, lines, min_structure_px=40, **kw) == []  # 2 m structure: not

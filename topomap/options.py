@@ -309,6 +309,12 @@ class TopomapOptions(_Options):
         few laser hits (glass, a wall seen edge-on, an open door leaf). A gap the laser saw nothing in is
         the way past the end of a wall or a cupboard and stays open (a door
         beside a wall, ``beside_wall``, needs no hits).
+    partition_structure : float
+        The obstacle a partition's face (``partition_wall``) lies on is at
+        least this long or wide (m): 2.0 m, longer than a free-standing
+        table or desk (1.2-1.8 m), whose side would otherwise pass for a
+        partition; a partition is joined to the building's walls or seen
+        over more than that.
     wall_wander : float
         Pieces of one long wall lie within this distance (m) of its line:
         0.2 m. A laser SLAM map draws a straight wall a few cells off its
@@ -393,6 +399,7 @@ class TopomapOptions(_Options):
     pillar_depth: float = _opt(0.5, "length")
     partition_wall: float = _opt(1.5, "length")
     partition_hits: float = _opt(0.2, "length")
+    partition_structure: float = _opt(2.0, "length")
     furniture_size: Optional[float] = _opt(None, "optional length")
     scan_furniture_size: float = _opt(3.0, "length")
     wall_thickness: float = _opt(0.5, "length")

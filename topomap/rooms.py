@@ -135,6 +135,31 @@ def _grow(seeds: np.ndarray, todo: np.ndarray, max_steps: int = 8) -> np.ndarray
     return out.astype(np.int32)
 
 
+def _wall_to_wall(rc, p, q, space, reach: int = 2):
+    """The cells ``rc`` of a cut from ``p`` to ``q``, carried on past each end
+    cell, for at most ``reach`` cells, while they are cells of ``space``: a
+    cut whose end was rounded onto the free cell beside a wall would leave a
+    4-connected way round it. The steps follow the cut's direction turned
+    to the nearest of the 8 neighbours (integer steps: the same cells
+    whichever way the map is turned)."""
+    H, W = space.shape
+    v = np.asarray(q, float) - np.asarray(p, float)
+    a = np.abs(v)
+    if a.max() < 1e-9:
+        return rc
+    # a component counts when it is at least tan(22.5 deg) of the other
+    step = np.where(a >= np.tan(np.pi / 8) * a.max(), np.sign(v), 0).astype(int)
+    rr, cc = [rc[0]], [rc[1]]
+    for (r, c), s in (((rc[0][-1], rc[1][-1]), step), ((rc[0][0], rc[1][0]), -step)):
+        for _ in range(reach):
+            r, c = r + s[0], c + s[1]
+            if not (0 <= r < H and 0 <= c < W) or not space[r, c]:
+                break
+            rr.append(np.array([r]))
+            cc.append(np.array([c]))
+    return np.concatenate(rr), np.concatenate(cc)
+
+
 def cut_rooms(grid: OccupancyGrid, segments, *, space=None, min_room_cells: int = 0, wide=None):
     """Cut free space along door segments and label the rooms (and fragments).
 
@@ -179,7 +204,7 @@ def cut_rooms(grid: OccupancyGrid, segments, *, space=None, min_room_cells: int 
     free = grid.free
     space = free if space is None else (space & free)
     # stage "cutting rooms" of the Voronoi methods: the door segments' cells taken out of the space
-    lines = [line_pixels(p, q, free.shape) for p, q in segments]
+    lines = [_wall_to_wall(line_pixels(p, q, free.shape), p, q, space) for p, q in segments]
     whole = space.copy()
     for rc in lines:
         whole[rc] = False

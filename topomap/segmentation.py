@@ -708,7 +708,7 @@ class _Walls:
             ops = ops + W.partition_gaps(self.obstacle, self.free, self.lines, min_wall_px=opts.partition_wall / res,
                                          min_gap_px=opts.min_door_width / res, max_gap_px=opts.max_door_width / res,
                                          min_hits_px=opts.partition_hits / res, depth_px=opts.alcove_depth / res,
-                                         hits_band_px=opts.wall_wander / res,
+                                         hits_band_px=opts.wall_wander / res, min_structure_px=opts.partition_structure / res,
                                          hits=None if hits is None else S.downsample(hits, self.k, keep="any"))
         ops = [(self.fine(p), self.fine(q)) for p, q in ops]
         if self.lw:

@@ -437,7 +437,8 @@ def long_walls(lines: np.ndarray, *, max_gap_px: float, offset_px: float, min_sp
 def partition_gaps(obstacle: np.ndarray, free: np.ndarray, lines: np.ndarray, *, min_wall_px: float,
                    min_gap_px: float, max_gap_px: float, min_hits_px: float, depth_px: float,
                    hits: np.ndarray | None = None, hits_band_px: float = 1.0,
-                   angle_tol: float = np.deg2rad(12.0), band_px: int = 1) -> list:
+                   min_structure_px: float = 0.0, angle_tol: float = np.deg2rad(12.0),
+                   band_px: int = 1) -> list:
     """Openings between the free end of a partition and the wall it points at.
 
     A partition between two rooms is often mapped only in part: the laser
@@ -470,6 +471,10 @@ def partition_gaps(obstacle: np.ndarray, free: np.ndarray, lines: np.ndarray, *,
         The cells the laser hit: the map's occupied cells, specks that
         ``obstacle`` looks through as clutter included. Default
         ``obstacle``.
+    min_structure_px : float
+        The partition's face is one of an obstacle (8-connected) at least
+        this long or wide: a wall of the building, joined to its other
+        walls, not a free-standing table or cupboard. 0: any.
 
     Returns
     -------
@@ -484,6 +489,21 @@ def partition_gaps(obstacle: np.ndarray, free: np.ndarray, lines: np.ndarray, *,
     segs = np.asarray(lines, float).reshape(-1, 4)
     if segs.shape[0] < 2:
         return []
+    if min_structure_px > 0:
+        # the extent of the obstacle each face line lies on
+        n_obj, obj, st, _ = cv2.connectedComponentsWithStats(obstacle.view(np.uint8), connectivity=8)
+        big = np.maximum(st[:, cv2.CC_STAT_WIDTH], st[:, cv2.CC_STAT_HEIGHT]) >= min_structure_px
+        big[0] = False
+        mid = np.rint((segs[:, :2] + segs[:, 2:]) / 2).astype(int)
+        H, W = obstacle.shape
+        on = np.zeros(len(segs), bool)
+        for dr in (-1, 0, 1):
+            for dc in (-1, 0, 1):
+                r = np.clip(mid[:, 0] + dr, 0, H - 1)
+                c = np.clip(mid[:, 1] + dc, 0, W - 1)
+                on |= big[obj[r, c]]
+    else:
+        on = np.ones(len(segs), bool)
     classes = _main_classes(segs, angle_tol)
     crossing = []
     for _, sel in classes:
@@ -498,7 +518,7 @@ def partition_gaps(obstacle: np.ndarray, free: np.ndarray, lines: np.ndarray, *,
     out = []
     for k, (u, sel) in enumerate(classes):
         a, b = segs[sel, :2], segs[sel, 2:]
-        keep = np.hypot(*(b - a).T) >= min_wall_px
+        keep = (np.hypot(*(b - a).T) >= min_wall_px) & on[sel]
         if not keep.any():
             continue
         a, b = a[keep], b[keep]
