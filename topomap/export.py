@@ -135,8 +135,8 @@ def _wkt_ring(text: str) -> str:
 #: JSON WKT and the GeoJSON coordinates of a room's outline encode its floats once.
 _RING_MEMO = contextvars.ContextVar("topomap_ring_memo", default=None)
 
-#: Coordinates encoded per json.dumps call in :func:`_coords_json`: Python lists of this many
-#: points at a time, whatever the size of the outline.
+#: Coordinates encoded per block in :func:`_coords_json`: Python objects for this many points at
+#: a time, whatever the size of the outline.
 _CHUNK = 1 << 15
 
 
@@ -144,8 +144,8 @@ def _coords_json(geom) -> str:
     """GeoJSON ``coordinates`` text of a 2-D, non-empty Polygon or MultiPolygon (memoised in write_outputs).
 
     The same text as ``json.dumps`` of the nested lists of its rings' coordinates, but made a block of
-    whole polygons (or of one polygon's rings) at a time: time and memory are linear in the
-    coordinates, with no Python object per ring or coordinate kept.
+    whole polygons (or of one polygon's rings) at a time (:func:`_rings_texts`): time and memory are
+    linear in the coordinates, with Python objects for one block's rings and points at a time only.
     """
     import shapely
 
@@ -170,20 +170,16 @@ def _coords_json(geom) -> str:
         k1 = max(int(np.searchsorted(ring_end[part_end - 1], c0 + _CHUNK, side="right")), k + 1)
         r1 = part_end[k1 - 1]
         if k1 > k + 1 or ring_end[r1 - 1] - c0 <= _CHUNK:
-            pts = xy[c0:ring_end[r1 - 1]].tolist()
-            bounds = np.r_[c0, ring_end[r0:r1]] - c0
-            rings = [pts[bounds[j]:bounds[j + 1]] for j in range(r1 - r0)]
+            rings = _rings_texts(xy[c0:ring_end[r1 - 1]], np.r_[c0, ring_end[r0:r1]] - c0)
             polys = np.r_[0, part_end[k:k1] - r0]
-            texts.append(json.dumps([rings[polys[j]:polys[j + 1]] for j in range(k1 - k)])[1:-1])
+            texts.append(", ".join("[" + ", ".join(rings[polys[j]:polys[j + 1]]) + "]" for j in range(k1 - k)))
         else:  # one polygon of more coordinates: its rings in blocks of up to _CHUNK coordinates
             inner = []
             r = r0
             while r < r1:
                 c = ring_end[r - 1] if r else 0
                 rb = min(max(int(np.searchsorted(ring_end, c + _CHUNK, side="right")), r + 1), r1)
-                pts = xy[c:ring_end[rb - 1]].tolist()
-                bounds = np.r_[c, ring_end[r:rb]] - c
-                inner.append(json.dumps([pts[bounds[j]:bounds[j + 1]] for j in range(rb - r)])[1:-1])
+                inner.append(", ".join(_rings_texts(xy[c:ring_end[rb - 1]], np.r_[c, ring_end[r:rb]] - c)))
                 r = rb
             texts.append("[" + ", ".join(inner) + "]")
             del inner
@@ -195,6 +191,18 @@ def _coords_json(geom) -> str:
     if memo is not None:
         memo[id(geom)] = (geom, text)
     return text
+
+
+def _rings_texts(xy, bounds) -> list:
+    """``json.dumps`` of each ring ``xy[bounds[j]:bounds[j + 1]]`` (``[[x, y], ...]``) of the points ``xy``.
+
+    Every distinct float is spelt once (json's spelling, from one ``json.dumps`` of the distinct
+    values): an outline's corners share few x and few y values (the map's cell edges).
+    """
+    bits, inv = np.unique(np.ascontiguousarray(xy, float).view(np.int64), return_inverse=True)  # bit for bit
+    spelt = np.array(json.dumps(bits.view(float).tolist())[1:-1].split(", "), dtype=object)
+    pts = list(map(", ".join, spelt[inv.reshape(-1, 2)].tolist()))
+    return ["[[" + "], [".join(pts[bounds[j]:bounds[j + 1]]) + "]]" for j in range(len(bounds) - 1)]
 
 
 def _poly_rings(p) -> list:
