@@ -48,7 +48,7 @@ import networkx as nx
 from .errors import GraphFormatError, first_line
 from .io import atomic_write  # noqa: F401  (re-exported: topomap.export.atomic_write)
 
-__all__ = ["atomic_write", "save_labels", "save_graphml", "save_json", "to_graphml_graph",
+__all__ = ["atomic_write", "save_labels", "label_png_bytes", "save_graphml", "save_json", "to_graphml_graph",
            "node_link", "write_outputs", "save_bytes", "geometry_wkt", "restore_types", "load_graphml", "load_json",
            "to_geojson", "from_geojson", "save_geojson", "load_geojson", "save_label_map", "load_label_map",
            "save_graph", "load_graph", "label_map_bytes", "graphml_bytes", "GRAPH_TYPES", "NODE_TYPES",
@@ -67,17 +67,53 @@ def save_labels(labels: np.ndarray, path) -> Path:
     ``path``: a file name (written atomically) or a binary file object
     (written as it is; the caller owns the file, as :func:`write_outputs`).
     """
-    from PIL import Image
-
+    labels = np.asarray(labels)
     if labels.max(initial=0) > 65535:
         raise ValueError(f"{_name(path)}: {int(labels.max())} rooms do not fit a 16-bit PNG")
-    img = Image.fromarray(labels.astype(np.uint16))
-    if _is_file(path):
-        img.save(path, format="PNG", compress_level=1)
-        return Path(_name(path))
-    with atomic_write(path) as fh:
-        img.save(fh, format="PNG", compress_level=1)  # fast zlib level: label images compress well anyway
-    return Path(path)
+    if labels.ndim != 2 or labels.size == 0:
+        from .errors import ParameterError
+
+        raise ParameterError(f"{_name(path)}: a label image must be a non-empty 2-D array, got shape {labels.shape}")
+    return _write(label_png_bytes(labels), path)
+
+
+#: Rows of the label image filtered and compressed at a time by :func:`label_png_bytes` (about 1 MB).
+_PNG_BLOCK_BYTES = 1 << 20
+
+
+def label_png_bytes(labels: np.ndarray) -> bytes:
+    """A 16-bit greyscale PNG of ``labels`` (each in 0..65535), as :func:`save_labels` writes it.
+
+    Every row is stored with the PNG "Up" filter (its difference to the row above: a label image
+    is mostly zeros then) and compressed at zlib level 1, a block of rows at a time: time and
+    memory are linear in the cells, about twice as fast as Pillow's encoder at its fastest level
+    (which tries every filter on every row) and as small.
+    """
+    import struct
+    import zlib
+
+    H, W = labels.shape
+    be = np.ascontiguousarray(labels, dtype=">u2").view(np.uint8).reshape(H, 2 * W)  # PNG: big-endian
+    z = zlib.compressobj(1)
+    parts = []
+    step = max(1, _PNG_BLOCK_BYTES // (2 * W + 1))
+    for a in range(0, H, step):
+        b = min(a + step, H)
+        raw = np.empty((b - a, 2 * W + 1), np.uint8)
+        raw[:, 0] = 2  # the filter type of each row: Up
+        if a == 0:
+            raw[0, 1:] = be[0]  # the row above the first is zeros
+            np.subtract(be[1:b], be[:b - 1], out=raw[1:, 1:])
+        else:
+            np.subtract(be[a:b], be[a - 1:b - 1], out=raw[:, 1:])
+        parts.append(z.compress(raw))
+    parts.append(z.flush())
+
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+    head = struct.pack(">IIBBBBB", W, H, 16, 0, 0, 0, 0)  # 16-bit greyscale, no interlace
+    return b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", head) + chunk(b"IDAT", b"".join(parts)) + chunk(b"IEND", b"")
 
 
 def _is_file(path) -> bool:
