@@ -296,11 +296,11 @@ def segment_cmd(maps, outdir, resolution, method, skeletons, no_overlay, no_geoj
     With --previous also changes.json (kept, new, vanished, split and
     merged room IDs).
     """
+    start = _process_age()  # before any import below: those are the "import" stage
+    imported = _preload(maps)
     from .batch import ERROR, FAILED, OK, SKIPPED, segment_many
     from .errors import ParameterError
 
-    start = _process_age()
-    imported = _preload(maps)
     warm = None
     if profile:  # one-off first-call costs as a stage of their own, not inside the first map's
         try:
