@@ -67,6 +67,9 @@ def room_polygons(labels: np.ndarray, to_world=None) -> dict:
         down to that limit (its largest piece is always kept). Its cells
         stay in the labels and in the room's ``cells`` and ``area``.
     """
+    labels = np.asarray(labels)
+    if labels.size and labels.min() < 0:  # negative labels are no room, as 0
+        labels = np.maximum(labels, 0)
     return _room_polygons(labels, to_world)
 
 
