@@ -161,3 +161,31 @@ def test_outline_texts_in_blocks_are_the_plain_texts(monkeypatch):
         assert shapely.wkt.loads(ex.geometry_wkt(g)).equals_exact(g, 0)
         big = max(g.geoms, key=lambda p: len(p.interiors))
         assert shapely.wkt.loads(ex.geometry_wkt(big)).equals_exact(big, 0)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_label_rings_are_each_labels_mask_rings(seed):
+    # one pass over a label image gives, for every label, the rings of its own mask (same corners, same order)
+    from topomap.geometry import label_rings, mask_rings
+
+    rng = np.random.default_rng(seed)
+    for _ in range(100):
+        L = rng.integers(0, rng.integers(1, 7), size=(rng.integers(1, 25), rng.integers(1, 25)))
+        R = label_rings(L)
+        assert np.all(np.diff(R.piece_label) >= 0)  # pieces grouped by label
+        for lab in range(1, int(L.max()) + 1):
+            xy, ring, piece, hole = mask_rings(L == lab)
+            pieces = np.flatnonzero(R.piece_label == lab)
+            rings = np.flatnonzero(np.isin(R.piece, pieces))
+            corners = np.isin(R.ring, rings)
+            assert np.array_equal(R.xy[corners], xy)
+            assert np.array_equal(np.searchsorted(rings, R.ring[corners]), ring)
+            assert np.array_equal(np.searchsorted(pieces, R.piece[rings]), piece)
+            assert np.array_equal(R.hole[rings], hole)
+        # the runs hold every labelled cell once
+        row, col, length, lab = R.runs
+        back = np.zeros_like(L)
+        for r, c, n, v in zip(row, col, length, lab):
+            assert (back[r, c:c + n] == 0).all()
+            back[r, c:c + n] = v
+        assert np.array_equal(back, L)

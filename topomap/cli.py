@@ -102,18 +102,20 @@ def write_segmentation(seg, outdir, *, overlay: bool = True, skeletons: bool = F
 #: Modules the segment command uses, imported up front (their import time is the
 #: ``import`` stage of ``--profile``, not hidden in the first map's stages).
 _PRELOAD = ("numpy", "scipy.ndimage", "scipy.sparse.csgraph", "scipy.spatial", "cv2", "PIL.Image",
-            "PIL.PngImagePlugin", "yaml", "networkx", "shapely", "shapely.geometry", "skimage.draw",
+            "PIL.PngImagePlugin", "networkx", "shapely", "shapely.geometry", "skimage.draw",
             "skimage.graph", "skimage.morphology", "skimage.segmentation", "topomap.io", "topomap.segmentation",
             "topomap.roomgraph", "topomap.planning", "topomap.export", "topomap.plot")
 
 
-def _preload() -> float:
-    """Import :data:`_PRELOAD`; returns the seconds it took."""
+def _preload(maps=()) -> float:
+    """Import :data:`_PRELOAD` (and the YAML reader when a map of ``maps`` is a YAML file); returns the
+    seconds it took."""
     import importlib
     import time
 
     t0 = time.perf_counter()
-    for name in _PRELOAD:
+    yaml = any(str(m).lower().endswith((".yaml", ".yml")) for m in maps)
+    for name in _PRELOAD + (("yaml",) if yaml else ()):
         importlib.import_module(name)
     return time.perf_counter() - t0
 
@@ -294,11 +296,11 @@ def segment_cmd(maps, outdir, resolution, method, skeletons, no_overlay, no_geoj
     With --previous also changes.json (kept, new, vanished, split and
     merged room IDs).
     """
+    start = _process_age()  # before any import below: those are the "import" stage
+    imported = _preload(maps)
     from .batch import ERROR, FAILED, OK, SKIPPED, segment_many
     from .errors import ParameterError
 
-    start = _process_age()
-    imported = _preload()
     warm = None
     if profile:  # one-off first-call costs as a stage of their own, not inside the first map's
         try:

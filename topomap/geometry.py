@@ -9,9 +9,12 @@ conversion of metres to whole pixels and the outlines of a mask's cells. Coordin
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
-__all__ = ["point_segment_distances", "line_pixels", "disk", "true_bbox", "metres_to_px", "mask_rings"]
+__all__ = ["point_segment_distances", "line_pixels", "disk", "true_bbox", "metres_to_px", "mask_rings", "label_rings",
+           "LabelRings"]
 
 
 def point_segment_distances(p, a, b) -> np.ndarray:
@@ -120,48 +123,117 @@ def mask_rings(mask: np.ndarray):
         Whether the ring is a hole of its piece. Rings are ordered by piece,
         each piece's shell first, then its holes.
     """
-    import cv2
+    return label_rings(np.asarray(mask, bool).view(np.uint8))[:4]
+
+
+class LabelRings(NamedTuple):
+    """The rings of every label of a label image (:func:`label_rings`)."""
+
+    #: (K, 2) float: the rings' corners as ``(row, col)`` (see :func:`mask_rings`).
+    xy: np.ndarray
+    #: (K,) int: ring of each corner; a ring's corners are consecutive.
+    ring: np.ndarray
+    #: (R,) int: piece of each ring; pieces ordered by label, then by their first cell (row-major).
+    piece: np.ndarray
+    #: (R,) bool: whether the ring is a hole of its piece (each piece's shell first, then its holes).
+    hole: np.ndarray
+    #: (P,) int: label of each piece.
+    piece_label: np.ndarray
+    #: (P,) int: number of cell edges on the rings of each piece.
+    piece_edges: np.ndarray
+    #: The runs of equal non-zero labels along the rows, row-major: (U,) int arrays ``row``,
+    #: ``col`` (first cell), ``length`` (cells) and ``label``.
+    runs: tuple
+
+
+def label_rings(labels: np.ndarray) -> LabelRings:
+    """The rings of :func:`mask_rings` of every label of a label image, in one pass over the image.
+
+    The rings of label ``i`` are those of :func:`mask_rings` of ``labels ==
+    i`` (the same corners in the same order): pieces are 4-connected cells
+    of one label, every ring is simple. Time and memory are linear in the
+    image's cells.
+
+    Parameters
+    ----------
+    labels : (M, N) array_like of int
+        Labels ``>= 0``; 0 is no label (it gets no rings).
+
+    Returns
+    -------
+    LabelRings
+    """
     from scipy import sparse
     from scipy.sparse import csgraph
 
-    m = np.asarray(mask, bool)
+    L = np.asarray(labels)
+    top = int(L.max(initial=0))
+    dt = np.uint8 if top < 2 ** 8 else np.uint16 if top < 2 ** 16 else np.int64
     # padded by one cell above and left, two below and right: vertex (i, j), the top-left corner of
     # cell (i, j), has the cell's flat index, and every ring closes inside
-    W = m.shape[1] + 3
-    P = np.zeros((m.shape[0] + 3, W), bool)
-    P[1:-2, 1:-2] = m
+    W = L.shape[1] + 3
+    P = np.zeros((L.shape[0] + 3, W), dt)
+    P[1:-2, 1:-2] = L
     it = np.int32 if 4 * P.size < 2 ** 31 else np.int64
-    pieces = cv2.connectedComponents(P.view(np.uint8), connectivity=4, ltype=cv2.CV_32S)[1].ravel()
     f = P.ravel()
-    # directed edges with the mask's cell on their right (rows down), by start vertex; a row's last
-    # cells are never the mask's, so flat neighbours across a row's end make no edge
-    E = np.flatnonzero(f[W:] & ~f[:-W]).astype(it) + W              # east, below cell (i, j)
-    S = np.flatnonzero(f[:-1] & ~f[1:]).astype(it) + 1               # south, left of cell (i, j)
-    Wd = np.flatnonzero(f[:-W] & ~f[W:]).astype(it) + (W + 1)        # west, cell (i - 1, j) above
-    N = np.flatnonzero(f[1:] & ~f[:-1]).astype(it) + (W + 1)         # north, cell (i, j) right
-    del f
+    h = np.flatnonzero(f[:-1] != f[1:]).astype(it)  # cell h and the one right of it differ
+    v = np.flatnonzero(f[:-W] != f[W:]).astype(it)  # cell v and the one below it differ
+    # runs of equal non-zero labels along the rows (none crosses a row's end: the padding is 0)
+    run0 = h[f[h + 1] != 0] + 1
+    run1 = h[f[h] != 0] + 1
+    run_label = f[run0].astype(np.int64)
+    z = np.zeros(0, np.int64)
+    if run0.size == 0:
+        return LabelRings(np.zeros((0, 2)), z, z, np.zeros(0, bool), z, z, (z, z, z, z))
+
+    def run_of(k):  # the run holding each (non-zero) cell k
+        return np.searchsorted(run0, k, side="right") - 1
+
+    # pieces: runs of one label in adjacent rows that overlap, joined (each overlap starts at a run's start)
+    up = run0[f[run0 - W] == f[run0]]
+    down = run0[f[run0 + W] == f[run0]]
+    a = np.concatenate([run_of(up - W), run_of(down)])
+    b = np.concatenate([run_of(up), run_of(down + W)])
+    nr = run0.size
+    _, comp = csgraph.connected_components(sparse.csr_matrix((np.ones(a.size, np.int8), (a, b)), shape=(nr, nr)),
+                                           directed=False)
+    _, first_run = np.unique(comp, return_index=True)  # runs are row-major: a piece's first run holds its first cell
+    order = np.lexsort((first_run, run_label[first_run]))  # pieces by label, then by their first cell
+    rank = np.empty(order.size, np.int64)
+    rank[order] = np.arange(order.size)
+    run_piece = rank[comp]
+    piece_label = run_label[first_run[order]]
+    del comp, first_run, order, rank
+    # directed edges with the label's cell on their right (rows down), by start vertex
+    E = v[f[v + W] != 0] + W              # east, below cell (i, j)
+    S = h[f[h] != 0] + 1                  # south, left of cell (i, j)
+    Wd = v[f[v] != 0] + (W + 1)           # west, cell (i - 1, j) above
+    N = h[f[h + 1] != 0] + (W + 1)        # north, cell (i, j) right
+    del h, v
     blocks = np.cumsum([0, E.size, S.size, Wd.size, N.size])  # edges by direction, each by start vertex
     start = np.concatenate([E, S, Wd, N])
     del E, S, Wd, N
     d = np.repeat(np.arange(4, dtype=np.int8), np.diff(blocks))
     n = start.size
-    if n == 0:
-        z = np.zeros(0, np.int64)
-        return np.zeros((0, 2)), z, z, np.zeros(0, bool)
     step = np.array([1, W, -1, -W], it)            # vertex steps east, south, west, north
     right = np.array([0, -1, -W - 1, -W], it)      # the cell on an edge's right, from its start
-    own = pieces[start + right[d]]                 # every edge's piece
+    own_cell = start + right[d]
+    own = f[own_cell]                              # every edge's label
     end = start + step[d]
     # the next edge at the end vertex: a right turn if the cell straight ahead (right of the straight
-    # edge) is not the mask's, else straight on if the cell ahead-left is not, else a left turn. Two
+    # edge) is not the label's, else straight on if the cell ahead-left is not, else a left turn. Two
     # cells that touch at the corner only (the cell ahead-left and this edge's own): a right turn
     # keeps them apart, unless they are the same piece: then the left turn, so that no ring passes
     # a corner twice (the piece's shell and a hole, or two holes, touch there instead)
     dl = (d + 3) % 4
-    ahead = pieces[end + right[d]]
-    left = pieces[end + right[dl]]
-    nd = np.where((ahead == 0) & (left != own), (d + 1) % 4, np.where(left == 0, d, dl))
-    del ahead, left, dl, pieces
+    ahead = f[end + right[d]] == own
+    left_cell = end + right[dl]
+    left = f[left_cell] == own
+    apart = ~ahead & left                          # corner contacts: the same piece?
+    sel = np.flatnonzero(apart)
+    apart[sel] = run_piece[run_of(left_cell[sel])] != run_piece[run_of(own_cell[sel])]
+    nd = np.where(~ahead & (~left | apart), (d + 1) % 4, np.where(~left, d, dl))
+    del ahead, left, apart, left_cell, dl, own, sel
     nxt = np.empty(n, it)  # the next edge: the one of direction nd from the end vertex
     for k in range(4):
         sel = np.flatnonzero(nd == k)
@@ -186,9 +258,10 @@ def mask_rings(mask: np.ndarray):
     corner = walk[d[walk] != d[prev[walk]]]  # edges that start with a turn, ring by ring
     del walk, prev, nxt, idx
     rcyc = cyc[corner]
+    ring_edges = np.bincount(cyc)
     del cyc
     r, c = np.divmod(start[corner], W)
-    del start, corner
+    del corner
     # each ring's orientation (shoelace, x = col, y = row: shells positive) and piece
     bounds = np.flatnonzero(np.r_[True, rcyc[1:] != rcyc[:-1]])
     ring_cyc = rcyc[bounds]  # the cycle of each ring in walk order
@@ -198,7 +271,9 @@ def mask_rings(mask: np.ndarray):
     twice_area = np.add.reduceat(c.astype(np.int64) * r[after] - c[after].astype(np.int64) * r, bounds)
     del after
     hole = twice_area < 0
-    piece = own[first[ring_cyc]].astype(np.int64) - 1
+    piece = run_piece[run_of(own_cell[first[ring_cyc]])]
+    del own_cell, start
+    piece_edges = np.bincount(piece, weights=ring_edges[ring_cyc], minlength=piece_label.size).astype(np.int64)
     # rings by piece, its shell first, then by their lowest edge: each ring's corners moved as a block
     rank = np.lexsort((first[ring_cyc], hole, piece))
     size = np.diff(np.r_[bounds, r.size])
@@ -214,4 +289,6 @@ def mask_rings(mask: np.ndarray):
     pos = np.empty(rank.size, np.int64)
     pos[rank] = np.arange(rank.size)
     ring[dest] = pos[walk_ring]
-    return xy, ring, piece[rank], hole[rank]
+    rows, cols = np.divmod(run0.astype(np.int64), W)
+    runs = (rows - 1, cols - 1, (run1 - run0).astype(np.int64), run_label)
+    return LabelRings(xy, ring, piece[rank], hole[rank], piece_label, piece_edges, runs)

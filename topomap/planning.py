@@ -204,6 +204,17 @@ class _Ctx:
             out[inside & (out == 0)] = r
         return out
 
+    def window_room(self, r, rooms, win):
+        """The cells of room ``r`` in the window ``(r0, r1, c0, c1)`` (a new bool array) and a test
+        ``(rows, cols) -> bool array``: window cells on one of ``rooms``."""
+        if self.seg is None:
+            L = self.window_labels(rooms, win)
+            return L == r, lambda rr, cc: L[rr, cc] > 0
+        r0, r1, c0, c1 = win
+        L = self.seg.labels[r0:r1, c0:c1]  # a view: one pass for the room's cells, none for the others
+        ids = np.array(sorted(rooms))
+        return L == r, lambda rr, cc: np.isin(L[rr, cc], ids)
+
     def label_at_pixel(self, row, col):
         H, W = self.shape
         if not (0 <= row < H and 0 <= col < W):
@@ -253,12 +264,11 @@ class _RoomSpace:
         c0, c1 = max(min(cols) - 1, 0), min(max(cols) + 2, W)
         self.win = (r0, r1, c0, c1)
         rooms = {r} | {x for d in doors for x in ctx.doors[d][:2]}
-        L = ctx.window_labels(rooms, self.win)
-        mask = L == r
+        mask, on_rooms = ctx.window_room(r, rooms, self.win)
         self.door_px = {}
         for d, (rr, cc) in lines.items():
             rr, cc = rr - r0, cc - c0
-            ok = L[rr, cc] > 0
+            ok = on_rooms(rr, cc)
             if not ok.any():
                 continue
             rr, cc = rr[ok], cc[ok]

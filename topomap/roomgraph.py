@@ -15,7 +15,7 @@ import numpy as np
 import networkx as nx
 from scipy import ndimage as ndi
 
-from .geometry import mask_rings
+from .geometry import label_rings, mask_rings
 
 __all__ = ["room_graph", "room_polygons", "OUTLINE_MIN_RINGS", "OUTLINE_CELLS_PER_RING"]
 
@@ -56,7 +56,8 @@ def room_polygons(labels: np.ndarray, to_world=None) -> dict:
         patch of other cells. The geometry is valid as built (no repair) and
         holds exactly the room's cells; exteriors run counterclockwise,
         holes clockwise (in the map frame, as RFC 7946 asks). Time and
-        memory are linear in the cells of each room's bounding box.
+        memory are linear in the cells of the label image (all rooms are
+        outlined in one pass over it).
 
         A room of more pieces and holes than :data:`OUTLINE_MIN_RINGS` +
         cells / :data:`OUTLINE_CELLS_PER_RING` (never seen in a building
@@ -66,39 +67,98 @@ def room_polygons(labels: np.ndarray, to_world=None) -> dict:
         down to that limit (its largest piece is always kept). Its cells
         stay in the labels and in the room's ``cells`` and ``area``.
     """
-    return _room_polygons(labels, ndi.find_objects(labels), to_world)
+    labels = np.asarray(labels)
+    if labels.size and labels.min() < 0:  # negative labels are no room, as 0
+        labels = np.maximum(labels, 0)
+    return _room_polygons(labels, to_world)
 
 
-def _room_polygons(labels, objs, to_world):
-    """:func:`room_polygons` with the rooms' bounding boxes (``ndi.find_objects(labels)``) given."""
+def _room_polygons(labels, to_world, rings=None, objs=None):
+    """:func:`room_polygons`, from the labels' rings (:func:`topomap.geometry.label_rings`) and their rooms'
+    bounding boxes (as ``ndi.find_objects(labels)``) when given.
+
+    All rooms' outlines come from one pass over the labels; a room beyond the detail limit (its rings
+    have more than 4 edges per ring the limit allows) is outlined again from its own cells
+    (:func:`_outline_cells`).
+    """
     import shapely
 
-    out = {}
+    R = label_rings(labels) if rings is None else rings
     cell, mirror = 1.0, False  # m² per cell (for the warning); whether to_world turns rings around
     if to_world is not None:
         x, y = to_world(np.array([0.0, 0.0, 1.0]), np.array([0.0, 1.0, 0.0]))
         cell = float(np.hypot(x[1] - x[0], y[1] - y[0])) ** 2
         mirror = (x[1] - x[0]) * (y[2] - y[0]) - (y[1] - y[0]) * (x[2] - x[0]) < 0  # (col, row) to (x, y)
-    for i, sl in enumerate(objs, start=1):
-        if sl is None:
-            continue
-        m = _outline_cells(labels[sl], i, cell if to_world is not None else None)
-        xy, ring, piece, _ = mask_rings(m)
-        del m
-        if mirror:  # every ring backwards: exteriors counterclockwise in (x, y)
-            bounds = np.flatnonzero(np.r_[True, ring[1:] != ring[:-1], True])
-            size = np.diff(bounds)
-            xy = xy[np.repeat(bounds[:-1] + bounds[1:] - 1, size) - np.arange(ring.size)]
-        rows, cols = xy[:, 0] + sl[0].start, xy[:, 1] + sl[1].start
-        del xy
-        if to_world is not None:
-            x, y = to_world(rows, cols)
-            x, y = np.asarray(x, float), np.asarray(y, float)
-        else:
-            x, y = cols, rows
-        polys = shapely.polygons(shapely.linearrings(np.stack([x, y], 1), indices=ring), indices=piece)
-        out[i] = polys[0] if len(polys) == 1 else shapely.multipolygons(polys)
-    return out
+    n = int(R.piece_label.max(initial=0))
+    _, _, length, lab = R.runs
+    cells = np.bincount(lab, weights=length, minlength=n + 1).astype(np.int64)
+    edges = np.bincount(R.piece_label, weights=R.piece_edges, minlength=n + 1)
+    # every ring has at least 4 edges, and the pieces and holes the limit counts are at most the edges / 4
+    detailed = np.flatnonzero(edges > 4 * (OUTLINE_MIN_RINGS + cells // OUTLINE_CELLS_PER_RING))
+    polys = _polygons(R.xy, R.ring, R.piece, (0, 0), to_world, mirror)
+    npieces = np.bincount(R.piece_label, minlength=n + 1)
+    first = np.r_[0, np.cumsum(npieces)]
+    out = {}
+    multi = np.flatnonzero(npieces > 1)
+    if multi.size:
+        sel = np.concatenate([np.arange(first[i], first[i + 1]) for i in multi])
+        for i, g in zip(multi, shapely.multipolygons(polys[sel], indices=np.repeat(np.arange(multi.size),
+                                                                                    npieces[multi]))):
+            out[int(i)] = g
+    for i in np.flatnonzero(npieces == 1):
+        out[int(i)] = polys[first[i]]
+    if detailed.size:
+        if objs is None:
+            objs = ndi.find_objects(labels)
+        for i in detailed:
+            sl = objs[i - 1]
+            m = _outline_cells(labels[sl], int(i), cell if to_world is not None else None)
+            xy, ring, piece, _ = mask_rings(m)
+            del m
+            p = _polygons(xy, ring, piece, (sl[0].start, sl[1].start), to_world, mirror)
+            out[int(i)] = p[0] if len(p) == 1 else shapely.multipolygons(p)
+    return {i: out[i] for i in sorted(out)}
+
+
+def _polygons(xy, ring, piece, offset, to_world, mirror):
+    """shapely Polygons of the rings ``xy, ring, piece`` of :func:`topomap.geometry.mask_rings` (``(row, col)``
+    + ``offset``), through ``to_world`` (turned around when ``mirror``), one per piece."""
+    import shapely
+
+    if mirror:  # every ring backwards: exteriors counterclockwise in (x, y)
+        bounds = np.flatnonzero(np.r_[True, ring[1:] != ring[:-1], True])
+        size = np.diff(bounds)
+        xy = xy[np.repeat(bounds[:-1] + bounds[1:] - 1, size) - np.arange(ring.size)]
+    rows, cols = xy[:, 0] + offset[0], xy[:, 1] + offset[1]
+    del xy
+    if to_world is not None:
+        x, y = to_world(rows, cols)
+        x, y = np.asarray(x, float), np.asarray(y, float)
+    else:
+        x, y = cols, rows
+    return shapely.polygons(shapely.linearrings(np.stack([x, y], 1), indices=ring), indices=piece)
+
+
+def _room_stats(runs, n):
+    """Cell counts, row sums and column sums (exact integers, as floats) and bounding boxes (as
+    ``ndi.find_objects``) of labels ``1..n``, from the labels' runs (:attr:`topomap.geometry.LabelRings.runs`)."""
+    row, col, length, lab = runs
+    cnt = np.bincount(lab, weights=length, minlength=n + 1)
+    sr = np.bincount(lab, weights=row * length, minlength=n + 1)
+    sc = np.bincount(lab, weights=length * col + length * (length - 1) // 2, minlength=n + 1)
+    objs = [None] * n
+    if lab.size:
+        order = np.argsort(lab, kind="stable")  # runs by label, each label's row-major
+        ls = lab[order]
+        g = np.flatnonzero(np.r_[True, ls[1:] != ls[:-1]])
+        r0 = row[order][g]
+        r1 = row[order][np.r_[g[1:], ls.size] - 1] + 1
+        c0 = np.minimum.reduceat(col[order], g)
+        c1 = np.maximum.reduceat((col + length)[order], g)
+        for i, a, b, c, e in zip(ls[g].tolist(), r0.tolist(), r1.tolist(), c0.tolist(), c1.tolist()):
+            if i <= n:
+                objs[i - 1] = (slice(a, b, None), slice(c, e, None))
+    return cnt, sr, sc, objs
 
 
 def _components(mask, connectivity):
@@ -197,16 +257,11 @@ def room_graph(seg) -> nx.MultiGraph:
                       n_fragments=int(seg.n_fragments), fragment_area=float(seg.fragment_area))
     if n == 0:
         return G
-    # cell counts and row / column sums per room, from each room's bounding box (exact integer sums)
-    cnt, sr, sc = np.zeros(n + 1), np.zeros(n + 1), np.zeros(n + 1)
-    objs = ndi.find_objects(labels, max_label=n)  # once: the sums below and the outlines
-    for i, sl in enumerate(objs, start=1):
-        if sl is not None:
-            m = labels[sl] == i
-            cnt[i] = np.count_nonzero(m)
-            sr[i] = float(m.sum(1) @ np.arange(sl[0].start, sl[0].stop))
-            sc[i] = float(m.sum(0) @ np.arange(sl[1].start, sl[1].stop))
-    polys = _room_polygons(labels, objs, grid.pixel_to_world)
+    # cell counts, row / column sums and boxes per room and the outlines: one pass over the labels
+    rings = label_rings(labels)
+    cnt, sr, sc, objs = _room_stats(rings.runs, n)
+    polys = _room_polygons(labels, grid.pixel_to_world, rings, objs)
+    del rings
     _BOXES[G] = (weakref.ref(seg.labels), objs)
     area_cell = grid.resolution ** 2
     for i in range(1, n + 1):
