@@ -91,3 +91,29 @@ def test_unknown_margin_does_not_change_the_result():
     nb = b.free_graph.nodes[0]
     assert nb["pixel"] == (na["pixel"][0] + pad, na["pixel"][1] + pad)
     assert (nb["x"], nb["y"]) == pytest.approx((na["x"], na["y"]))
+
+
+def test_a_door_needs_a_laser_hit_at_one_post_at_least():
+    from topomap.doors import UNEXPLORED_POSTS, Candidate, seen_posts
+
+    seen = np.zeros((20, 20), bool)
+    seen[5, 2] = True                                  # a hit at the first door's upper post
+    a = Candidate(edge=None, centroid=np.array([5.0, 5.0]), direction=np.array([0.0, 1.0]), radius=3.0,
+                  ip1=np.array([5.0, 2.0]), ip2=np.array([5.0, 8.0]))
+    b = Candidate(edge=None, centroid=np.array([12.0, 5.0]), direction=np.array([0.0, 1.0]), radius=3.0,
+                  ip1=np.array([12.0, 2.0]), ip2=np.array([12.0, 8.0]))
+    kept = seen_posts([(0.3, a), (0.3, b)], seen)
+    assert [c for _, c in kept] == [a]
+    assert b.status == UNEXPLORED_POSTS
+
+
+def test_posts_on_unexplored_edges_only_on_maps_whose_walls_are_hits():
+    from topomap.io import from_array
+    from topomap.segmentation import _near_hits
+
+    free = np.zeros((40, 40), bool)
+    free[5:35, 5:35] = True
+    walls = ~free
+    grid = from_array(free, resolution=0.05)
+    assert _near_hits(grid, walls, 2.0) is not None            # walls occupied: a laser map
+    assert _near_hits(grid, np.zeros_like(free), 2.0) is None  # walls drawn as unknown: a plan

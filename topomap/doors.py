@@ -63,11 +63,14 @@ WIDE_WITHOUT_WALL_ENDS = "wide opening without wall ends"
 WALL_OPENING = "opening in a wall"
 #: topomap: both posts stand out less than ``pillar_depth`` from the two long side walls of a corridor.
 ACROSS_CORRIDOR = "across a corridor"
+#: topomap: neither post is a laser hit (no occupied cell within ``frontier_post``): the edges of unexplored space.
+UNEXPLORED_POSTS = "between unexplored edges"
 
 #: Every status a candidate can end with or pass through.
 STATUSES = (CANDIDATE, DOOR, NO_WALL_BOTH_SIDES, NO_ENDPOINTS, NO_PROTRUDING_WALL_NEAR, CENTRES_APART,
             CROSSES_WALL_SKELETON, WIDTH_OUT_OF_RANGE, POSTS_NOT_FACING, NO_PROTRUDING_WALL, MOUTH,
-            MOUTH_WITHOUT_PROTRUDING_WALLS, DUPLICATE, WIDE_WITHOUT_WALL_ENDS, WALL_OPENING, ACROSS_CORRIDOR)
+            MOUTH_WITHOUT_PROTRUDING_WALLS, DUPLICATE, WIDE_WITHOUT_WALL_ENDS, WALL_OPENING, ACROSS_CORRIDOR,
+            UNEXPLORED_POSTS)
 
 
 @dataclass
@@ -749,6 +752,29 @@ def across_corridor(accepted, walls, depth_px: float) -> list:
             c.status = ACROSS_CORRIDOR
         else:
             kept.append((width, c))
+    return kept
+
+
+def seen_posts(accepted, seen: np.ndarray) -> list:
+    """Stage "door judging": the accepted ``(width, Candidate)`` with at
+    least one post on a cell of ``seen`` (the cells within ``frontier_post``
+    of an occupied cell); the others get :data:`UNEXPLORED_POSTS`.
+
+    On a map still being explored, free space often narrows between the
+    edges of what the laser has seen (unknown cells on both sides, as where
+    a room was glimpsed through its door); a door stands in a wall, which
+    the laser hits."""
+    H, W = seen.shape
+    kept = []
+    for width, c in accepted:
+        hit = False
+        for p in (c.ip1, c.ip2):
+            rr, cc = np.clip(np.rint(np.asarray(p, float)).astype(int), 0, [H - 1, W - 1])
+            hit |= bool(seen[rr, cc])
+        if hit:
+            kept.append((width, c))
+        else:
+            c.status = UNEXPLORED_POSTS
     return kept
 
 

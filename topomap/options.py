@@ -293,6 +293,15 @@ class TopomapOptions(_Options):
         stands out from a corridor's side wall. A door across a corridor
         sits in a wall across it, which stands out farther (in a 2 m
         corridor, 0.5 m either side of a 1 m door). 0 turns this off.
+    frontier_post : float
+        A bottleneck neither of whose posts has an occupied cell within
+        this distance (m) is no door (status ``between unexplored edges``):
+        0.1 m, a cell or two. On a map still being explored, free space
+        narrows between the edges of what the laser has seen (a room
+        glimpsed through its door); a door stands in a wall, which the
+        laser hits. Only on maps whose free space is bounded mostly by
+        occupied cells (not on plans that draw walls in mid-gray). 0 turns
+        this off.
     partition_wall : float
         With ``openings``, a straight wall face at least this long (m) on
         one of the building's main directions that ends in free space
@@ -397,6 +406,7 @@ class TopomapOptions(_Options):
     long_wall: float = _opt(4.0, "length")
     wall_wander: float = _opt(0.2, "length")
     pillar_depth: float = _opt(0.5, "length")
+    frontier_post: float = _opt(0.1, "length")
     partition_wall: float = _opt(1.5, "length")
     partition_hits: float = _opt(0.2, "length")
     partition_structure: float = _opt(2.0, "length")

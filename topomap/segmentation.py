@@ -626,6 +626,23 @@ def segment_paper(grid: OccupancyGrid, options: PaperOptions | None = None, **kw
     return seg
 
 
+def _near_hits(search: OccupancyGrid, occupied: np.ndarray, radius_px: float):
+    """The cells within ``radius_px`` of an occupied cell, when
+    most of the cells that bound free space are such cells (a laser map,
+    whose walls are hits and whose other bounds are unexplored space);
+    None on a map whose walls are not occupied cells (a plan that draws
+    them in mid-gray)."""
+    import cv2
+
+    from . import walls as W
+
+    r = max(int(np.floor(radius_px + 1e-9)), 0)
+    near = cv2.dilate(occupied.view(np.uint8), disk(r)) > 0 if r else occupied
+    faces = W.wall_faces(~search.free, search.free)
+    n = int(faces.sum())
+    return near if n > 0 and int((faces & near).sum()) >= 0.5 * n else None
+
+
 class _Walls:
     """Stage "walls" of the default method on the grid walls are measured on:
     the map's own cells, or cells of ``opts.wall_cell`` when the map's are
@@ -816,6 +833,10 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
         accepted = D.judge_doors(cands, search.free, S.graph_endpoints(Go), thr_px, opts, res)
         if wl.lw and opts.pillar_depth > 0:
             accepted = D.across_corridor(accepted, wl.index, opts.pillar_depth / res)
+        if opts.frontier_post > 0:
+            seen = _near_hits(search, rooms_grid.occupied, opts.frontier_post / res)
+            if seen is not None:
+                accepted = D.seen_posts(accepted, seen)
         segs = D.suppress_duplicates(accepted, res)
     if opts.openings:
         with T("openings"):
