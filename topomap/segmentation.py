@@ -626,19 +626,21 @@ def segment_paper(grid: OccupancyGrid, options: PaperOptions | None = None, **kw
     return seg
 
 
-def _near_hits(search: OccupancyGrid, occupied: np.ndarray, radius_px: float):
+def _near_hits(search: OccupancyGrid, occupied: np.ndarray, radius_px: float, *, faces=None):
     """The cells within ``radius_px`` of an occupied cell, when
     most of the cells that bound free space are such cells (a laser map,
     whose walls are hits and whose other bounds are unexplored space);
     None on a map whose walls are not occupied cells (a plan that draws
-    them in mid-gray)."""
+    them in mid-gray). ``faces``: :func:`topomap.walls.wall_faces` of
+    ``search``, when the caller has them."""
     import cv2
 
     from . import walls as W
 
     r = max(int(np.floor(radius_px + 1e-9)), 0)
-    near = cv2.dilate(occupied.view(np.uint8), disk(r)) > 0 if r else occupied
-    faces = W.wall_faces(~search.free, search.free)
+    near = cv2.dilate(occupied.view(np.uint8), disk(r)).view(bool) if r else occupied
+    if faces is None:
+        faces = W.wall_faces(~search.free, search.free)
     n = int(faces.sum())
     return near if n > 0 and int((faces & near).sum()) >= 0.5 * n else None
 
@@ -834,7 +836,8 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
         if wl.lw and opts.pillar_depth > 0:
             accepted = D.across_corridor(accepted, wl.index, opts.pillar_depth / res)
         if opts.frontier_post > 0:
-            seen = _near_hits(search, rooms_grid.occupied, opts.frontier_post / res)
+            seen = _near_hits(search, rooms_grid.occupied, opts.frontier_post / res,
+                              faces=wl.faces if wl.k == 1 else None)
             if seen is not None:
                 accepted = D.seen_posts(accepted, seen)
         segs = D.suppress_duplicates(accepted, res)

@@ -350,10 +350,12 @@ def face_runs(faces: np.ndarray, *, min_length_px: float, band_px: int = 1, max_
         lines = wall_lines(faces, min_length_px=min_length_px)
     segs = np.asarray(lines, float).reshape(-1, 4)
     th0 = wall_directions(segs) if len(segs) else 0.0
-    rr, cc = np.nonzero(faces)
-    if rr.size == 0:
+    import cv2
+
+    xy = cv2.findNonZero(np.ascontiguousarray(faces).view(np.uint8))  # the face cells, fast
+    if xy is None:
         return np.zeros((0, 4))
-    pts = np.stack([rr, cc], 1).astype(float)
+    pts = xy.reshape(-1, 2)[:, ::-1].astype(float)
     out = []
     for k in range(2):
         tk = th0 + k * np.pi / 2
@@ -361,9 +363,14 @@ def face_runs(faces: np.ndarray, *, min_length_px: float, band_px: int = 1, max_
         n = np.array([-u[1], u[0]])
         t = np.rint(pts @ u).astype(np.int64)
         rb = np.rint(pts @ n).astype(np.int64)
+        t_lo = int(t.min())
+        span = int(t.max()) - t_lo + 1
+        first = np.argsort((rb - int(rb.min())) * span + (t - t_lo))  # by line, then along it
+        rb, t = rb[first], t[first]
+        # the same order for each shifted copy: a stable sort merges the sorted runs
         key = np.concatenate([rb + o for o in range(-band_px, band_px + 1)])
         tt = np.tile(t, 2 * band_px + 1)
-        order = np.lexsort((tt, key))
+        order = np.argsort((key - int(key.min())) * span + (tt - t_lo), kind="stable")
         key, tt = key[order], tt[order]
         new = np.ones(key.size, bool)
         new[1:] = (key[1:] != key[:-1]) | (tt[1:] - tt[:-1] > max_gap_px + 1)
@@ -489,28 +496,15 @@ def partition_gaps(obstacle: np.ndarray, free: np.ndarray, lines: np.ndarray, *,
     segs = np.asarray(lines, float).reshape(-1, 4)
     if segs.shape[0] < 2:
         return []
-    if min_structure_px > 0:
-        # the extent of the obstacle each face line lies on
-        n_obj, obj, st, _ = cv2.connectedComponentsWithStats(obstacle.view(np.uint8), connectivity=8)
-        big = np.maximum(st[:, cv2.CC_STAT_WIDTH], st[:, cv2.CC_STAT_HEIGHT]) >= min_structure_px
-        big[0] = False
-        mid = np.rint((segs[:, :2] + segs[:, 2:]) / 2).astype(int)
-        H, W = obstacle.shape
-        on = np.zeros(len(segs), bool)
-        for dr in (-1, 0, 1):
-            for dc in (-1, 0, 1):
-                r = np.clip(mid[:, 0] + dr, 0, H - 1)
-                c = np.clip(mid[:, 1] + dc, 0, W - 1)
-                on |= big[obj[r, c]]
-    else:
-        on = np.ones(len(segs), bool)
     classes = _main_classes(segs, angle_tol)
     crossing = []
+    ends_px = np.rint(segs).astype(int).tolist()  # as round(): half to even
     for _, sel in classes:
         m = np.zeros(obstacle.shape, np.uint8)
-        for r1, c1, r2, c2 in segs[sel]:
-            cv2.line(m, (int(round(c1)), int(round(r1))), (int(round(c2)), int(round(r2))), 1, 3)
-        crossing.append(m > 0)
+        for t in sel:
+            r1, c1, r2, c2 = ends_px[t]
+            cv2.line(m, (c1, r1), (c2, r2), 1, 3)
+        crossing.append(m.view(bool))
     back = 3  # samples start inside the piece, as in wall_openings
     n_gap = int(np.ceil(max_gap_px)) + back + 1
     offsets = np.arange(-band_px, band_px + 1)
@@ -518,10 +512,11 @@ def partition_gaps(obstacle: np.ndarray, free: np.ndarray, lines: np.ndarray, *,
     out = []
     for k, (u, sel) in enumerate(classes):
         a, b = segs[sel, :2], segs[sel, 2:]
-        keep = (np.hypot(*(b - a).T) >= min_wall_px) & on[sel]
+        keep = np.hypot(*(b - a).T) >= min_wall_px
         if not keep.any():
             continue
         a, b = a[keep], b[keep]
+        line_of = np.tile(sel[keep], 2)
         d = np.sign((b - a) @ u)[:, None] * u
         ends, dirs = np.concatenate([b, a]), np.concatenate([d, -d])
         start = ends - (back + 1) * dirs
@@ -539,13 +534,17 @@ def partition_gaps(obstacle: np.ndarray, free: np.ndarray, lines: np.ndarray, *,
         gap = e1 - s0
         ok &= (gap >= min_gap_px) & (gap <= max_gap_px)
         within = (j >= s0[:, None]) & (j < e1[:, None])
-        hb = max(int(round(hits_band_px)), band_px)
-        rh, ch, inh = _sample_cells(obstacle.shape, start, dirs, n_gap, np.arange(-hb, hb + 1))
-        seen = (hits[rh, ch] & inh).any(axis=1)
-        ok &= (seen & within).sum(axis=1) >= min_hits_px
         line_free = free[r[:, band_px], c[:, band_px]] & inside[:, band_px]
         ok &= (line_free & within).sum(axis=1) >= 0.5 * np.maximum(gap, 1)
         i = np.flatnonzero(ok)
+        if not i.size:
+            continue
+        hb = max(int(round(hits_band_px)), band_px)
+        rh, ch, inh = _sample_cells(obstacle.shape, start[i], dirs[i], n_gap, np.arange(-hb, hb + 1))
+        seen = (hits[rh, ch] & inh).any(axis=1)
+        i = i[(seen & within[i]).sum(axis=1) >= min_hits_px]
+        if min_structure_px > 0:
+            i = np.array([t for t in i if _on_structure(obstacle, segs[line_of[t]], min_structure_px)], int)
         if not i.size:
             continue
         p = start[i] + s0[i, None] * dirs[i]
@@ -554,6 +553,36 @@ def partition_gaps(obstacle: np.ndarray, free: np.ndarray, lines: np.ndarray, *,
         good[good] = ~_spans_passage(obstacle, p[good], q[good], depth_px)
         out.extend((p[t], q[t]) for t in np.flatnonzero(good))
     return out
+
+
+def _on_structure(obstacle: np.ndarray, seg, min_px: float) -> bool:
+    """Whether the obstacle (8-connected) at the middle of the face line
+    ``seg`` (or a cell beside it) is at least ``min_px`` long or wide. Its
+    components are labelled only in a window of ``min_px`` (and a margin)
+    round the line: one that leaves the window at a side inside the map is
+    at least that large."""
+    import cv2
+
+    H, W = obstacle.shape
+    m = int(np.ceil(min_px)) + 3
+    r0 = max(int(min(seg[0], seg[2])) - m, 0)
+    r1 = min(int(max(seg[0], seg[2])) + m + 1, H)
+    c0 = max(int(min(seg[1], seg[3])) - m, 0)
+    c1 = min(int(max(seg[1], seg[3])) + m + 1, W)
+    win = np.ascontiguousarray(obstacle[r0:r1, c0:c1]).view(np.uint8)
+    _, obj, st, _ = cv2.connectedComponentsWithStats(win, connectivity=8)
+    x, y, w, h = (st[:, k] for k in range(4))
+    big = np.maximum(w, h) >= min_px
+    # leaving the window at a side that is not the map's edge
+    big |= ((x == 0) & (c0 > 0)) | ((y == 0) & (r0 > 0)) | ((x + w == c1 - c0) & (c1 < W)) | ((y + h == r1 - r0) & (r1 < H))
+    big[0] = False
+    mr, mc = np.rint((np.asarray(seg[:2], float) + np.asarray(seg[2:], float)) / 2).astype(int)
+    for dr in (-1, 0, 1):
+        for dc in (-1, 0, 1):
+            rr, cc = min(max(mr + dr, 0), H - 1), min(max(mc + dc, 0), W - 1)
+            if r0 <= rr < r1 and c0 <= cc < c1 and big[obj[rr - r0, cc - c0]]:
+                return True
+    return False
 
 
 def scale_walls(walls: list, k: int) -> list:
