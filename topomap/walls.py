@@ -75,8 +75,8 @@ def straight_share(faces: np.ndarray, lines: np.ndarray) -> float:
     if n == 0:
         return 1.0
     on = np.zeros(faces.shape, np.uint8)
-    for r1, c1, r2, c2 in lines:
-        cv2.line(on, (int(round(c1)), int(round(r1))), (int(round(c2)), int(round(r2))), 1, 3)
+    for r1, c1, r2, c2 in np.rint(np.asarray(lines, float).reshape(-1, 4)).astype(int).tolist():
+        cv2.line(on, (c1, r1), (c2, r2), 1, 3)
     return float((faces & (on > 0)).sum()) / n
 
 
@@ -86,15 +86,15 @@ def _sample_cells(shape, starts, dirs, n, offsets):
     rows and cols (clipped to the map), and a mask of samples inside it."""
     H, W = shape
     starts, dirs = np.asarray(starts, float), np.asarray(dirs, float)
-    t = np.arange(1, n + 1, dtype=float)
-    o = np.asarray(offsets, float)
-    perp = np.stack([-dirs[:, 1], dirs[:, 0]], 1)
-    pts = (starts[:, None, None, :] + t[None, None, :, None] * dirs[:, None, None, :]
-           + o[None, :, None, None] * perp[:, None, None, :])
-    r = np.rint(pts[..., 0]).astype(int)
-    c = np.rint(pts[..., 1]).astype(int)
+    t = np.arange(1, n + 1, dtype=float)[None, None, :]
+    o = np.asarray(offsets, float)[None, :, None]
+    # rows and cols apart (the same sums as one (..., 2) array, without it)
+    r = np.rint(starts[:, 0, None, None] + t * dirs[:, 0, None, None] + o * -dirs[:, 1, None, None]).astype(np.intp)
+    c = np.rint(starts[:, 1, None, None] + t * dirs[:, 1, None, None] + o * dirs[:, 0, None, None]).astype(np.intp)
     inside = (r >= 0) & (r < H) & (c >= 0) & (c < W)
-    return np.clip(r, 0, H - 1), np.clip(c, 0, W - 1), inside
+    np.clip(r, 0, H - 1, out=r)
+    np.clip(c, 0, W - 1, out=c)
+    return r, c, inside
 
 
 def _perp(d):
