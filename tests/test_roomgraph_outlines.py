@@ -189,3 +189,23 @@ def test_label_rings_are_each_labels_mask_rings(seed):
             assert (back[r, c:c + n] == 0).all()
             back[r, c:c + n] = v
         assert np.array_equal(back, L)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_detail_limit_found_before_tracing_equals_the_rings_count(seed, monkeypatch):
+    # the rooms beyond the detail limit, found from their boundary edges before any ring is traced,
+    # are those whose traced rings have more edges than the limit allows
+    from topomap import roomgraph as RG
+    from topomap.geometry import label_rings
+
+    monkeypatch.setattr(RG, "OUTLINE_MIN_RINGS", 3)
+    rng = np.random.default_rng(seed)
+    labels = rng.integers(0, 5, (40, 50))
+    labels[rng.random(labels.shape) < 0.5] = 1      # label 1 large and full of holes
+    n = int(labels.max())
+    R = label_rings(labels)
+    edges = np.bincount(R.piece_label, weights=R.piece_edges, minlength=n + 1)
+    cells = np.bincount(labels.ravel(), minlength=n + 1)
+    want = np.flatnonzero(edges > 4 * (RG.OUTLINE_MIN_RINGS + cells // RG.OUTLINE_CELLS_PER_RING))
+    assert list(RG._detailed(labels, n)) == [i for i in want if i > 0]
+    assert len(want)  # the case has a room beyond the limit

@@ -73,28 +73,52 @@ def room_polygons(labels: np.ndarray, to_world=None) -> dict:
     return _room_polygons(labels, to_world)
 
 
-def _room_polygons(labels, to_world, rings=None, objs=None):
+def _detailed(labels: np.ndarray, n: int) -> np.ndarray:
+    """The labels ``1..n`` beyond the outline detail limit, from the cell edges on their boundaries
+    (every ring has at least 4, and the pieces and holes the limit counts are at most the edges / 4):
+    found before any ring is traced, so that such a room's rings are never all traced."""
+    if n == 0 or labels.size == 0:
+        return np.zeros(0, np.int64)
+    P = np.pad(labels, 1)
+    edges = np.zeros(n + 1, np.int64)
+    for a, b in ((P[:, :-1], P[:, 1:]), (P[:-1, :], P[1:, :])):
+        d = a != b
+        edges += np.bincount(a[d].ravel(), minlength=n + 1)[:n + 1]
+        edges += np.bincount(b[d].ravel(), minlength=n + 1)[:n + 1]
+        del d
+    cells = np.bincount(labels.ravel(), minlength=n + 1)[:n + 1]
+    out = np.flatnonzero(edges > 4 * (OUTLINE_MIN_RINGS + cells // OUTLINE_CELLS_PER_RING))
+    return out[out > 0]
+
+
+def _without(labels: np.ndarray, drop: np.ndarray) -> np.ndarray:
+    """``labels`` with the labels in ``drop`` set to 0 (the same array when there are none)."""
+    if not len(drop):
+        return labels
+    lut = np.arange(int(labels.max(initial=0)) + 1, dtype=labels.dtype)
+    lut[drop] = 0
+    return lut[labels]
+
+
+def _room_polygons(labels, to_world, rings=None, objs=None, detailed=None):
     """:func:`room_polygons`, from the labels' rings (:func:`topomap.geometry.label_rings`) and their rooms'
     bounding boxes (as ``ndi.find_objects(labels)``) when given.
 
-    All rooms' outlines come from one pass over the labels; a room beyond the detail limit (its rings
-    have more than 4 edges per ring the limit allows) is outlined again from its own cells
-    (:func:`_outline_cells`).
+    All rooms' outlines come from one pass over the labels; a room beyond the detail limit
+    (``detailed``, :func:`_detailed`; its rings are not traced in that pass) is outlined from its own
+    cells (:func:`_outline_cells`).
     """
     import shapely
 
-    R = label_rings(labels) if rings is None else rings
+    if detailed is None:
+        detailed = _detailed(labels, int(labels.max(initial=0)))
+    R = label_rings(_without(labels, detailed)) if rings is None else rings
     cell, mirror = 1.0, False  # m² per cell (for the warning); whether to_world turns rings around
     if to_world is not None:
         x, y = to_world(np.array([0.0, 0.0, 1.0]), np.array([0.0, 1.0, 0.0]))
         cell = float(np.hypot(x[1] - x[0], y[1] - y[0])) ** 2
         mirror = (x[1] - x[0]) * (y[2] - y[0]) - (y[1] - y[0]) * (x[2] - x[0]) < 0  # (col, row) to (x, y)
     n = int(R.piece_label.max(initial=0))
-    _, _, length, lab = R.runs
-    cells = np.bincount(lab, weights=length, minlength=n + 1).astype(np.int64)
-    edges = np.bincount(R.piece_label, weights=R.piece_edges, minlength=n + 1)
-    # every ring has at least 4 edges, and the pieces and holes the limit counts are at most the edges / 4
-    detailed = np.flatnonzero(edges > 4 * (OUTLINE_MIN_RINGS + cells // OUTLINE_CELLS_PER_RING))
     polys = _polygons(R.xy, R.ring, R.piece, (0, 0), to_world, mirror)
     npieces = np.bincount(R.piece_label, minlength=n + 1)
     first = np.r_[0, np.cumsum(npieces)]
@@ -258,9 +282,17 @@ def room_graph(seg) -> nx.MultiGraph:
     if n == 0:
         return G
     # cell counts, row / column sums and boxes per room and the outlines: one pass over the labels
-    rings = label_rings(labels)
+    detailed = _detailed(labels, n)  # rooms beyond the outline detail limit: their rings are not traced here
+    rings = label_rings(_without(labels, detailed))
     cnt, sr, sc, objs = _room_stats(rings.runs, n)
-    polys = _room_polygons(labels, grid.pixel_to_world, rings, objs)
+    if detailed.size:
+        boxes = ndi.find_objects(labels, max_label=n)
+        for i in detailed.tolist():
+            sl = boxes[i - 1]
+            rr, cc = np.nonzero(labels[sl] == i)
+            cnt[i], sr[i], sc[i] = rr.size, float((rr + sl[0].start).sum()), float((cc + sl[1].start).sum())
+            objs[i - 1] = sl
+    polys = _room_polygons(labels, grid.pixel_to_world, rings, objs, detailed)
     del rings
     _BOXES[G] = (weakref.ref(seg.labels), objs)
     area_cell = grid.resolution ** 2
