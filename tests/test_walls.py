@@ -271,3 +271,41 @@ def test_partition_face_on_a_free_standing_table_is_no_partition():
     kw = dict(min_wall_px=30, min_gap_px=10, max_gap_px=60, min_hits_px=4, depth_px=24, hits=hits)
     assert W.partition_gaps(~free, free, lines, **kw)                       # any obstacle: found
     assert W.partition_gaps(~free, free, lines, min_structure_px=40, **kw) == []  # 2 m structure: not
+
+
+def _across_reference(p, q, index, tol, min_angle=np.deg2rad(60.0)):
+    # the definition, one segment and one wall at a time
+    v = q - p
+    d = v / max(float(np.hypot(*v)), 1e-9)
+    hit = [False, False]
+    for u, n, rho, t0, t1 in index.classes:
+        if abs(float(d @ u)) > np.cos(min_angle):
+            continue
+        for k, x in enumerate((p, q)):
+            r, t = float(x @ n), float(x @ u)
+            hit[k] |= any(abs(r - rh) <= tol and a - tol <= t <= b + tol for rh, a, b in zip(rho, t0, t1))
+    return hit[0] and hit[1]
+
+
+def test_across_walls_many_follows_the_definition():
+    rng = np.random.default_rng(3)
+    walls = []
+    for k in range(12):                       # horizontal and vertical walls, some near each other
+        u = np.array([0.0, 1.0]) if k % 2 else np.array([1.0, 0.0])
+        n = np.array([-u[1], u[0]])
+        rho = float(rng.integers(0, 100))
+        a = float(rng.integers(0, 60))
+        walls.append((rho * n, u, n, [[a, a + float(rng.integers(20, 80))]]))
+    index = W.WallIndex(walls)
+    # ends on the walls' lines (or near them) half of the time
+    P, Q = rng.uniform(0, 120, (400, 2)), rng.uniform(0, 120, (400, 2))
+    for X in (P, Q):
+        on = rng.random(len(X)) < 0.5
+        w = rng.integers(0, len(walls), len(X))
+        for i in np.flatnonzero(on):
+            origin, u, n, runs = walls[w[i]]
+            X[i] = origin + rng.uniform(runs[0][0], runs[0][1]) * u + rng.uniform(-4, 4) * n
+    many = W.across_walls_many(P, Q, index, tol_px=3.0)
+    want = [_across_reference(p, q, index, 3.0) for p, q in zip(P, Q)]
+    assert list(many) == want
+    assert 0 < sum(want) < len(want)

@@ -743,12 +743,15 @@ def across_corridor(accepted, walls, depth_px: float) -> list:
     walls by less than that — pillars, wall columns, radiators, cupboards —
     is the corridor's own; a door across a corridor sits in a wall across
     it, which stands out farther."""
-    from .walls import WallIndex, across_walls
+    from .walls import across_walls_many
 
-    index = walls if isinstance(walls, WallIndex) else WallIndex(walls)
+    if not accepted:
+        return []
+    across = across_walls_many(np.array([c.ip1 for _, c in accepted], float),
+                               np.array([c.ip2 for _, c in accepted], float), walls, tol_px=depth_px)
     kept = []
-    for width, c in accepted:
-        if across_walls(c.ip1, c.ip2, index, tol_px=depth_px):
+    for (width, c), a in zip(accepted, across):
+        if a:
             c.status = ACROSS_CORRIDOR
         else:
             kept.append((width, c))

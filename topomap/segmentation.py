@@ -732,7 +732,10 @@ class _Walls:
         ops = [(self.fine(p), self.fine(q)) for p, q in ops]
         if self.lw:
             tol = opts.wall_wander / (res / self.k)
-            ops = [(p, q) for p, q in ops if not W.across_walls(p, q, self.index, tol_px=tol)]
+            if ops:
+                across = W.across_walls_many(np.array([p for p, _ in ops]), np.array([q for _, q in ops]),
+                                             self.index, tol_px=tol)
+                ops = [pq for pq, a in zip(ops, across) if not a]
         return ops
 
 

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["wall_faces", "wall_lines", "straight_share", "wall_openings", "wall_directions", "long_walls",
-           "across_walls", "WallIndex", "long_wall_gaps", "partition_gaps", "face_runs", "wall_mask", "scale_walls"]
+           "across_walls", "across_walls_many", "WallIndex", "long_wall_gaps", "partition_gaps", "face_runs", "wall_mask", "scale_walls"]
 
 
 def wall_faces(obstacle: np.ndarray, free: np.ndarray) -> np.ndarray:
@@ -640,23 +640,38 @@ def across_walls(p, q, walls, *, tol_px: float, min_angle: float = np.deg2rad(60
     walls, such as a corridor between its side walls.
 
     ``walls`` is a :class:`WallIndex` (or the list of walls, indexed on
-    every call)."""
+    every call). :func:`across_walls_many` answers for many segments at
+    once."""
+    return bool(across_walls_many(np.reshape(np.asarray(p, float), (1, 2)), np.reshape(np.asarray(q, float), (1, 2)),
+                                  walls, tol_px=tol_px, min_angle=min_angle)[0])
+
+
+def across_walls_many(P, Q, walls, *, tol_px: float, min_angle: float = np.deg2rad(60.0)) -> np.ndarray:
+    """:func:`across_walls` of the segments ``P[i]``-``Q[i]`` (``(E, 2)``
+    arrays): ``(E,)`` bool."""
     if not isinstance(walls, WallIndex):
         walls = WallIndex(walls)
-    p, q = np.asarray(p, float), np.asarray(q, float)
-    v = q - p
-    d = v / max(float(np.hypot(*v)), 1e-9)
-    hit = [False, False]
+    P, Q = np.asarray(P, float).reshape(-1, 2), np.asarray(Q, float).reshape(-1, 2)
+    v = Q - P
+    d = v / np.maximum(np.hypot(v[:, 0], v[:, 1]), 1e-9)[:, None]
+    hit = np.zeros((2, len(P)), bool)
     for u, n, rho, t0, t1 in walls.classes:
-        if abs(float(d @ u)) > np.cos(min_angle):
-            continue
-        for k, x in enumerate((p, q)):
-            if hit[k]:
+        steep = np.abs(d[:, 0] * u[0] + d[:, 1] * u[1]) <= np.cos(min_angle)
+        for k, X in enumerate((P, Q)):
+            todo = steep & ~hit[k]
+            if not todo.any():
                 continue
-            r, t = float(x @ n), float(x @ u)
-            lo, hi = np.searchsorted(rho, r - tol_px), np.searchsorted(rho, r + tol_px, side="right")
-            hit[k] = bool(((t0[lo:hi] - tol_px <= t) & (t <= t1[lo:hi] + tol_px)).any())
-    return hit[0] and hit[1]
+            x = X[todo]
+            r = x[:, 0] * n[0] + x[:, 1] * n[1]
+            t = x[:, 0] * u[0] + x[:, 1] * u[1]
+            lo = np.searchsorted(rho, r - tol_px)
+            hi = np.searchsorted(rho, r + tol_px, side="right")
+            on = np.zeros(len(x), bool)
+            for step in range(int((hi - lo).max(initial=0))):  # the walls within tol_px of each end
+                w = np.minimum(lo + step, len(rho) - 1)
+                on |= (lo + step < hi) & (t0[w] - tol_px <= t) & (t <= t1[w] + tol_px)
+            hit[k, np.flatnonzero(todo)] = on
+    return hit[0] & hit[1]
 
 
 def long_wall_gaps(obstacle: np.ndarray, free: np.ndarray, walls: list, *, min_gap_px: float,
