@@ -15,6 +15,7 @@ import numpy as np
 import networkx as nx
 from scipy import ndimage as ndi
 
+from ._fast import lookup
 from .geometry import label_rings, mask_rings
 
 __all__ = ["room_graph", "room_polygons", "OUTLINE_MIN_RINGS", "OUTLINE_CELLS_PER_RING"]
@@ -97,7 +98,7 @@ def _without(labels: np.ndarray, drop: np.ndarray) -> np.ndarray:
         return labels
     lut = np.arange(int(labels.max(initial=0)) + 1, dtype=labels.dtype)
     lut[drop] = 0
-    return lut[labels]
+    return lookup(lut, labels)
 
 
 def _room_polygons(labels, to_world, rings=None, objs=None, detailed=None):

@@ -69,15 +69,21 @@ def straight_share(faces: np.ndarray, lines: np.ndarray) -> float:
     draws walls that wander a cell or two off their line (0.14-0.67 there).
     1.0 when there are no faces.
     """
-    import cv2
-
     n = int(faces.sum())
     if n == 0:
         return 1.0
-    on = np.zeros(faces.shape, np.uint8)
+    return float((faces & _line_mask(lines, faces.shape, 3)).sum()) / n
+
+
+def _line_mask(lines, shape, width: int) -> np.ndarray:
+    """The cells of the segments ``lines`` (``(K, 4)``, ends rounded as
+    :func:`round` does), each drawn ``width`` cells wide: ``shape`` bool."""
+    import cv2
+
+    m = np.zeros(shape, np.uint8)
     for r1, c1, r2, c2 in np.rint(np.asarray(lines, float).reshape(-1, 4)).astype(int).tolist():
-        cv2.line(on, (c1, r1), (c2, r2), 1, 3)
-    return float((faces & (on > 0)).sum()) / n
+        cv2.line(m, (c1, r1), (c2, r2), 1, width)
+    return m.view(bool)
 
 
 def _sample_cells(shape, starts, dirs, n, offsets):
@@ -318,19 +324,24 @@ def _main_classes(segs: np.ndarray, angle_tol: float):
     """The segments ``(K, 4)`` within ``angle_tol`` of each of the
     building's two main directions (:func:`wall_directions`): for each, its
     unit vector ``u`` (row, col) and the indices of its segments."""
-    th0 = wall_directions(segs)
     v = segs[:, 2:] - segs[:, :2]
     th = np.mod(np.arctan2(v[:, 0], v[:, 1]), np.pi)
     out = []
-    for k in range(2):
-        tk = th0 + k * np.pi / 2
+    for tk, u in _main_directions(segs):
         dth = np.abs(np.mod(th - tk + np.pi / 2, np.pi) - np.pi / 2)
-        out.append((np.array([np.sin(tk), np.cos(tk)]), np.flatnonzero(dth <= angle_tol)))
+        out.append((u, np.flatnonzero(dth <= angle_tol)))
     return out
 
 
+def _main_directions(segs: np.ndarray):
+    """The building's two main directions (:func:`wall_directions` of the
+    segments ``(K, 4)``): ``(angle, unit vector (row, col))`` for each."""
+    th0 = wall_directions(segs)
+    return [(tk, np.array([np.sin(tk), np.cos(tk)])) for tk in (th0, th0 + np.pi / 2)]
+
+
 def face_runs(faces: np.ndarray, *, min_length_px: float, band_px: int = 1, max_gap_px: int = 2,
-              angle_tol: float = np.deg2rad(12.0), lines: np.ndarray | None = None) -> np.ndarray:
+              lines: np.ndarray | None = None) -> np.ndarray:
     """Straight runs of wall faces along the building's two main directions.
 
     The face cells are projected onto each main direction (:func:`wall_directions`
@@ -349,7 +360,6 @@ def face_runs(faces: np.ndarray, *, min_length_px: float, band_px: int = 1, max_
     if lines is None:
         lines = wall_lines(faces, min_length_px=min_length_px)
     segs = np.asarray(lines, float).reshape(-1, 4)
-    th0 = wall_directions(segs) if len(segs) else 0.0
     import cv2
 
     xy = cv2.findNonZero(np.ascontiguousarray(faces).view(np.uint8))  # the face cells, fast
@@ -357,9 +367,7 @@ def face_runs(faces: np.ndarray, *, min_length_px: float, band_px: int = 1, max_
         return np.zeros((0, 4))
     pts = xy.reshape(-1, 2)[:, ::-1].astype(float)
     out = []
-    for k in range(2):
-        tk = th0 + k * np.pi / 2
-        u = np.array([np.sin(tk), np.cos(tk)])
+    for _, u in _main_directions(segs):
         n = np.array([-u[1], u[0]])
         t = np.rint(pts @ u).astype(np.int64)
         rb = np.rint(pts @ n).astype(np.int64)
@@ -489,22 +497,13 @@ def partition_gaps(obstacle: np.ndarray, free: np.ndarray, lines: np.ndarray, *,
         Opening segments in pixels, from the partition's end to the crossing
         wall.
     """
-    import cv2
-
     if hits is None:
         hits = obstacle
     segs = np.asarray(lines, float).reshape(-1, 4)
     if segs.shape[0] < 2:
         return []
     classes = _main_classes(segs, angle_tol)
-    crossing = []
-    ends_px = np.rint(segs).astype(int).tolist()  # as round(): half to even
-    for _, sel in classes:
-        m = np.zeros(obstacle.shape, np.uint8)
-        for t in sel:
-            r1, c1, r2, c2 = ends_px[t]
-            cv2.line(m, (c1, r1), (c2, r2), 1, 3)
-        crossing.append(m.view(bool))
+    crossing = [_line_mask(segs[sel], obstacle.shape, 3) for _, sel in classes]
     back = 3  # samples start inside the piece, as in wall_openings
     n_gap = int(np.ceil(max_gap_px)) + back + 1
     offsets = np.arange(-band_px, band_px + 1)
@@ -603,14 +602,8 @@ def scale_walls(walls: list, k: int) -> list:
 def wall_mask(walls: list, shape, *, width_px: int = 5) -> np.ndarray:
     """The cells of the long walls (:func:`long_walls`): each piece drawn
     ``width_px`` cells wide (the wander of a scanned wall about its line)."""
-    import cv2
-
-    m = np.zeros(shape, np.uint8)
-    for origin, u, _, runs in walls:
-        for t0, t1 in runs:
-            p, q = origin + t0 * u, origin + t1 * u
-            cv2.line(m, (int(round(p[1])), int(round(p[0]))), (int(round(q[1])), int(round(q[0]))), 1, width_px)
-    return m > 0
+    segs = [np.r_[origin + t0 * u, origin + t1 * u] for origin, u, _, runs in walls for t0, t1 in runs]
+    return _line_mask(np.array(segs, float).reshape(-1, 4), shape, width_px)
 
 
 class WallIndex:
