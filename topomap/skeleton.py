@@ -138,12 +138,14 @@ class _PixelGraph:
 
     def __init__(self, skel: np.ndarray):
         H, W = skel.shape
-        self.pr, self.pc = np.divmod(np.flatnonzero(skel), W)  # np.nonzero's order (row-major), faster
+        lin = np.flatnonzero(skel)
+        self.pr, self.pc = np.divmod(lin, W)  # np.nonzero's order (row-major), faster
         self.npx = npx = self.pr.size
-        # sparse pixel adjacency: one full-size index image, everything else O(pixels)
-        pid = np.full((H + 2, W + 2), -1, np.int32)
-        pid[self.pr + 1, self.pc + 1] = np.arange(npx, dtype=np.int32)
-        self.nb = np.stack([pid[self.pr + 1 + dr, self.pc + 1 + dc] for dr, dc in _OFFSETS], 1)
+        # sparse pixel adjacency: one full-size index image (padded by one, flat), everything else O(pixels)
+        pid = np.full((H + 2) * (W + 2), -1, np.int32)
+        at = lin + 2 * self.pr + W + 3  # (row + 1) * (W + 2) + col + 1
+        pid[at] = np.arange(npx, dtype=np.int32)
+        self.nb = pid[at[:, None] + (_OFFSETS[:, 0] * (W + 2) + _OFFSETS[:, 1])]
         self.has = self.nb >= 0
         self.deg = self.has.sum(1)
         self.src = np.repeat(np.arange(npx), 8)[self.has.ravel()]
