@@ -540,7 +540,8 @@ def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, dept
         r0, c0 = int(round(c.centroid[0])), int(round(c.centroid[1]))
         ra, rb = max(r0 - R, 0), min(r0 + R + 1, H)
         ca, cb = max(c0 - R, 0), min(c0 + R + 1, W)
-        rr, cc = np.nonzero(obstacle[ra:rb, ca:cb])
+        win = obstacle[ra:rb, ca:cb]
+        rr, cc = np.nonzero(win)
         c.ip1 = c.ip2 = None
         if rr.size == 0:
             continue
@@ -558,19 +559,19 @@ def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, dept
         if d[j] > max_px:
             c.ip1 = q[i]
             continue
+        c.ip1, c.ip2 = q[i], q[j]
+        if depth_px <= 0 or c.status == MOUTH:
+            continue
         # closest pairs of cells across a passage lie on the obstacles'
         # surface: only cells with a free 4-neighbour are paired (keeps the
         # pairing linear in the window's side, not in its area)
-        win = obstacle[ra:rb, ca:cb]
         on_surface = wall_faces(win, ~win)[rr, cc]
         a = q[(~opp) & (d <= d[i] + depth_px) & on_surface]
         b = q[opp & (d <= d[j] + depth_px) & on_surface]
-        if depth_px > 0 and a.size and b.size and c.status != MOUTH:
+        if a.size and b.size:
             D = np.hypot(a[:, None, 0] - b[None, :, 0], a[:, None, 1] - b[None, :, 1])
             ia, ib = np.nonzero(D <= D.min() + 0.75)
             c.ip1, c.ip2 = a[ia].mean(axis=0), b[ib].mean(axis=0)
-        else:
-            c.ip1, c.ip2 = q[i], q[j]
     return candidates
 
 

@@ -138,12 +138,14 @@ class _PixelGraph:
 
     def __init__(self, skel: np.ndarray):
         H, W = skel.shape
-        self.pr, self.pc = np.divmod(np.flatnonzero(skel), W)  # np.nonzero's order (row-major), faster
+        lin = np.flatnonzero(skel)
+        self.pr, self.pc = np.divmod(lin, W)  # np.nonzero's order (row-major), faster
         self.npx = npx = self.pr.size
-        # sparse pixel adjacency: one full-size index image, everything else O(pixels)
-        pid = np.full((H + 2, W + 2), -1, np.int32)
-        pid[self.pr + 1, self.pc + 1] = np.arange(npx, dtype=np.int32)
-        self.nb = np.stack([pid[self.pr + 1 + dr, self.pc + 1 + dc] for dr, dc in _OFFSETS], 1)
+        # sparse pixel adjacency: one full-size index image (padded by one, flat), everything else O(pixels)
+        pid = np.full((H + 2) * (W + 2), -1, np.int32)
+        at = lin + 2 * self.pr + W + 3  # (row + 1) * (W + 2) + col + 1
+        pid[at] = np.arange(npx, dtype=np.int32)
+        self.nb = pid[at[:, None] + (_OFFSETS[:, 0] * (W + 2) + _OFFSETS[:, 1])]
         self.has = self.nb >= 0
         self.deg = self.has.sum(1)
         self.src = np.repeat(np.arange(npx), 8)[self.has.ravel()]
@@ -250,26 +252,62 @@ def _ordered_branches(px: _PixelGraph, node_of, is_br, blab):
     br_r, br_c, br_l = px.pr[bidx], px.pc[bidx], blab[bidx]
     src, dst = px.src, px.dst
     m = is_br[src] & is_br[dst]
-    s_l, d_l = local[src[m]], local[dst[m]]
-    w = np.hypot(br_r[s_l] - br_r[d_l], br_c[s_l] - br_c[d_l])
-    A = sparse.csr_matrix((w, (s_l, d_l)), shape=(nbr, nbr))
-    # (branch pixel, node) pairs of touching pixels
+    s_l, d_l = local[src[m]], local[dst[m]]  # sorted by s_l
+    # (branch pixel, node) pairs of touching pixels, sorted
     m2 = is_br[src] & (node_of[dst] > 0)
-    en = np.unique(np.stack([local[src[m2]], node_of[dst[m2]]], 1), axis=0)
-    # order along each branch: one multi-source Dijkstra from one end per branch
+    nn = int(node_of.max()) + 1
+    en_p, en_n = np.divmod(np.unique(local[src[m2]] * nn + node_of[dst[m2]]), nn)
+    # order along each branch (a path: at most two branch neighbours), from its first end
     bdeg = np.bincount(s_l, minlength=nbr)
     ends = np.flatnonzero(bdeg <= 1)
     ends = ends[np.argsort(br_l[ends], kind="stable")]
     e_l = br_l[ends]
     starts = ends[np.r_[True, e_l[1:] != e_l[:-1]]] if ends.size else ends
-    dist = csgraph.dijkstra(A, directed=False, indices=starts, min_only=True)
-    porder = np.lexsort((dist, br_l))
+    pos = _path_positions(s_l, d_l, bdeg, starts, br_l, nbr)
+    if pos is None:  # a branch without an end: order by distance from the ends
+        w = np.hypot(br_r[s_l] - br_r[d_l], br_c[s_l] - br_c[d_l])
+        A = sparse.csr_matrix((w, (s_l, d_l)), shape=(nbr, nbr))
+        dist = csgraph.dijkstra(A, directed=False, indices=starts, min_only=True)
+        porder = np.lexsort((dist, br_l))
+    else:
+        first = np.r_[0, np.cumsum(np.bincount(br_l))[:-1]]
+        porder = np.empty(nbr, np.int64)
+        porder[first[br_l] + pos] = np.arange(nbr)
     bounds = np.flatnonzero(np.r_[True, br_l[porder][1:] != br_l[porder][:-1], True])
     touch_px = {}
-    for p, nlab in en.tolist():
+    for p, nlab in zip(en_p.tolist(), en_n.tolist()):
         touch_px.setdefault(p, []).append(nlab)
     segs = [porder[bounds[k]:bounds[k + 1]] for k in range(bounds.size - 1)]
     return br_r, br_c, segs, touch_px
+
+
+def _path_positions(s_l, d_l, bdeg, starts, br_l, n):
+    """Position (steps from the branch's start pixel ``starts[label - 1]``) of every pixel of
+    branches that are paths, by pointer jumping over the directed steps; None when a branch
+    has no start (labels ``br_l`` are 1..K, every label with one start otherwise).
+
+    Each step ``a -> b`` (``s_l``, ``d_l``, sorted by ``s_l``) is followed by the step out of
+    ``b`` that does not go back to ``a``; a step's list ends at an end pixel, and a pixel's
+    position is one more than the number of steps after its step that ends at the start.
+    """
+    n_lab = int(br_l.max())
+    if starts.size != n_lab:
+        return None
+    pos = np.zeros(n, np.int64)
+    if not s_l.size:
+        return pos
+    first = np.r_[0, np.cumsum(bdeg)[:-1]]
+    fb = first[d_l]
+    step = np.arange(s_l.size)
+    # the step after each one; a last step is its own successor
+    nxt = np.where(bdeg[d_l] == 2, fb + (d_l[fb] == s_l), step)
+    rank = (nxt != step).astype(np.int64)
+    for _ in range(int(np.ceil(np.log2(max(int(np.bincount(br_l).max()), 2))))):
+        rank += rank[nxt]
+        nxt = nxt[nxt]
+    back = d_l[nxt] == starts[br_l[s_l] - 1]  # the steps towards the start
+    pos[s_l[back]] = rank[back] + 1
+    return pos
 
 
 def _branch_edge(seg, path, a_nodes, b_nodes, nodes: _Nodes):
