@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import contextvars
 import json
+import math
 import re
 from pathlib import Path
 
@@ -316,8 +317,18 @@ def _plain(v):
     return str(v)
 
 
+#: Types :func:`_scalar` keeps as they are (exactly these, not subclasses such as numpy's float64).
+_AS_IS = frozenset({float, int, str, bool})
+
+
 def _scalar(v):
     """GraphML-safe value: scalars stay, tuples/lists/arrays become JSON, geometry exact WKT, None ''."""
+    t = type(v)
+    if t in _AS_IS:  # most attributes: Python numbers
+        return v
+    if t is tuple and len(v) == 2 and type(v[0]) is float and type(v[1]) is float \
+            and math.isfinite(v[0]) and math.isfinite(v[1]):  # p1, p2: json.dumps spells floats by repr
+        return f"[{v[0]!r}, {v[1]!r}]"
     if v is None:
         return ""
     if isinstance(v, (bool, str)):
@@ -659,12 +670,16 @@ def node_link(G: nx.Graph) -> dict:
 
 def save_json(G: nx.Graph, path) -> Path:
     """Write the room graph as node-link JSON (atomically; or into a binary file object); see :func:`node_link`."""
-    data = node_link(G)
+    return _write(_json_bytes(node_link(G)), path)
+
+
+def _json_bytes(data) -> bytes:
+    """The :func:`save_json` file of node-link ``data``."""
     try:  # compact: json's C encoder (indent or json.dump would use the Python one)
         text = json.dumps(data, allow_nan=False)
     except ValueError:  # a NaN or infinity: written as null (valid JSON), read back as NaN
         text = json.dumps(_plain(data), allow_nan=False)
-    return _write(text.encode("utf-8"), path)
+    return text.encode("utf-8")
 
 
 def load_json(path) -> nx.MultiGraph:
@@ -1128,7 +1143,7 @@ def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None, geojs
         del names["overlay"]
     scalar = {}
 
-    def plain():  # the GraphML scalars, encoded once for both GraphML and JSON (encoding them again is a no-op)
+    def plain():  # the GraphML scalars, encoded once for both GraphML and JSON (as save_graphml, save_json)
         if not scalar:
             scalar["G"] = to_graphml_graph(graph)
         return scalar["G"]
@@ -1144,8 +1159,9 @@ def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None, geojs
     writers = {"labels": lambda p: save_labels(seg.labels, p),
                "label_map_pgm": lambda p: save_bytes(map_pair()["pgm"], p),
                "label_map": lambda p: save_bytes(map_pair()["yaml"], p),
-               "graphml": lambda p: save_graphml(plain(), p),
-               "json": lambda p: save_json(plain(), p), "geojson": lambda p: save_geojson(graph, p),
+               "graphml": lambda p: _write(graphml_bytes(plain()), p),
+               "json": lambda p: _write(_json_bytes(nx.node_link_data(plain(), edges="edges")), p),
+               "geojson": lambda p: save_geojson(graph, p),
                "overlay": lambda p: save_bytes(overlay_png, p)}
     to_file = ("labels", "graphml", "json", "geojson")  # writers given the open temporary file
     memo = _RING_MEMO.set({})  # outlines' floats encoded once, for the WKT and the GeoJSON
