@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import contextvars
 import json
+import math
 import re
 from pathlib import Path
 
@@ -229,6 +230,49 @@ def _coords_json(geom) -> str:
     return text
 
 
+def _memo_outlines(geoms) -> None:
+    """Put the :func:`_coords_json` texts of ``geoms`` into the memo of :func:`write_outputs`, made for
+    many outlines at once.
+
+    The 2-D, non-empty Polygons and MultiPolygons are taken in blocks of whole geometries of up to
+    :data:`_CHUNK` coordinates (a larger one: :func:`_coords_json` alone): one shapely call per block
+    for its rings and coordinates and one spelling of its distinct floats (:func:`_rings_texts`), the
+    same texts as one geometry at a time. Anything else is left to :func:`_coords_json`.
+    """
+    import shapely
+
+    memo = _RING_MEMO.get()
+    if memo is None:
+        return
+    todo = [g for g in geoms if _is_geom(g) and g.geom_type in ("Polygon", "MultiPolygon") and not g.is_empty
+            and not g.has_z and id(g) not in memo]
+    if not todo:
+        return
+    size = shapely.get_num_coordinates(np.array(todo, dtype=object))
+    ends = np.cumsum(size)
+    k = 0
+    while k < len(todo):
+        k1 = max(int(np.searchsorted(ends, (ends[k - 1] if k else 0) + _CHUNK, side="right")), k + 1)
+        block = np.array(todo[k:k1], dtype=object)
+        parts, part_geom = shapely.get_parts(block, return_index=True)
+        if k1 == k + 1 or shapely.is_empty(parts).any():  # one large geometry, or an empty part: alone
+            for g in todo[k:k1]:
+                _coords_json(g)
+            k = k1
+            continue
+        rings, ring_part = shapely.get_rings(parts, return_index=True)
+        texts = _rings_texts(shapely.get_coordinates(rings), np.r_[0, np.cumsum(shapely.get_num_coordinates(rings))])
+        rb = np.r_[0, np.cumsum(np.bincount(ring_part, minlength=len(parts)))]  # each part's rings
+        part_texts = ["[" + ", ".join(texts[rb[j]:rb[j + 1]]) + "]" for j in range(len(parts))]
+        pb = np.r_[0, np.cumsum(np.bincount(part_geom, minlength=k1 - k))]  # each geometry's parts
+        for j, g in enumerate(todo[k:k1]):
+            if g.geom_type == "MultiPolygon":
+                memo[id(g)] = (g, "[" + ", ".join(part_texts[pb[j]:pb[j + 1]]) + "]")
+            else:
+                memo[id(g)] = (g, part_texts[pb[j]])
+        k = k1
+
+
 def _rings_texts(xy, bounds) -> list:
     """``json.dumps`` of each ring ``xy[bounds[j]:bounds[j + 1]]`` (``[[x, y], ...]``) of the points ``xy``.
 
@@ -316,8 +360,18 @@ def _plain(v):
     return str(v)
 
 
+#: Types :func:`_scalar` keeps as they are (exactly these, not subclasses such as numpy's float64).
+_AS_IS = frozenset({float, int, str, bool})
+
+
 def _scalar(v):
     """GraphML-safe value: scalars stay, tuples/lists/arrays become JSON, geometry exact WKT, None ''."""
+    t = type(v)
+    if t in _AS_IS:  # most attributes: Python numbers
+        return v
+    if t is tuple and len(v) == 2 and type(v[0]) is float and type(v[1]) is float \
+            and math.isfinite(v[0]) and math.isfinite(v[1]):  # p1, p2: json.dumps spells floats by repr
+        return f"[{v[0]!r}, {v[1]!r}]"
     if v is None:
         return ""
     if isinstance(v, (bool, str)):
@@ -489,7 +543,24 @@ def save_graphml(G: nx.Graph, path) -> Path:
     -------
     pathlib.Path
     """
-    return _write(graphml_bytes(to_graphml_graph(G)), path)
+    return _write(graphml_bytes(_scalars(G)), path)
+
+
+#: Inside :func:`write_outputs`: ``[graph, to_graphml_graph(graph) or None until made]`` of the graph it
+#: saves, so GraphML and JSON encode its attributes once.
+_SCALAR_MEMO = contextvars.ContextVar("topomap_scalar_memo", default=None)
+
+
+def _scalars(G: nx.Graph) -> nx.Graph:
+    """:func:`to_graphml_graph` of ``G``; in :func:`write_outputs` made once, its rooms' outlines first
+    all together (:func:`_memo_outlines`)."""
+    memo = _SCALAR_MEMO.get()
+    if memo is None or memo[0] is not G:
+        return to_graphml_graph(G)
+    if memo[1] is None:
+        _memo_outlines([d.get("polygon") for _, d in G.nodes(data=True)])
+        memo[1] = to_graphml_graph(G)
+    return memo[1]
 
 
 _XML_TYPES = {bool: "boolean", int: "long", float: "double", str: "string"}
@@ -653,8 +724,7 @@ def load_graphml(path) -> nx.MultiGraph:
 
 def node_link(G: nx.Graph) -> dict:
     """JSON-ready node-link data of ``G`` (geometry as WKT, tuples as JSON strings)."""
-    H = to_graphml_graph(G)
-    return nx.node_link_data(H, edges="edges")
+    return nx.node_link_data(_scalars(G), edges="edges")
 
 
 def save_json(G: nx.Graph, path) -> Path:
@@ -1126,13 +1196,6 @@ def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None, geojs
         del names["geojson"]
     if overlay_png is None:
         del names["overlay"]
-    scalar = {}
-
-    def plain():  # the GraphML scalars, encoded once for both GraphML and JSON (encoding them again is a no-op)
-        if not scalar:
-            scalar["G"] = to_graphml_graph(graph)
-        return scalar["G"]
-
     label_map = {}
 
     def map_pair():  # labels.pgm and labels.yaml, made once
@@ -1144,11 +1207,12 @@ def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None, geojs
     writers = {"labels": lambda p: save_labels(seg.labels, p),
                "label_map_pgm": lambda p: save_bytes(map_pair()["pgm"], p),
                "label_map": lambda p: save_bytes(map_pair()["yaml"], p),
-               "graphml": lambda p: save_graphml(plain(), p),
-               "json": lambda p: save_json(plain(), p), "geojson": lambda p: save_geojson(graph, p),
+               "graphml": lambda p: save_graphml(graph, p),
+               "json": lambda p: save_json(graph, p), "geojson": lambda p: save_geojson(graph, p),
                "overlay": lambda p: save_bytes(overlay_png, p)}
     to_file = ("labels", "graphml", "json", "geojson")  # writers given the open temporary file
     memo = _RING_MEMO.set({})  # outlines' floats encoded once, for the WKT and the GeoJSON
+    scalars = _SCALAR_MEMO.set([graph, None])  # the GraphML scalars, encoded once for GraphML and JSON
     try:
         with ExitStack() as stack:  # on success renames every temporary file; on error removes them all
             tmp = {k: stack.enter_context(atomic_write(outdir / f, None)) for k, f in names.items()}
@@ -1162,6 +1226,7 @@ def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None, geojs
                 if timings is not None:
                     timings[f"write_{k}"] = time.perf_counter() - t
     finally:
+        _SCALAR_MEMO.reset(scalars)
         _RING_MEMO.reset(memo)
     return {k: outdir / f for k, f in names.items()}
 

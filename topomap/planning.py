@@ -148,6 +148,7 @@ class _Ctx:
             for r in {a, b}:
                 self._of.setdefault(r, []).append(did)
         self._bbox = None
+        self._cells = {}  # door -> its cells (door_cells)
 
     # -- rooms ------------------------------------------------------------
     def room_bbox(self, r):
@@ -234,8 +235,12 @@ class _Ctx:
         return list(self._of.get(r, ()))
 
     def door_cells(self, did):
-        _, _, p1, p2, _, _ = self.doors[did]
-        return line_pixels(p1, p2, self.shape)
+        """The cells of door ``did``'s segment (:func:`topomap.geometry.line_pixels`; drawn once)."""
+        cells = self._cells.get(did)
+        if cells is None:
+            _, _, p1, p2, _, _ = self.doors[did]
+            cells = self._cells[did] = line_pixels(p1, p2, self.shape)
+        return cells
 
 
 def _pixel(ctx, x, y):
@@ -388,17 +393,18 @@ def _block_components(mask, f):
     K = R.size
     strip = np.zeros((f, K, f + 1), np.uint8)
     strip[:, :, :f] = blocks.transpose(1, 0, 2, 3)[:, R, C]
-    n, slab = cv2.connectedComponents(strip.reshape(f, K * (f + 1)), connectivity=8, ltype=cv2.CV_32S)
+    n, slab, stats, scen = cv2.connectedComponentsWithStats(strip.reshape(f, K * (f + 1)), connectivity=8,
+                                                            ltype=cv2.CV_32S)
     blab = slab.reshape(f, K, f + 1)[:, :, :f]  # (f, K, f): row in block, block, column in block
     lab.reshape(H, f, W, f).transpose(1, 0, 2, 3)[:, R, C] = blab
     # the centroids OpenCV gives on the image of all blocks one empty cell apart (each coordinate's
-    # sum over the piece / its area there), then moved back onto the window's cells
-    i, k, j = np.nonzero(blab)
-    lb = blab[i, k, j]
-    area = np.bincount(lb, minlength=n).astype(float)
+    # sum over the piece / its area there), then moved back onto the window's cells. The sums are
+    # integers: those on the strip, exact from its centroids, moved to the spaced image's blocks
+    area = stats[:, cv2.CC_STAT_AREA].astype(float)
     area[0] = 1
-    sr = np.bincount(lb, weights=(R[k] * (f + 1) + i).astype(float), minlength=n)
-    sc = np.bincount(lb, weights=(C[k] * (f + 1) + j).astype(float), minlength=n)
+    k = stats[:, cv2.CC_STAT_LEFT] // (f + 1)  # each piece's block on the strip
+    sr = np.rint(scen[:, 1] * area) + area * (R[k] * (f + 1))
+    sc = np.rint(scen[:, 0] * area) + area * ((C[k] - k) * (f + 1))
     cen = np.stack([sr / area, sc / area], 1)
     cen[0] = 0
     cen = cen - np.floor(cen / (f + 1))

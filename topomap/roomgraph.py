@@ -77,19 +77,30 @@ def room_polygons(labels: np.ndarray, to_world=None) -> dict:
 def _detailed(labels: np.ndarray, n: int) -> np.ndarray:
     """The labels ``1..n`` beyond the outline detail limit, from the cell edges on their boundaries
     (every ring has at least 4, and the pieces and holes the limit counts are at most the edges / 4):
-    found before any ring is traced, so that such a room's rings are never all traced."""
+    found before any ring is traced, so that such a room's rings are never all traced.
+
+    The edges are counted on the labels padded by one cell of 0 and read flat (two neighbours
+    differ: an edge of each), in the smallest integer type that holds them; the cells are counted
+    only when some label has more edges than any room within the limit can have."""
     if n == 0 or labels.size == 0:
         return np.zeros(0, np.int64)
-    P = np.pad(labels, 1)
+    dt = np.uint8 if n < 2 ** 8 else np.uint16 if n < 2 ** 16 else labels.dtype
+    H, W = labels.shape
+    P = np.zeros((H + 2, W + 2), dt)
+    P[1:-1, 1:-1] = labels
+    f = P.ravel()
     edges = np.zeros(n + 1, np.int64)
-    for a, b in ((P[:, :-1], P[:, 1:]), (P[:-1, :], P[1:, :])):
-        d = a != b
-        edges += np.bincount(a[d].ravel(), minlength=n + 1)[:n + 1]
-        edges += np.bincount(b[d].ravel(), minlength=n + 1)[:n + 1]
-        del d
+    for step in (1, W + 2):  # the cell right of, then below each cell (row ends meet padding only)
+        k = np.flatnonzero(f[:-step] != f[step:])
+        edges += np.bincount(f[k], minlength=n + 1)[:n + 1]
+        edges += np.bincount(f[k + step], minlength=n + 1)[:n + 1]
+    del P, f
+    edges[0] = 0
+    out = np.flatnonzero(edges > 4 * OUTLINE_MIN_RINGS)  # the limit of a room of no cells
+    if not out.size:
+        return out
     cells = np.bincount(labels.ravel(), minlength=n + 1)[:n + 1]
-    out = np.flatnonzero(edges > 4 * (OUTLINE_MIN_RINGS + cells // OUTLINE_CELLS_PER_RING))
-    return out[out > 0]
+    return out[edges[out] > 4 * (OUTLINE_MIN_RINGS + cells[out] // OUTLINE_CELLS_PER_RING)]
 
 
 def _without(labels: np.ndarray, drop: np.ndarray) -> np.ndarray:
