@@ -703,10 +703,11 @@ def judge_doors(cands, free: np.ndarray, endpoints: np.ndarray, threshold_px: fl
     posts = [p for _, c in judged for p in (c.ip1, c.ip2)]
     look = max(int(round(threshold_px / 2)), 1)
     pvals = protrusion_at(free, posts, max(threshold_px, 0.25 / resolution), look)
+    ends_ok = _wall_ends_at_posts(tree, posts, threshold_px)
     accepted = []
     for n, (width, c) in enumerate(judged):
         f1, f2 = pvals[2 * n], pvals[2 * n + 1]
-        e_ok = _wall_ends_at_posts(tree, c, threshold_px)
+        e_ok = bool(ends_ok[n])
         if width > opts.wide_opening and not e_ok:
             # wider than any door leaf: only where walls end on both sides
             c.status = WIDE_WITHOUT_WALL_ENDS
@@ -723,14 +724,16 @@ def judge_doors(cands, free: np.ndarray, endpoints: np.ndarray, threshold_px: fl
     return accepted
 
 
-def _wall_ends_at_posts(tree, c, threshold_px: float) -> bool:
-    """The paper's endpoint evidence: an occupied-skeleton endpoint (the end
-    of a wall) within ``threshold_px`` of both posts of ``c``."""
-    if tree is None:
-        return False
-    d1, _ = tree.query(c.ip1)
-    d2, _ = tree.query(c.ip2)
-    return bool(d1 <= threshold_px and d2 <= threshold_px)
+def _wall_ends_at_posts(tree, posts, threshold_px: float) -> np.ndarray:
+    """The paper's endpoint evidence: for each pair of posts (``posts`` the two
+    posts of every candidate in turn, ``(2 n, 2)``), whether an
+    occupied-skeleton endpoint (the end of a wall) lies within
+    ``threshold_px`` of both: ``(n,)`` bool."""
+    n = len(posts) // 2
+    if tree is None or n == 0:
+        return np.zeros(n, bool)
+    d, _ = tree.query(np.asarray(posts, float).reshape(-1, 2))
+    return (d <= threshold_px).reshape(n, 2).all(axis=1)
 
 
 def across_corridor(accepted, walls, depth_px: float) -> list:
