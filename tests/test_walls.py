@@ -309,3 +309,16 @@ def test_across_walls_many_follows_the_definition():
     want = [_across_reference(p, q, index, 3.0) for p, q in zip(P, Q)]
     assert list(many) == want
     assert 0 < sum(want) < len(want)
+
+
+def test_share_on_counts_the_walls_cells_in_a_part():
+    obstacle = np.zeros((40, 100), bool)
+    obstacle[10, 5:95] = True               # a wall along row 10
+    part = np.zeros_like(obstacle)
+    part[10, 5:35] = True                   # a third of it furniture
+    u, n = np.array([0.0, 1.0]), np.array([-1.0, 0.0])
+    walls = [(np.array([10.0, 0.0]), u, n, [[5.0, 94.0]]),    # on row 10
+             (np.array([30.0, 0.0]), u, n, [[5.0, 94.0]])]    # on an empty row
+    share = W.share_on(walls, obstacle, part, band_px=1)
+    assert share[0] == pytest.approx(30 / 90)
+    assert share[1] == 0.0

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["wall_faces", "wall_lines", "straight_share", "wall_openings", "wall_directions", "long_walls",
-           "across_walls", "across_walls_many", "WallIndex", "long_wall_gaps", "partition_gaps", "face_runs", "wall_mask", "scale_walls"]
+           "across_walls", "across_walls_many", "WallIndex", "long_wall_gaps", "partition_gaps", "face_runs", "share_on", "wall_mask", "scale_walls"]
 
 
 def wall_faces(obstacle: np.ndarray, free: np.ndarray) -> np.ndarray:
@@ -582,6 +582,25 @@ def _on_structure(obstacle: np.ndarray, seg, min_px: float) -> bool:
             if r0 <= rr < r1 and c0 <= cc < c1 and big[obj[rr - r0, cc - c0]]:
                 return True
     return False
+
+
+def share_on(walls: list, obstacle: np.ndarray, part: np.ndarray, *, band_px: float) -> np.ndarray:
+    """For each long wall (:func:`long_walls`, in the cells of ``obstacle``),
+    the share of the obstacle cells on its pieces (within ``band_px`` of its
+    line) that are cells of ``part``: ``(len(walls),)`` floats, 0 where no
+    obstacle cell lies on it."""
+    H, W = obstacle.shape
+    b = int(np.ceil(band_px))
+    o = np.arange(-b, b + 1, dtype=float)
+    out = np.zeros(len(walls))
+    for k, (origin, u, n, runs) in enumerate(walls):
+        ts = np.concatenate([np.arange(np.ceil(t0), np.floor(t1) + 1) for t0, t1 in runs])
+        pts = origin + ts[:, None, None] * u + o[None, :, None] * n
+        r = np.clip(np.rint(pts[..., 0]).astype(np.intp), 0, H - 1)
+        c = np.clip(np.rint(pts[..., 1]).astype(np.intp), 0, W - 1)
+        on = int(obstacle[r, c].sum())
+        out[k] = part[r, c].sum() / on if on else 0.0
+    return out
 
 
 def scale_walls(walls: list, k: int) -> list:
