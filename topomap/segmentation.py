@@ -817,17 +817,17 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
             # cupboards) would chain into long walls and keep it (measured:
             # precision -2.0 on the Freiburg partial maps, -4.6 on
             # bremen_cartesium_full)
-            # a long wall whose cells are mostly bulky furniture (a row of
-            # desks or round tables) is furniture, and keeps none of it
+            # a long wall whose cells are mostly bulky furniture in separate
+            # pieces (a row of desks or round tables) keeps none of it
             wk = _Walls(looked, opts, runs=False)
             _, every = without_clutter(rooms_grid, opts.min_wall_length, furniture_size=opts.furniture_size,
                                        wall_thickness=opts.wall_thickness)
             bulky = every if clutter is None else every & ~clutter
-            share = W.share_on(W.scale_walls(wk.lw, wk.k), ~looked.free, bulky, band_px=opts.wall_wander / res)
+            rows = W.furniture_rows(W.scale_walls(wk.lw, wk.k), ~looked.free, bulky, band_px=opts.wall_wander / res)
             looked2, clutter2 = without_clutter(rooms_grid, opts.min_wall_length,
                                                 furniture_size=opts.furniture_size,
                                                 wall_thickness=opts.wall_thickness,
-                                                keep=wk.mask(looked.free.shape, keep=share < 0.5))
+                                                keep=wk.mask(looked.free.shape, keep=~rows))
             if clutter2 is not None and (clutter is None or not np.array_equal(clutter2, clutter)):
                 looked, clutter = looked2, clutter2
                 search, closed = close_wall_gaps(looked, opts.wall_gap)
