@@ -309,3 +309,19 @@ def test_across_walls_many_follows_the_definition():
     want = [_across_reference(p, q, index, 3.0) for p, q in zip(P, Q)]
     assert list(many) == want
     assert 0 < sum(want) < len(want)
+
+
+def test_furniture_rows_need_mostly_furniture_in_separate_pieces():
+    obstacle = np.zeros((40, 100), bool)
+    obstacle[10, 5:95] = True               # a wall along row 10
+    obstacle[20, 5:95] = True               # and one along row 20
+    obstacle[30, 5:95] = True               # and one along row 30
+    part = np.zeros_like(obstacle)
+    part[10, 5:35] = True                   # row 10: a third of it one piece of furniture
+    part[20, 5:30] = part[20, 40:70] = True  # row 20: two thirds, two pieces
+    part[30, 5:95] = True                   # row 30: all furniture, but one piece (a counter)
+    u, n = np.array([0.0, 1.0]), np.array([-1.0, 0.0])
+    walls = [(np.array([r, 0.0]), u, n, [[5.0, 94.0]]) for r in (10.0, 20.0, 30.0, 36.0)]  # 36: empty
+    rows = W.furniture_rows(walls, obstacle, part, band_px=1)
+    assert rows.tolist() == [False, True, False, False]
+    assert W.furniture_rows(walls, obstacle, part, band_px=1, min_pieces=1).tolist() == [False, True, True, False]

@@ -692,11 +692,13 @@ class _Walls:
         """The straight wall faces ``(r1, c1, r2, c2)`` in the map's cells."""
         return self.fine(np.asarray(self.lines, float).reshape(-1, 2, 2)).reshape(-1, 4)
 
-    def mask(self, shape):
-        """The long walls' cells (:func:`topomap.walls.wall_mask`) on a map grid of ``shape``."""
+    def mask(self, shape, keep=None):
+        """The long walls' cells (:func:`topomap.walls.wall_mask`) on a map grid of ``shape``; with
+        ``keep`` (a bool per long wall), those of the walls it marks only."""
         from . import walls as W
 
-        m = W.wall_mask(self.lw, self.free.shape)
+        lw = self.lw if keep is None else [w for w, k in zip(self.lw, keep) if k]
+        m = W.wall_mask(lw, self.free.shape)
         if self.k > 1:
             m = np.kron(m, np.ones((self.k, self.k), bool))[:shape[0], :shape[1]]
         return m
@@ -815,10 +817,17 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
             # cupboards) would chain into long walls and keep it (measured:
             # precision -2.0 on the Freiburg partial maps, -4.6 on
             # bremen_cartesium_full)
+            # a long wall whose cells are mostly bulky furniture in separate
+            # pieces (a row of desks or round tables) keeps none of it
+            wk = _Walls(looked, opts, runs=False)
+            _, every = without_clutter(rooms_grid, opts.min_wall_length, furniture_size=opts.furniture_size,
+                                       wall_thickness=opts.wall_thickness)
+            bulky = every if clutter is None else every & ~clutter
+            rows = W.furniture_rows(W.scale_walls(wk.lw, wk.k), ~looked.free, bulky, band_px=opts.wall_wander / res)
             looked2, clutter2 = without_clutter(rooms_grid, opts.min_wall_length,
                                                 furniture_size=opts.furniture_size,
                                                 wall_thickness=opts.wall_thickness,
-                                                keep=_Walls(looked, opts, runs=False).mask(looked.free.shape))
+                                                keep=wk.mask(looked.free.shape, keep=~rows))
             if clutter2 is not None and (clutter is None or not np.array_equal(clutter2, clutter)):
                 looked, clutter = looked2, clutter2
                 search, closed = close_wall_gaps(looked, opts.wall_gap)

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["wall_faces", "wall_lines", "straight_share", "wall_openings", "wall_directions", "long_walls",
-           "across_walls", "across_walls_many", "WallIndex", "long_wall_gaps", "partition_gaps", "face_runs", "wall_mask", "scale_walls"]
+           "across_walls", "across_walls_many", "WallIndex", "long_wall_gaps", "partition_gaps", "face_runs", "furniture_rows", "wall_mask", "scale_walls"]
 
 
 def wall_faces(obstacle: np.ndarray, free: np.ndarray) -> np.ndarray:
@@ -582,6 +582,44 @@ def _on_structure(obstacle: np.ndarray, seg, min_px: float) -> bool:
             if r0 <= rr < r1 and c0 <= cc < c1 and big[obj[rr - r0, cc - c0]]:
                 return True
     return False
+
+
+def furniture_rows(walls: list, obstacle: np.ndarray, part: np.ndarray, *, band_px: float,
+                   min_share: float = 0.5, min_pieces: int = 2) -> np.ndarray:
+    """Which long walls are rows of furniture.
+
+    A long wall (:func:`long_walls`, in the cells of ``obstacle``) is a row
+    of furniture when at least ``min_share`` of the obstacle cells on its
+    pieces (within ``band_px`` of its line) are cells of ``part`` (bulky
+    free-standing furniture) and those cells belong to at least
+    ``min_pieces`` separate pieces (8-connected): desks or round tables set
+    in line, whose sides line up like a wall's. One piece is not a row: a
+    long cupboard or a counter along a wall lines up with the wall itself.
+
+    Returns
+    -------
+    (len(walls),) ndarray of bool
+    """
+    import cv2
+
+    H, W = obstacle.shape
+    out = np.zeros(len(walls), bool)
+    if not len(walls) or not part.any():
+        return out
+    _, lab = cv2.connectedComponents(np.ascontiguousarray(part, dtype=np.uint8), connectivity=8,
+                                     ltype=cv2.CV_32S)
+    b = int(np.ceil(band_px))
+    o = np.arange(-b, b + 1, dtype=float)
+    for k, (origin, u, n, runs) in enumerate(walls):
+        ts = np.concatenate([np.arange(np.ceil(t0), np.floor(t1) + 1) for t0, t1 in runs])
+        pts = origin + ts[:, None, None] * u + o[None, :, None] * n
+        r = np.clip(np.rint(pts[..., 0]).astype(np.intp), 0, H - 1)
+        c = np.clip(np.rint(pts[..., 1]).astype(np.intp), 0, W - 1)
+        on = int(obstacle[r, c].sum())
+        pieces = lab[r, c]
+        pieces = pieces[pieces > 0]
+        out[k] = bool(on) and pieces.size >= min_share * on and np.unique(pieces).size >= min_pieces
+    return out
 
 
 def scale_walls(walls: list, k: int) -> list:
