@@ -372,24 +372,24 @@ def face_runs(faces: np.ndarray, *, min_length_px: float, band_px: int = 1, max_
         t = np.rint(pts @ u).astype(np.int64)
         rb = np.rint(pts @ n).astype(np.int64)
         t_lo = int(t.min())
-        span = int(t.max()) - t_lo + 1
-        first = np.argsort((rb - int(rb.min())) * span + (t - t_lo))  # by line, then along it
-        rb, t = rb[first], t[first]
-        # the same order for each shifted copy: a stable sort merges the sorted runs
-        key = np.concatenate([rb + o for o in range(-band_px, band_px + 1)])
-        tt = np.tile(t, 2 * band_px + 1)
-        order = np.argsort((key - int(key.min())) * span + (tt - t_lo), kind="stable")
-        key, tt = key[order], tt[order]
-        new = np.ones(key.size, bool)
-        new[1:] = (key[1:] != key[:-1]) | (tt[1:] - tt[:-1] > max_gap_px + 1)
+        # one integer per cell, by line, then along it, lines apart by more
+        # than a gap so that a run never goes on from one line to the next
+        span = int(t.max()) - t_lo + int(max_gap_px) + 3
+        rb_lo = int(rb.min()) - band_px
+        v = np.sort((rb - rb_lo) * span + (t - t_lo))
+        # the cells of each line shifted by -band_px..band_px lines: the
+        # sorted copies merge
+        v = np.sort(np.concatenate([v + o * span for o in range(-band_px, band_px + 1)]), kind="stable")
+        new = np.ones(v.size, bool)
+        np.greater(np.diff(v), max_gap_px + 1, out=new[1:])
         start = np.flatnonzero(new)
-        end = np.r_[start[1:], key.size] - 1
-        t0, t1 = tt[start], tt[end]
+        end = np.r_[start[1:], v.size] - 1
+        t0, t1 = v[start] % span + t_lo, v[end] % span + t_lo
         keep = t1 - t0 >= min_length_px
-        for kb, a, b in zip(key[start][keep], t0[keep], t1[keep]):
-            p, q = kb * n + a * u, kb * n + b * u
-            out.append((p[0], p[1], q[0], q[1]))
-    return np.array(out, float).reshape(-1, 4)
+        kb = (v[start[keep]] // span + rb_lo)[:, None]
+        t0, t1 = t0[keep], t1[keep]
+        out.append(np.concatenate([kb * n + t0[:, None] * u, kb * n + t1[:, None] * u], axis=1))
+    return np.concatenate(out).astype(float).reshape(-1, 4)
 
 
 def long_walls(lines: np.ndarray, *, max_gap_px: float, offset_px: float, min_span_px: float,
@@ -419,9 +419,11 @@ def long_walls(lines: np.ndarray, *, max_gap_px: float, offset_px: float, min_sp
         t1, t2 = segs[sel, :2] @ u, segs[sel, 2:] @ u
         lo, hi = np.minimum(t1, t2), np.maximum(t1, t2)
         order = np.argsort(rho)
-        groups, cur = [], [order[0]]
-        for a, b in zip(order[:-1], order[1:]):
-            if rho[b] - rho[a] <= offset_px and rho[b] - rho[cur[0]] <= 2 * offset_px:
+        # the loops on Python floats: the same sums and comparisons, faster
+        rl, lol, hil = rho.tolist(), lo.tolist(), hi.tolist()
+        groups, cur = [], [int(order[0])]
+        for a, b in zip(order[:-1].tolist(), order[1:].tolist()):
+            if rl[b] - rl[a] <= offset_px and rl[b] - rl[cur[0]] <= 2 * offset_px:
                 cur.append(b)
             else:
                 groups.append(cur)
@@ -432,20 +434,20 @@ def long_walls(lines: np.ndarray, *, max_gap_px: float, offset_px: float, min_sp
             w = L[sel[grp]]
             r0 = float((rho[grp] * w).sum() / w.sum())
             chains, runs = [], []
-            for j in grp[np.argsort(lo[grp])]:
-                if runs and lo[j] <= runs[-1][1] + 1.0:
-                    runs[-1][1] = max(runs[-1][1], hi[j])
-                elif runs and lo[j] - runs[-1][1] <= max_gap_px:
-                    runs.append([lo[j], hi[j]])
+            for j in grp[np.argsort(lo[grp])].tolist():
+                if runs and lol[j] <= runs[-1][1] + 1.0:
+                    runs[-1][1] = max(runs[-1][1], hil[j])
+                elif runs and lol[j] - runs[-1][1] <= max_gap_px:
+                    runs.append([lol[j], hil[j]])
                 else:
                     if runs:
                         chains.append(runs)
-                    runs = [[lo[j], hi[j]]]
+                    runs = [[lol[j], hil[j]]]
             chains.append(runs)
             for runs in chains:
                 span = runs[-1][1] - runs[0][0]
                 if span >= min_span_px and sum(r[1] - r[0] for r in runs) >= support * span:
-                    out.append((r0 * n, u, n, runs))
+                    out.append((r0 * n, u, n, [[np.float64(a), np.float64(b)] for a, b in runs]))
     return out
 
 
