@@ -133,10 +133,11 @@ def _depth_ok(obstacle, p, q, depth_px):
     v = q - p
     n = _perp(v / np.maximum(np.hypot(*v.T), 1e-9)[:, None])
     k = max(int(np.ceil(depth_px)), 1)
-    ok = np.ones(len(p), bool)
-    for side in (n, -n):
-        ok &= np.any([_free_runs(obstacle, p + f * v, side, k) == k for f in (0.25, 0.5, 0.75)], axis=0)
-    return ok
+    # the six probes (two sides, three points) of every segment in one call
+    starts = np.concatenate([p + f * v for _ in (n, -n) for f in (0.25, 0.5, 0.75)])
+    dirs = np.concatenate([side for side in (n, -n) for _ in (0.25, 0.5, 0.75)])
+    deep = (_free_runs(obstacle, starts, dirs, k) == k).reshape(2, 3, len(p))
+    return deep.any(axis=1).all(axis=0)
 
 
 def _spans_passage(obstacle, p, q, depth_px, slack: float = 1.25):
@@ -154,27 +155,24 @@ def _spans_passage(obstacle, p, q, depth_px, slack: float = 1.25):
     mid = (p + q) / 2
     cap = np.ceil(slack * L).astype(int) + 2
     top = int(cap.max()) if cap.size else 1
-    out = np.ones(len(p), bool)
-    for side in (n, -n):
-        narrow = np.zeros(len(p), bool)
-        for t in (0.25 * depth_px, 0.5 * depth_px, 0.75 * depth_px, depth_px):
-            c = mid + t * side
-            w = (np.minimum(_free_runs(obstacle, c - d, -d, top), cap)
-                 + np.minimum(_free_runs(obstacle, c, d, top), cap) + 1)
-            narrow |= w <= slack * L
-        out &= narrow
-    return out
+    # both ways along the segment from 4 points on each side, in one call
+    cs = [mid + t * side for side in (n, -n) for t in (0.25 * depth_px, 0.5 * depth_px, 0.75 * depth_px, depth_px)]
+    starts = np.concatenate([c - d for c in cs] + cs)
+    dirs = np.concatenate([-d] * len(cs) + [d] * len(cs))
+    runs = np.minimum(_free_runs(obstacle, starts, dirs, top).reshape(2, len(cs), len(p)), cap)
+    narrow = (runs[0] + runs[1] + 1 <= slack * L).reshape(2, len(cs) // 2, len(p))
+    return narrow.any(axis=1).all(axis=0)
 
 
 def _gaps(obstacle, free, segs, back, n_gap, offsets, min_gap_px, max_gap_px, chunk: int = 1024):
     """The gaps past the ends of the wall segments ``segs``, in the order of
-    the segments (each segment's second end first): ``(end, d, s0, e0)``
-    with the end point, the outward direction and the indices of the first
-    free sample and of the first obstacle sample after it (sample ``i`` at
-    ``end + (i - back) * d``). Only gaps that start within the wall piece's
-    last cells, are ``min_gap_px``-``max_gap_px`` long and free along at
-    least half their line are given. Vectorised over the ends, ``chunk``
-    ends at a time."""
+    the segments (each segment's second end first): arrays ``(end, d, s0,
+    e0)`` of the end points, the outward directions and the indices of the
+    first free sample and of the first obstacle sample after it (sample
+    ``i`` at ``end + (i - back) * d``). Only gaps that start within the wall
+    piece's last cells, are ``min_gap_px``-``max_gap_px`` long and free
+    along at least half their line are given. Vectorised over the ends,
+    ``chunk`` ends at a time."""
     segs = np.asarray(segs, float).reshape(-1, 4)
     a, b = segs[:, :2], segs[:, 2:]
     L = np.hypot(*(b - a).T)
@@ -182,8 +180,16 @@ def _gaps(obstacle, free, segs, back, n_gap, offsets, min_gap_px, max_gap_px, ch
     u = (b - a) / L[:, None]
     ends = np.stack([b, a], 1).reshape(-1, 2)
     dirs = np.stack([u, -u], 1).reshape(-1, 2)
+    # the first samples tell the ends where the wall piece ends (a gap starts
+    # within its last cells): only those are followed further
+    m = min(back + 3, n_gap)
+    r, c, inside = _sample_cells(obstacle.shape, ends - (back + 1) * dirs, dirs, m, offsets)
+    hit = (obstacle[r, c] & inside).any(axis=1)
+    todo = np.flatnonzero(hit[:, 0] & ~hit[:, 1:].all(axis=1))
+    ends, dirs = ends[todo], dirs[todo]
     centre = len(offsets) // 2
     idx = np.arange(n_gap)
+    out = []
     for k in range(0, ends.shape[0], chunk):
         E, D = ends[k:k + chunk], dirs[k:k + chunk]
         r, c, inside = _sample_cells(obstacle.shape, E - (back + 1) * D, D, n_gap, offsets)
@@ -201,8 +207,10 @@ def _gaps(obstacle, free, segs, back, n_gap, offsets, min_gap_px, max_gap_px, ch
         rows = np.arange(lf.shape[0])
         n_free = cs[rows, e0] - cs[rows, s0]
         ok &= n_free >= 0.5 * np.maximum(e0 - s0, 1)
-        for i in np.flatnonzero(ok):
-            yield E[i], D[i], int(s0[i]), int(e0[i])
+        out.append((E[ok], D[ok], s0[ok], e0[ok]))
+    if not out:
+        return np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0, int), np.zeros(0, int)
+    return tuple(np.concatenate(x) for x in zip(*out))
 
 
 def wall_openings(obstacle: np.ndarray, free: np.ndarray, *, min_wall_px: float, min_gap_px: float,
@@ -269,21 +277,20 @@ def wall_openings(obstacle: np.ndarray, free: np.ndarray, *, min_wall_px: float,
     n_gap = int(np.ceil(max_gap_px)) + back + 1
     n_side = max(int(np.ceil(side_px)), 1)
     offsets = np.arange(-band_px, band_px + 1)
-    found = list(_gaps(obstacle, free, segs, back, n_gap, offsets, min_gap_px, max_gap_px))
-    if not found:
+    end, d, s0, e0 = _gaps(obstacle, free, segs, back, n_gap, offsets, min_gap_px, max_gap_px)
+    if not len(end):
         return []
-    end = np.array([g[0] for g in found])
-    d = np.array([g[1] for g in found])
-    s0 = np.array([g[2] for g in found])
-    e0 = np.array([g[3] for g in found])
     start = end - (back + 1) * d
     gap = e0 - s0 + 1
     p = start + s0[:, None] * d            # last wall sample before each gap
     far = start + (e0 + 1)[:, None] * d    # first wall sample after it
     perp = _perp(d)
-    crossed = [_face_runs(faces, x - perp, perp, n_side, offsets) & _face_runs(faces, x + perp, -perp, n_side, offsets)
-               for x in (p, far)]
-    goes_on = _face_runs(faces, far - d, d, n_side, offsets)
+    # the five probes of every gap in one call: across the line at both of
+    # its ends, both ways, and along it past the gap
+    probe = _face_runs(faces, np.concatenate([p - perp, p + perp, far - perp, far + perp, far - d]),
+                       np.concatenate([perp, -perp, perp, -perp, d]), n_side, offsets).reshape(5, -1)
+    crossed = [probe[0] & probe[1], probe[2] & probe[3]]
+    goes_on = probe[4]
     # no wall end where the piece's end lies on a wall crossing its line; where
     # the wall goes on, a far end on a crossing wall makes the gap a passage's
     # width; where it does not, only a door-wide gap ending on a wall is kept
@@ -505,7 +512,7 @@ def partition_gaps(obstacle: np.ndarray, free: np.ndarray, lines: np.ndarray, *,
     if segs.shape[0] < 2:
         return []
     classes = _main_classes(segs, angle_tol)
-    crossing = [_line_mask(segs[sel], obstacle.shape, 3) for _, sel in classes]
+    crossing = {}  # the cells of each class's lines, drawn when the other class needs them
     back = 3  # samples start inside the piece, as in wall_openings
     n_gap = int(np.ceil(max_gap_px)) + back + 1
     offsets = np.arange(-band_px, band_px + 1)
@@ -521,6 +528,17 @@ def partition_gaps(obstacle: np.ndarray, free: np.ndarray, lines: np.ndarray, *,
         d = np.sign((b - a) @ u)[:, None] * u
         ends, dirs = np.concatenate([b, a]), np.concatenate([d, -d])
         start = ends - (back + 1) * dirs
+        # only the ends where the piece ends within its last cells (the first
+        # samples tell) are followed further
+        m = min(back + 3, n_gap)
+        r, c, inside = _sample_cells(obstacle.shape, start, dirs, m, offsets)
+        hit = (obstacle[r, c] & inside).any(axis=1)
+        todo = np.flatnonzero(hit[:, 0] & ~hit[:, 1:].all(axis=1))
+        if not todo.size:
+            continue
+        start, dirs, line_of = start[todo], dirs[todo], line_of[todo]
+        if 1 - k not in crossing:
+            crossing[1 - k] = _line_mask(segs[classes[1 - k][1]], obstacle.shape, 3)
         r, c, inside = _sample_cells(obstacle.shape, start, dirs, n_gap, offsets)
         hit = (obstacle[r, c] & inside).any(axis=1)
         s0 = np.argmax(~hit, axis=1)
