@@ -426,35 +426,46 @@ def long_walls(lines: np.ndarray, *, max_gap_px: float, offset_px: float, min_sp
         t1, t2 = segs[sel, :2] @ u, segs[sel, 2:] @ u
         lo, hi = np.minimum(t1, t2), np.maximum(t1, t2)
         order = np.argsort(rho)
-        # the loops on Python floats: the same sums and comparisons, faster
-        rl, lol, hil = rho.tolist(), lo.tolist(), hi.tolist()
-        groups, cur = [], [int(order[0])]
-        for a, b in zip(order[:-1].tolist(), order[1:].tolist()):
-            if rl[b] - rl[a] <= offset_px and rl[b] - rl[cur[0]] <= 2 * offset_px:
-                cur.append(b)
-            else:
-                groups.append(cur)
-                cur = [b]
-        groups.append(cur)
-        for grp in groups:
-            grp = np.array(grp)
-            w = L[sel[grp]]
-            r0 = float((rho[grp] * w).sum() / w.sum())
-            chains, runs = [], []
-            for j in grp[np.argsort(lo[grp])].tolist():
-                if runs and lol[j] <= runs[-1][1] + 1.0:
-                    runs[-1][1] = max(runs[-1][1], hil[j])
-                elif runs and lol[j] - runs[-1][1] <= max_gap_px:
-                    runs.append([lol[j], hil[j]])
-                else:
-                    if runs:
-                        chains.append(runs)
-                    runs = [[lol[j], hil[j]]]
-            chains.append(runs)
-            for runs in chains:
-                span = runs[-1][1] - runs[0][0]
-                if span >= min_span_px and sum(r[1] - r[0] for r in runs) >= support * span:
-                    out.append((r0 * n, u, n, [[np.float64(a), np.float64(b)] for a, b in runs]))
+        rl = rho.tolist()  # the grouping loop on Python floats: the same comparisons, faster
+        bounds, g0 = [0], int(order[0])
+        for i, (a, b) in enumerate(zip(order[:-1].tolist(), order[1:].tolist()), 1):
+            if not (rl[b] - rl[a] <= offset_px and rl[b] - rl[g0] <= 2 * offset_px):
+                bounds.append(i)
+                g0 = b
+        bounds.append(len(order))
+        # the pieces of each group (order[bounds[g]:bounds[g + 1]]) along the
+        # wall, all groups at once: by group, then by their start
+        gid = np.repeat(np.arange(len(bounds) - 1), np.diff(bounds))
+        by = order[np.lexsort((lo[order], gid))]
+        glo, ghi = lo[by], hi[by]
+        # the pieces so far reach the running maximum of their ends within the
+        # group (of the ranks of the ends, offset by group: exact): a piece
+        # starting within a cell of it extends the run, one within max_gap_px
+        # starts the next run of the chain, any other the next chain
+        m = len(by)
+        rank = np.empty(m, np.int64)
+        rank[np.argsort(ghi, kind="stable")] = np.arange(m)
+        acc = np.sort(ghi, kind="stable")[np.maximum.accumulate(gid * m + rank) - gid * m]
+        head = np.r_[True, gid[1:] != gid[:-1]]
+        reach = np.r_[-np.inf, acc[:-1]]
+        run = head | ~(glo <= reach + 1.0)
+        chain = head | (run & ~(glo - reach <= max_gap_px))
+        first = np.flatnonzero(run)
+        run_lo, run_hi = glo[first], acc[np.r_[first[1:], m] - 1]
+        c_first = np.flatnonzero(chain[first])                 # the first run of each chain
+        c_last = np.r_[c_first[1:], len(first)] - 1
+        span = run_hi[c_last] - run_lo[c_first]
+        r0 = {}
+        for c in np.flatnonzero(span >= min_span_px).tolist():
+            runs = [[a, b] for a, b in zip(run_lo[c_first[c]:c_last[c] + 1].tolist(),
+                                           run_hi[c_first[c]:c_last[c] + 1].tolist())]
+            if sum(r[1] - r[0] for r in runs) >= support * float(span[c]):
+                k = int(gid[first[c_first[c]]])
+                if k not in r0:
+                    grp = order[bounds[k]:bounds[k + 1]]
+                    w = L[sel[grp]]
+                    r0[k] = float((rho[grp] * w).sum() / w.sum())
+                out.append((r0[k] * n, u, n, [[np.float64(a), np.float64(b)] for a, b in runs]))
     return out
 
 
