@@ -69,10 +69,10 @@ def straight_share(faces: np.ndarray, lines: np.ndarray) -> float:
     draws walls that wander a cell or two off their line (0.14-0.67 there).
     1.0 when there are no faces.
     """
-    n = int(faces.sum())
+    n = np.count_nonzero(faces)
     if n == 0:
         return 1.0
-    return float((faces & _line_mask(lines, faces.shape, 3)).sum()) / n
+    return float(np.count_nonzero(faces & _line_mask(lines, faces.shape, 3))) / n
 
 
 def _line_mask(lines, shape, width: int) -> np.ndarray:
@@ -367,12 +367,11 @@ def face_runs(faces: np.ndarray, *, min_length_px: float, band_px: int = 1, max_
     if lines is None:
         lines = wall_lines(faces, min_length_px=min_length_px)
     segs = np.asarray(lines, float).reshape(-1, 4)
-    import cv2
-
-    xy = cv2.findNonZero(np.ascontiguousarray(faces).view(np.uint8))  # the face cells, fast
-    if xy is None:
+    at = np.flatnonzero(faces)  # the face cells, in raster order
+    if not at.size:
         return np.zeros((0, 4))
-    pts = xy.reshape(-1, 2)[:, ::-1].astype(float)
+    pts = np.empty((at.size, 2))
+    pts[:, 0], pts[:, 1] = np.divmod(at, faces.shape[1])
     out = []
     for _, u in _main_directions(segs):
         n = np.array([-u[1], u[0]])
