@@ -572,14 +572,15 @@ def partition_gaps(obstacle: np.ndarray, free: np.ndarray, lines: np.ndarray, *,
         rh, ch, inh = _sample_cells(obstacle.shape, start[i], dirs[i], n_gap, np.arange(-hb, hb + 1))
         seen = (hits[rh, ch] & inh).any(axis=1)
         i = i[(seen & within[i]).sum(axis=1) >= min_hits_px]
-        if min_structure_px > 0:
-            i = np.array([t for t in i if _on_structure(obstacle, segs[line_of[t]], min_structure_px)], int)
         if not i.size:
             continue
         p = start[i] + s0[i, None] * dirs[i]
         q = start[i] + (e1[i] + 1)[:, None] * dirs[i]
         good = _depth_ok(obstacle, p, q, depth_px)
         good[good] = ~_spans_passage(obstacle, p[good], q[good], depth_px)
+        if min_structure_px > 0:  # the costliest test last
+            for t in np.flatnonzero(good):
+                good[t] = _on_structure(obstacle, segs[line_of[i[t]]], min_structure_px)
         out.extend((p[t], q[t]) for t in np.flatnonzero(good))
     return out
 
@@ -715,24 +716,32 @@ def long_wall_gaps(obstacle: np.ndarray, free: np.ndarray, walls: list, *, min_g
         Opening segments in pixels.
     """
     H, W = free.shape
+    # every gap of every wall, its cells on the wall's line in a row of a
+    # (gaps, cells) array: cell j of gap g at origin + (ceil(e) + j) u
+    gaps = [(origin, u, e, s0) for origin, u, _, runs in walls
+            for (_, e), (s0, _) in zip(runs[:-1], runs[1:]) if min_gap_px <= s0 - e <= max_gap_px]
+    if not gaps:
+        return []
+    origin = np.array([g[0] for g in gaps], float)
+    u = np.array([g[1] for g in gaps], float)
+    t_lo = np.ceil([g[2] for g in gaps])
+    count = (np.floor([g[3] for g in gaps]) + 1 - t_lo).astype(int)
+    cols = np.arange(max(int(count.max()), 1))
+    valid = cols[None, :] < count[:, None]
+    ts = t_lo[:, None] + cols[None, :]
+    pts = origin[:, None, :] + ts[:, :, None] * u[:, None, :]
+    rr = np.rint(pts[..., 0]).astype(int)
+    cc = np.rint(pts[..., 1]).astype(int)
+    inside = (rr >= 0) & (rr < H) & (cc >= 0) & (cc < W)
+    fr = free[np.clip(rr, 0, H - 1), np.clip(cc, 0, W - 1)] & valid
+    n_free = fr.sum(axis=1)
+    ok = (count > 0) & (inside | ~valid).all(axis=1) & ~(n_free / np.maximum(count, 1) < 0.5)
     out = []
-    for origin, u, _, runs in walls:
-        for (_, e), (s0, _) in zip(runs[:-1], runs[1:]):
-            if not (min_gap_px <= s0 - e <= max_gap_px):
-                continue
-            ts = np.arange(np.ceil(e), np.floor(s0) + 1)
-            pts = origin + ts[:, None] * u
-            rr = np.rint(pts[:, 0]).astype(int)
-            cc = np.rint(pts[:, 1]).astype(int)
-            if not ((rr >= 0) & (rr < H) & (cc >= 0) & (cc < W)).all():
-                continue
-            fr = free[rr, cc]
-            if fr.mean() < 0.5:
-                continue
-            k = np.flatnonzero(fr)
-            p, q = origin + (ts[k[0]] - 1) * u, origin + (ts[k[-1]] + 1) * u
-            if np.hypot(*(q - p)) >= min_gap_px:
-                out.append((p, q))
+    for g in np.flatnonzero(ok):
+        k = np.flatnonzero(fr[g])
+        p, q = origin[g] + (ts[g, k[0]] - 1) * u[g], origin[g] + (ts[g, k[-1]] + 1) * u[g]
+        if np.hypot(*(q - p)) >= min_gap_px:
+            out.append((p, q))
     if not out:
         return out
     deep = _depth_ok(obstacle, np.array([p for p, _ in out]), np.array([q for _, q in out]), depth_px)
