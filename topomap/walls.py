@@ -89,7 +89,8 @@ def _line_mask(lines, shape, width: int) -> np.ndarray:
 def _sample_cells(shape, starts, dirs, n, offsets):
     """Cells ``start + t d + o n_perp`` for ``t = 1..n`` and each offset ``o``,
     for every row of ``starts`` / ``dirs`` (``(E, 2)``): ``(E, len(offsets), n)``
-    rows and cols (clipped to the map), and a mask of samples inside it."""
+    flat indices into a C-ordered array of ``shape`` (of the cells clipped
+    to the map), and a mask of the samples inside it."""
     H, W = shape
     starts, dirs = np.asarray(starts, float), np.asarray(dirs, float)
     t = np.arange(1, n + 1, dtype=float)[None, None, :]
@@ -98,9 +99,11 @@ def _sample_cells(shape, starts, dirs, n, offsets):
     r = np.rint(starts[:, 0, None, None] + t * dirs[:, 0, None, None] + o * -dirs[:, 1, None, None]).astype(np.intp)
     c = np.rint(starts[:, 1, None, None] + t * dirs[:, 1, None, None] + o * dirs[:, 0, None, None]).astype(np.intp)
     inside = (r >= 0) & (r < H) & (c >= 0) & (c < W)
-    np.clip(r, 0, H - 1, out=r)
-    np.clip(c, 0, W - 1, out=c)
-    return r, c, inside
+    np.minimum(np.maximum(r, 0, out=r), H - 1, out=r)
+    np.minimum(np.maximum(c, 0, out=c), W - 1, out=c)
+    r *= W
+    r += c
+    return r, inside
 
 
 def _perp(d):
@@ -111,8 +114,8 @@ def _perp(d):
 def _free_runs(obstacle, starts, dirs, n):
     """Samples from each row of ``starts`` along the row of ``dirs`` (at most
     ``n``) before the first obstacle cell or the map's edge: ``(E,)``."""
-    r, c, inside = _sample_cells(obstacle.shape, starts, dirs, n, [0])
-    stop = obstacle[r[:, 0], c[:, 0]] | ~inside[:, 0]
+    at, inside = _sample_cells(obstacle.shape, starts, dirs, n, [0])
+    stop = np.ravel(obstacle)[at[:, 0]] | ~inside[:, 0]
     return np.where(stop.any(axis=1), np.argmax(stop, axis=1), n)
 
 
@@ -120,8 +123,8 @@ def _face_runs(faces, starts, dirs, n, offsets):
     """Whether a wall face runs on past each row of ``starts`` along the row
     of ``dirs`` for ``n`` samples (within the band of ``offsets``), at 70 %
     of them at least: ``(E,)`` bool."""
-    r, c, inside = _sample_cells(faces.shape, starts, dirs, n, offsets)
-    return (faces[r, c] & inside).any(axis=1).mean(axis=1) >= 0.7
+    at, inside = _sample_cells(faces.shape, starts, dirs, n, offsets)
+    return (np.ravel(faces)[at] & inside).any(axis=1).mean(axis=1) >= 0.7
 
 
 def _depth_ok(obstacle, p, q, depth_px):
@@ -183,8 +186,9 @@ def _gaps(obstacle, free, segs, back, n_gap, offsets, min_gap_px, max_gap_px, ch
     # the first samples tell the ends where the wall piece ends (a gap starts
     # within its last cells): only those are followed further
     m = min(back + 3, n_gap)
-    r, c, inside = _sample_cells(obstacle.shape, ends - (back + 1) * dirs, dirs, m, offsets)
-    hit = (obstacle[r, c] & inside).any(axis=1)
+    ob, fr = np.ravel(obstacle), np.ravel(free)
+    at, inside = _sample_cells(obstacle.shape, ends - (back + 1) * dirs, dirs, m, offsets)
+    hit = (ob[at] & inside).any(axis=1)
     todo = np.flatnonzero(hit[:, 0] & ~hit[:, 1:].all(axis=1))
     ends, dirs = ends[todo], dirs[todo]
     centre = len(offsets) // 2
@@ -192,8 +196,8 @@ def _gaps(obstacle, free, segs, back, n_gap, offsets, min_gap_px, max_gap_px, ch
     out = []
     for k in range(0, ends.shape[0], chunk):
         E, D = ends[k:k + chunk], dirs[k:k + chunk]
-        r, c, inside = _sample_cells(obstacle.shape, E - (back + 1) * D, D, n_gap, offsets)
-        hit = (obstacle[r, c] & inside).any(axis=1)
+        at, inside = _sample_cells(obstacle.shape, E - (back + 1) * D, D, n_gap, offsets)
+        hit = (ob[at] & inside).any(axis=1)
         clear = ~hit
         s0 = np.argmax(clear, axis=1)
         ok = clear.any(axis=1) & (s0 != 0) & (s0 <= back + 2)
@@ -202,7 +206,7 @@ def _gaps(obstacle, free, segs, back, n_gap, offsets, min_gap_px, max_gap_px, ch
         ok &= after.any(axis=1)
         gap = e0 - s0 + 1
         ok &= (gap >= min_gap_px) & (gap <= max_gap_px)
-        lf = free[r[:, centre], c[:, centre]] & inside[:, centre]
+        lf = fr[at[:, centre]] & inside[:, centre]
         cs = np.concatenate([np.zeros((lf.shape[0], 1), int), np.cumsum(lf, axis=1)], axis=1)
         rows = np.arange(lf.shape[0])
         n_free = cs[rows, e0] - cs[rows, s0]
@@ -523,6 +527,7 @@ def partition_gaps(obstacle: np.ndarray, free: np.ndarray, lines: np.ndarray, *,
         return []
     classes = _main_classes(segs, angle_tol)
     crossing = {}  # the cells of each class's lines, drawn when the other class needs them
+    ob, fr = np.ravel(obstacle), np.ravel(free)
     back = 3  # samples start inside the piece, as in wall_openings
     n_gap = int(np.ceil(max_gap_px)) + back + 1
     offsets = np.arange(-band_px, band_px + 1)
@@ -541,36 +546,36 @@ def partition_gaps(obstacle: np.ndarray, free: np.ndarray, lines: np.ndarray, *,
         # only the ends where the piece ends within its last cells (the first
         # samples tell) are followed further
         m = min(back + 3, n_gap)
-        r, c, inside = _sample_cells(obstacle.shape, start, dirs, m, offsets)
-        hit = (obstacle[r, c] & inside).any(axis=1)
+        at, inside = _sample_cells(obstacle.shape, start, dirs, m, offsets)
+        hit = (ob[at] & inside).any(axis=1)
         todo = np.flatnonzero(hit[:, 0] & ~hit[:, 1:].all(axis=1))
         if not todo.size:
             continue
         start, dirs, line_of = start[todo], dirs[todo], line_of[todo]
         if 1 - k not in crossing:
-            crossing[1 - k] = _line_mask(segs[classes[1 - k][1]], obstacle.shape, 3)
-        r, c, inside = _sample_cells(obstacle.shape, start, dirs, n_gap, offsets)
-        hit = (obstacle[r, c] & inside).any(axis=1)
+            crossing[1 - k] = np.ravel(_line_mask(segs[classes[1 - k][1]], obstacle.shape, 3))
+        at, inside = _sample_cells(obstacle.shape, start, dirs, n_gap, offsets)
+        hit = (ob[at] & inside).any(axis=1)
         s0 = np.argmax(~hit, axis=1)
         ok = (~hit).any(axis=1) & (s0 != 0) & (s0 <= back + 2)
-        met = (crossing[1 - k][r, c] & inside).any(axis=1) & (j >= s0[:, None])
+        met = (crossing[1 - k][at] & inside).any(axis=1) & (j >= s0[:, None])
         e0 = np.argmax(met, axis=1)
         ok &= met.any(axis=1)
         # the gap ends at the crossing wall's first cell on the line
-        wall = obstacle[r[:, band_px], c[:, band_px]] & inside[:, band_px] & (j >= e0[:, None])
+        wall = ob[at[:, band_px]] & inside[:, band_px] & (j >= e0[:, None])
         e1 = np.argmax(wall, axis=1)
         ok &= wall.any(axis=1) & (e1 - e0 <= 2 * band_px + 1)
         gap = e1 - s0
         ok &= (gap >= min_gap_px) & (gap <= max_gap_px)
         within = (j >= s0[:, None]) & (j < e1[:, None])
-        line_free = free[r[:, band_px], c[:, band_px]] & inside[:, band_px]
+        line_free = fr[at[:, band_px]] & inside[:, band_px]
         ok &= (line_free & within).sum(axis=1) >= 0.5 * np.maximum(gap, 1)
         i = np.flatnonzero(ok)
         if not i.size:
             continue
         hb = max(int(round(hits_band_px)), band_px)
-        rh, ch, inh = _sample_cells(obstacle.shape, start[i], dirs[i], n_gap, np.arange(-hb, hb + 1))
-        seen = (hits[rh, ch] & inh).any(axis=1)
+        ah, inh = _sample_cells(obstacle.shape, start[i], dirs[i], n_gap, np.arange(-hb, hb + 1))
+        seen = (np.ravel(hits)[ah] & inh).any(axis=1)
         i = i[(seen & within[i]).sum(axis=1) >= min_hits_px]
         if not i.size:
             continue
