@@ -81,8 +81,9 @@ def _line_mask(lines, shape, width: int) -> np.ndarray:
     import cv2
 
     m = np.zeros(shape, np.uint8)
-    for r1, c1, r2, c2 in np.rint(np.asarray(lines, float).reshape(-1, 4)).astype(int).tolist():
-        cv2.line(m, (c1, r1), (c2, r2), 1, width)
+    ends = np.rint(np.asarray(lines, float).reshape(-1, 4)).astype(np.int32)
+    if len(ends):  # one 2-point polyline per segment: the pixels of cv2.line, in one call
+        cv2.polylines(m, np.ascontiguousarray(ends[:, [1, 0, 3, 2]]).reshape(-1, 2, 2), False, 1, width)
     return m.view(bool)
 
 
@@ -327,7 +328,8 @@ def wall_directions(lines: np.ndarray) -> float:
     th = np.mod(np.arctan2(v[:, 0], v[:, 1]), np.pi / 2)
     bins = np.arange(90)
     h = np.bincount(np.floor(np.degrees(th)).astype(int) % 90, weights=L, minlength=90)
-    hs = sum(np.roll(h, k) for k in range(-3, 4))
+    hp = np.concatenate([h[-3:], h, h[:3]])
+    hs = sum(hp[3 - k:93 - k] for k in range(-3, 4))  # np.roll(h, k) for k = -3..3, summed in that order
     return float(np.radians(bins[int(np.argmax(hs))] + 0.5))
 
 
@@ -449,14 +451,19 @@ def long_walls(lines: np.ndarray, *, max_gap_px: float, offset_px: float, min_sp
         rank = np.empty(m, np.int64)
         rank[np.argsort(ghi, kind="stable")] = np.arange(m)
         acc = np.sort(ghi, kind="stable")[np.maximum.accumulate(gid * m + rank) - gid * m]
-        head = np.r_[True, gid[1:] != gid[:-1]]
-        reach = np.r_[-np.inf, acc[:-1]]
+        head = np.ones(m, bool)
+        np.not_equal(gid[1:], gid[:-1], out=head[1:])
+        reach = np.empty(m)
+        reach[0], reach[1:] = -np.inf, acc[:-1]
         run = head | ~(glo <= reach + 1.0)
         chain = head | (run & ~(glo - reach <= max_gap_px))
         first = np.flatnonzero(run)
-        run_lo, run_hi = glo[first], acc[np.r_[first[1:], m] - 1]
+        last = np.empty_like(first)
+        last[:-1], last[-1] = first[1:] - 1, m - 1
+        run_lo, run_hi = glo[first], acc[last]
         c_first = np.flatnonzero(chain[first])                 # the first run of each chain
-        c_last = np.r_[c_first[1:], len(first)] - 1
+        c_last = np.empty_like(c_first)
+        c_last[:-1], c_last[-1] = c_first[1:] - 1, len(first) - 1
         span = run_hi[c_last] - run_lo[c_first]
         r0 = {}
         for c in np.flatnonzero(span >= min_span_px).tolist():
