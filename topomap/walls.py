@@ -567,16 +567,14 @@ def partition_gaps(obstacle: np.ndarray, free: np.ndarray, lines: np.ndarray, *,
         todo = np.flatnonzero(hit[:, 0] & ~hit[:, 1:].all(axis=1))
         if not todo.size:
             continue
+        s0 = np.argmax(~hit[todo], axis=1)  # the first free sample, among those
         start, dirs, line_of = start[todo], dirs[todo], line_of[todo]
         if 1 - k not in crossing:
             crossing[1 - k] = np.ravel(_line_mask(segs[classes[1 - k][1]], obstacle.shape, 3))
         at, inside = _sample_cells(obstacle.shape, start, dirs, n_gap, offsets)
-        hit = (ob[at] & inside).any(axis=1)
-        s0 = np.argmax(~hit, axis=1)
-        ok = (~hit).any(axis=1) & (s0 != 0) & (s0 <= back + 2)
         met = (crossing[1 - k][at] & inside).any(axis=1) & (j >= s0[:, None])
         e0 = np.argmax(met, axis=1)
-        ok &= met.any(axis=1)
+        ok = met.any(axis=1)
         # the gap ends at the crossing wall's first cell on the line
         wall = ob[at[:, band_px]] & inside[:, band_px] & (j >= e0[:, None])
         e1 = np.argmax(wall, axis=1)
