@@ -607,7 +607,7 @@ def partition_gaps(obstacle: np.ndarray, free: np.ndarray, lines: np.ndarray, *,
 def _on_structure(obstacle: np.ndarray, seg, min_px: float) -> bool:
     """Whether the obstacle (8-connected) at the middle of the face line
     ``seg`` (or a cell beside it) is at least ``min_px`` long or wide. Its
-    components are labelled only in a window of ``min_px`` (and a margin)
+    components are filled only in a window of ``min_px`` (and a margin)
     round the line: one that leaves the window at a side inside the map is
     at least that large."""
     import cv2
@@ -618,18 +618,19 @@ def _on_structure(obstacle: np.ndarray, seg, min_px: float) -> bool:
     r1 = min(int(max(seg[0], seg[2])) + m + 1, H)
     c0 = max(int(min(seg[1], seg[3])) - m, 0)
     c1 = min(int(max(seg[1], seg[3])) + m + 1, W)
-    win = np.ascontiguousarray(obstacle[r0:r1, c0:c1]).view(np.uint8)
-    _, obj, st, _ = cv2.connectedComponentsWithStats(win, connectivity=8)
-    x, y, w, h = (st[:, k] for k in range(4))
-    big = np.maximum(w, h) >= min_px
-    # leaving the window at a side that is not the map's edge
-    big |= ((x == 0) & (c0 > 0)) | ((y == 0) & (r0 > 0)) | ((x + w == c1 - c0) & (c1 < W)) | ((y + h == r1 - r0) & (r1 < H))
-    big[0] = False
+    win = np.array(obstacle[r0:r1, c0:c1], np.uint8)  # a copy: the fill marks it
     mr, mc = np.rint((np.asarray(seg[:2], float) + np.asarray(seg[2:], float)) / 2).astype(int)
     for dr in (-1, 0, 1):
         for dc in (-1, 0, 1):
             rr, cc = min(max(mr + dr, 0), H - 1), min(max(mc + dc, 0), W - 1)
-            if r0 <= rr < r1 and c0 <= cc < c1 and big[obj[rr - r0, cc - c0]]:
+            if not (r0 <= rr < r1 and c0 <= cc < c1) or win[rr - r0, cc - c0] != 1:
+                continue  # outside the window, free, or on a component seen already
+            # the component through the cell (8-connected) and its bounding box
+            _, _, _, (x, y, w, h) = cv2.floodFill(win, None, (int(cc - c0), int(rr - r0)), 2, 0, 0, 8)
+            # as long or wide as min_px, or leaving the window at a side that
+            # is not the map's edge
+            if (max(w, h) >= min_px or (x == 0 and c0 > 0) or (y == 0 and r0 > 0)
+                    or (x + w == c1 - c0 and c1 < W) or (y + h == r1 - r0 and r1 < H)):
                 return True
     return False
 
