@@ -316,8 +316,9 @@ def wall_openings(obstacle: np.ndarray, free: np.ndarray, *, min_wall_px: float,
         if k.size:
             ok[k] = ~_spans_passage(obstacle, p[k], far[k], depth_px)
     out, seen = [], set()
-    for i in np.flatnonzero(ok):
-        key = tuple(np.rint(np.concatenate([np.minimum(p[i], far[i]), np.maximum(p[i], far[i])])).astype(int))
+    k = np.flatnonzero(ok)
+    keys = np.rint(np.concatenate([np.minimum(p[k], far[k]), np.maximum(p[k], far[k])], axis=1)).astype(int)
+    for i, key in zip(k.tolist(), map(tuple, keys.tolist())):
         if key in seen:
             continue
         seen.add(key)
