@@ -325,3 +325,63 @@ def test_furniture_rows_need_mostly_furniture_in_separate_pieces():
     rows = W.furniture_rows(walls, obstacle, part, band_px=1)
     assert rows.tolist() == [False, True, False, False]
     assert W.furniture_rows(walls, obstacle, part, band_px=1, min_pieces=1).tolist() == [False, True, True, False]
+
+
+def test_wall_faces_are_obstacle_cells_with_a_free_4_neighbour():
+    rng = np.random.default_rng(3)
+    for _ in range(50):
+        h, w = rng.integers(1, 30, 2)
+        free = rng.random((h, w)) < rng.random()
+        obstacle = rng.random((h, w)) < 0.5          # may overlap free: only the neighbours count
+        want = np.zeros((h, w), bool)
+        for r in range(h):
+            for c in range(w):
+                nb = [(r - 1, c), (r + 1, c), (r, c - 1), (r, c + 1)]
+                want[r, c] = obstacle[r, c] and any(0 <= a < h and 0 <= b < w and free[a, b] for a, b in nb)
+        assert np.array_equal(W.wall_faces(obstacle, free), want)
+
+
+def _chains(lo, hi, max_gap):
+    """Pieces [lo, hi] of one line, one at a time by their start: the runs
+    of each chain (pieces within a cell of each other merge; a gap of at
+    most ``max_gap`` starts the next run of the chain, a wider one the next
+    chain)."""
+    chains, runs = [], []
+    for a, b in sorted(zip(lo, hi)):
+        if runs and a <= runs[-1][1] + 1.0:
+            runs[-1][1] = max(runs[-1][1], b)
+        elif runs and a - runs[-1][1] <= max_gap:
+            runs.append([a, b])
+        else:
+            if runs:
+                chains.append(runs)
+            runs = [[a, b]]
+    return chains + [runs]
+
+
+def test_long_walls_chain_the_pieces_of_each_line_in_order():
+    # pieces along a few rows (far apart: one group per row), projected on
+    # the main direction as long_walls does, chained one at a time
+    rng = np.random.default_rng(5)
+    for _ in range(30):
+        rows = rng.choice([10.0, 40.0, 70.0, 100.0], 60)
+        lo = np.round(rng.uniform(0, 400, 60), 1)
+        hi = lo + rng.choice([0.5, 1.0, 3.0, 12.0, 40.0], 60)
+        segs = np.c_[rows, lo, rows, hi]
+        segs[::2] = segs[::2][:, [2, 3, 0, 1]]                  # either end first
+        segs = np.r_[segs, [[0, 0, 300, 0]]]                    # a wall of the other direction
+        walls = W.long_walls(segs, max_gap_px=15, offset_px=4, min_span_px=50)
+        got = sorted([[float(a), float(b)] for a, b in runs] for origin, u, n, runs in walls if abs(u[1]) > 0.9)
+        (u, sel), = [(u, sel) for u, sel in W._main_classes(segs, np.deg2rad(12.0)) if abs(u[1]) > 0.9]
+        t1, t2 = segs[sel, :2] @ u, segs[sel, 2:] @ u
+        want = []
+        for row in np.unique(rows):
+            on = rows[sel] == row
+            for runs in _chains(np.minimum(t1, t2)[on].tolist(), np.maximum(t1, t2)[on].tolist(), 15):
+                span = runs[-1][1] - runs[0][0]
+                if span >= 50 and sum(b - a for a, b in runs) >= 0.5 * span:
+                    want.append(runs)
+        assert got == sorted(want)
+        for origin, u_, n, runs in walls:                       # on its row
+            if abs(u_[1]) > 0.9:
+                assert min(abs(float(origin @ n) - (-u_[1] * r)) for r in (10, 40, 70, 100)) < 4

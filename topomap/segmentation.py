@@ -731,14 +731,13 @@ class _Walls:
                                          min_hits_px=opts.partition_hits / res, depth_px=opts.alcove_depth / res,
                                          hits_band_px=opts.wall_wander / res, min_structure_px=opts.partition_structure / res,
                                          hits=None if hits is None else S.downsample(hits, self.k, keep="any"))
-        ops = [(self.fine(p), self.fine(q)) for p, q in ops]
+        if not ops:
+            return []
+        P, Q = self.fine(np.array([p for p, _ in ops])), self.fine(np.array([q for _, q in ops]))
+        keep = np.ones(len(ops), bool)
         if self.lw:
-            tol = opts.wall_wander / (res / self.k)
-            if ops:
-                across = W.across_walls_many(np.array([p for p, _ in ops]), np.array([q for _, q in ops]),
-                                             self.index, tol_px=tol)
-                ops = [pq for pq, a in zip(ops, across) if not a]
-        return ops
+            keep = ~W.across_walls_many(P, Q, self.index, tol_px=opts.wall_wander / (res / self.k))
+        return [(P[i], Q[i]) for i in np.flatnonzero(keep)]
 
 
 def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, *, prior=None,

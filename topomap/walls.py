@@ -22,6 +22,10 @@ __all__ = ["wall_faces", "wall_lines", "straight_share", "wall_openings", "wall_
            "across_walls", "across_walls_many", "WallIndex", "long_wall_gaps", "partition_gaps", "face_runs", "furniture_rows", "wall_mask", "scale_walls"]
 
 
+#: The 4-neighbours of a cell (not the cell itself), as a morphology kernel.
+_FOUR = np.array([[0, 1, 0], [1, 0, 1], [0, 1, 0]], np.uint8)
+
+
 def wall_faces(obstacle: np.ndarray, free: np.ndarray) -> np.ndarray:
     """Obstacle cells with a free 4-neighbour: the faces of walls.
 
@@ -33,8 +37,13 @@ def wall_faces(obstacle: np.ndarray, free: np.ndarray) -> np.ndarray:
     -------
     (M, N) ndarray of bool
     """
-    f = np.pad(free, 1, constant_values=False)
-    touch = f[:-2, 1:-1] | f[2:, 1:-1] | f[1:-1, :-2] | f[1:-1, 2:]
+    import cv2
+
+    f = np.ascontiguousarray(free, dtype=bool)
+    if f.size == 0:
+        return obstacle & f
+    # the maximum over the 4 neighbours (none outside the map), one pass
+    touch = cv2.dilate(f.view(np.uint8), _FOUR, borderType=cv2.BORDER_CONSTANT, borderValue=0).view(bool)
     return obstacle & touch
 
 
@@ -69,10 +78,10 @@ def straight_share(faces: np.ndarray, lines: np.ndarray) -> float:
     draws walls that wander a cell or two off their line (0.14-0.67 there).
     1.0 when there are no faces.
     """
-    n = int(faces.sum())
+    n = np.count_nonzero(faces)
     if n == 0:
         return 1.0
-    return float((faces & _line_mask(lines, faces.shape, 3)).sum()) / n
+    return float(np.count_nonzero(faces & _line_mask(lines, faces.shape, 3))) / n
 
 
 def _line_mask(lines, shape, width: int) -> np.ndarray:
@@ -81,15 +90,17 @@ def _line_mask(lines, shape, width: int) -> np.ndarray:
     import cv2
 
     m = np.zeros(shape, np.uint8)
-    for r1, c1, r2, c2 in np.rint(np.asarray(lines, float).reshape(-1, 4)).astype(int).tolist():
-        cv2.line(m, (c1, r1), (c2, r2), 1, width)
+    ends = np.rint(np.asarray(lines, float).reshape(-1, 4)).astype(np.int32)
+    if len(ends):  # one 2-point polyline per segment: the pixels of cv2.line, in one call
+        cv2.polylines(m, np.ascontiguousarray(ends[:, [1, 0, 3, 2]]).reshape(-1, 2, 2), False, 1, width)
     return m.view(bool)
 
 
 def _sample_cells(shape, starts, dirs, n, offsets):
     """Cells ``start + t d + o n_perp`` for ``t = 1..n`` and each offset ``o``,
     for every row of ``starts`` / ``dirs`` (``(E, 2)``): ``(E, len(offsets), n)``
-    rows and cols (clipped to the map), and a mask of samples inside it."""
+    flat indices into a C-ordered array of ``shape`` (of the cells clipped
+    to the map), and a mask of the samples inside it."""
     H, W = shape
     starts, dirs = np.asarray(starts, float), np.asarray(dirs, float)
     t = np.arange(1, n + 1, dtype=float)[None, None, :]
@@ -98,9 +109,11 @@ def _sample_cells(shape, starts, dirs, n, offsets):
     r = np.rint(starts[:, 0, None, None] + t * dirs[:, 0, None, None] + o * -dirs[:, 1, None, None]).astype(np.intp)
     c = np.rint(starts[:, 1, None, None] + t * dirs[:, 1, None, None] + o * dirs[:, 0, None, None]).astype(np.intp)
     inside = (r >= 0) & (r < H) & (c >= 0) & (c < W)
-    np.clip(r, 0, H - 1, out=r)
-    np.clip(c, 0, W - 1, out=c)
-    return r, c, inside
+    np.minimum(np.maximum(r, 0, out=r), H - 1, out=r)
+    np.minimum(np.maximum(c, 0, out=c), W - 1, out=c)
+    r *= W
+    r += c
+    return r, inside
 
 
 def _perp(d):
@@ -111,8 +124,8 @@ def _perp(d):
 def _free_runs(obstacle, starts, dirs, n):
     """Samples from each row of ``starts`` along the row of ``dirs`` (at most
     ``n``) before the first obstacle cell or the map's edge: ``(E,)``."""
-    r, c, inside = _sample_cells(obstacle.shape, starts, dirs, n, [0])
-    stop = obstacle[r[:, 0], c[:, 0]] | ~inside[:, 0]
+    at, inside = _sample_cells(obstacle.shape, starts, dirs, n, [0])
+    stop = np.ravel(obstacle)[at[:, 0]] | ~inside[:, 0]
     return np.where(stop.any(axis=1), np.argmax(stop, axis=1), n)
 
 
@@ -120,8 +133,8 @@ def _face_runs(faces, starts, dirs, n, offsets):
     """Whether a wall face runs on past each row of ``starts`` along the row
     of ``dirs`` for ``n`` samples (within the band of ``offsets``), at 70 %
     of them at least: ``(E,)`` bool."""
-    r, c, inside = _sample_cells(faces.shape, starts, dirs, n, offsets)
-    return (faces[r, c] & inside).any(axis=1).mean(axis=1) >= 0.7
+    at, inside = _sample_cells(faces.shape, starts, dirs, n, offsets)
+    return (np.ravel(faces)[at] & inside).any(axis=1).mean(axis=1) >= 0.7
 
 
 def _depth_ok(obstacle, p, q, depth_px):
@@ -133,10 +146,11 @@ def _depth_ok(obstacle, p, q, depth_px):
     v = q - p
     n = _perp(v / np.maximum(np.hypot(*v.T), 1e-9)[:, None])
     k = max(int(np.ceil(depth_px)), 1)
-    ok = np.ones(len(p), bool)
-    for side in (n, -n):
-        ok &= np.any([_free_runs(obstacle, p + f * v, side, k) == k for f in (0.25, 0.5, 0.75)], axis=0)
-    return ok
+    # the six probes (two sides, three points) of every segment in one call
+    starts = np.concatenate([p + f * v for _ in (n, -n) for f in (0.25, 0.5, 0.75)])
+    dirs = np.concatenate([side for side in (n, -n) for _ in (0.25, 0.5, 0.75)])
+    deep = (_free_runs(obstacle, starts, dirs, k) == k).reshape(2, 3, len(p))
+    return deep.any(axis=1).all(axis=0)
 
 
 def _spans_passage(obstacle, p, q, depth_px, slack: float = 1.25):
@@ -154,27 +168,24 @@ def _spans_passage(obstacle, p, q, depth_px, slack: float = 1.25):
     mid = (p + q) / 2
     cap = np.ceil(slack * L).astype(int) + 2
     top = int(cap.max()) if cap.size else 1
-    out = np.ones(len(p), bool)
-    for side in (n, -n):
-        narrow = np.zeros(len(p), bool)
-        for t in (0.25 * depth_px, 0.5 * depth_px, 0.75 * depth_px, depth_px):
-            c = mid + t * side
-            w = (np.minimum(_free_runs(obstacle, c - d, -d, top), cap)
-                 + np.minimum(_free_runs(obstacle, c, d, top), cap) + 1)
-            narrow |= w <= slack * L
-        out &= narrow
-    return out
+    # both ways along the segment from 4 points on each side, in one call
+    cs = [mid + t * side for side in (n, -n) for t in (0.25 * depth_px, 0.5 * depth_px, 0.75 * depth_px, depth_px)]
+    starts = np.concatenate([c - d for c in cs] + cs)
+    dirs = np.concatenate([-d] * len(cs) + [d] * len(cs))
+    runs = np.minimum(_free_runs(obstacle, starts, dirs, top).reshape(2, len(cs), len(p)), cap)
+    narrow = (runs[0] + runs[1] + 1 <= slack * L).reshape(2, len(cs) // 2, len(p))
+    return narrow.any(axis=1).all(axis=0)
 
 
 def _gaps(obstacle, free, segs, back, n_gap, offsets, min_gap_px, max_gap_px, chunk: int = 1024):
     """The gaps past the ends of the wall segments ``segs``, in the order of
-    the segments (each segment's second end first): ``(end, d, s0, e0)``
-    with the end point, the outward direction and the indices of the first
-    free sample and of the first obstacle sample after it (sample ``i`` at
-    ``end + (i - back) * d``). Only gaps that start within the wall piece's
-    last cells, are ``min_gap_px``-``max_gap_px`` long and free along at
-    least half their line are given. Vectorised over the ends, ``chunk``
-    ends at a time."""
+    the segments (each segment's second end first): arrays ``(end, d, s0,
+    e0)`` of the end points, the outward directions and the indices of the
+    first free sample and of the first obstacle sample after it (sample
+    ``i`` at ``end + (i - back) * d``). Only gaps that start within the wall
+    piece's last cells, are ``min_gap_px``-``max_gap_px`` long and free
+    along at least half their line are given. Vectorised over the ends,
+    ``chunk`` ends at a time."""
     segs = np.asarray(segs, float).reshape(-1, 4)
     a, b = segs[:, :2], segs[:, 2:]
     L = np.hypot(*(b - a).T)
@@ -182,12 +193,21 @@ def _gaps(obstacle, free, segs, back, n_gap, offsets, min_gap_px, max_gap_px, ch
     u = (b - a) / L[:, None]
     ends = np.stack([b, a], 1).reshape(-1, 2)
     dirs = np.stack([u, -u], 1).reshape(-1, 2)
+    # the first samples tell the ends where the wall piece ends (a gap starts
+    # within its last cells): only those are followed further
+    m = min(back + 3, n_gap)
+    ob, fr = np.ravel(obstacle), np.ravel(free)
+    at, inside = _sample_cells(obstacle.shape, ends - (back + 1) * dirs, dirs, m, offsets)
+    hit = (ob[at] & inside).any(axis=1)
+    todo = np.flatnonzero(hit[:, 0] & ~hit[:, 1:].all(axis=1))
+    ends, dirs = ends[todo], dirs[todo]
     centre = len(offsets) // 2
     idx = np.arange(n_gap)
+    out = []
     for k in range(0, ends.shape[0], chunk):
         E, D = ends[k:k + chunk], dirs[k:k + chunk]
-        r, c, inside = _sample_cells(obstacle.shape, E - (back + 1) * D, D, n_gap, offsets)
-        hit = (obstacle[r, c] & inside).any(axis=1)
+        at, inside = _sample_cells(obstacle.shape, E - (back + 1) * D, D, n_gap, offsets)
+        hit = (ob[at] & inside).any(axis=1)
         clear = ~hit
         s0 = np.argmax(clear, axis=1)
         ok = clear.any(axis=1) & (s0 != 0) & (s0 <= back + 2)
@@ -196,13 +216,15 @@ def _gaps(obstacle, free, segs, back, n_gap, offsets, min_gap_px, max_gap_px, ch
         ok &= after.any(axis=1)
         gap = e0 - s0 + 1
         ok &= (gap >= min_gap_px) & (gap <= max_gap_px)
-        lf = free[r[:, centre], c[:, centre]] & inside[:, centre]
+        lf = fr[at[:, centre]] & inside[:, centre]
         cs = np.concatenate([np.zeros((lf.shape[0], 1), int), np.cumsum(lf, axis=1)], axis=1)
         rows = np.arange(lf.shape[0])
         n_free = cs[rows, e0] - cs[rows, s0]
         ok &= n_free >= 0.5 * np.maximum(e0 - s0, 1)
-        for i in np.flatnonzero(ok):
-            yield E[i], D[i], int(s0[i]), int(e0[i])
+        out.append((E[ok], D[ok], s0[ok], e0[ok]))
+    if not out:
+        return np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0, int), np.zeros(0, int)
+    return tuple(np.concatenate(x) for x in zip(*out))
 
 
 def wall_openings(obstacle: np.ndarray, free: np.ndarray, *, min_wall_px: float, min_gap_px: float,
@@ -269,21 +291,20 @@ def wall_openings(obstacle: np.ndarray, free: np.ndarray, *, min_wall_px: float,
     n_gap = int(np.ceil(max_gap_px)) + back + 1
     n_side = max(int(np.ceil(side_px)), 1)
     offsets = np.arange(-band_px, band_px + 1)
-    found = list(_gaps(obstacle, free, segs, back, n_gap, offsets, min_gap_px, max_gap_px))
-    if not found:
+    end, d, s0, e0 = _gaps(obstacle, free, segs, back, n_gap, offsets, min_gap_px, max_gap_px)
+    if not len(end):
         return []
-    end = np.array([g[0] for g in found])
-    d = np.array([g[1] for g in found])
-    s0 = np.array([g[2] for g in found])
-    e0 = np.array([g[3] for g in found])
     start = end - (back + 1) * d
     gap = e0 - s0 + 1
     p = start + s0[:, None] * d            # last wall sample before each gap
     far = start + (e0 + 1)[:, None] * d    # first wall sample after it
     perp = _perp(d)
-    crossed = [_face_runs(faces, x - perp, perp, n_side, offsets) & _face_runs(faces, x + perp, -perp, n_side, offsets)
-               for x in (p, far)]
-    goes_on = _face_runs(faces, far - d, d, n_side, offsets)
+    # the five probes of every gap in one call: across the line at both of
+    # its ends, both ways, and along it past the gap
+    probe = _face_runs(faces, np.concatenate([p - perp, p + perp, far - perp, far + perp, far - d]),
+                       np.concatenate([perp, -perp, perp, -perp, d]), n_side, offsets).reshape(5, -1)
+    crossed = [probe[0] & probe[1], probe[2] & probe[3]]
+    goes_on = probe[4]
     # no wall end where the piece's end lies on a wall crossing its line; where
     # the wall goes on, a far end on a crossing wall makes the gap a passage's
     # width; where it does not, only a door-wide gap ending on a wall is kept
@@ -295,8 +316,9 @@ def wall_openings(obstacle: np.ndarray, free: np.ndarray, *, min_wall_px: float,
         if k.size:
             ok[k] = ~_spans_passage(obstacle, p[k], far[k], depth_px)
     out, seen = [], set()
-    for i in np.flatnonzero(ok):
-        key = tuple(np.rint(np.concatenate([np.minimum(p[i], far[i]), np.maximum(p[i], far[i])])).astype(int))
+    k = np.flatnonzero(ok)
+    keys = np.rint(np.concatenate([np.minimum(p[k], far[k]), np.maximum(p[k], far[k])], axis=1)).astype(int)
+    for i, key in zip(k.tolist(), map(tuple, keys.tolist())):
         if key in seen:
             continue
         seen.add(key)
@@ -316,7 +338,8 @@ def wall_directions(lines: np.ndarray) -> float:
     th = np.mod(np.arctan2(v[:, 0], v[:, 1]), np.pi / 2)
     bins = np.arange(90)
     h = np.bincount(np.floor(np.degrees(th)).astype(int) % 90, weights=L, minlength=90)
-    hs = sum(np.roll(h, k) for k in range(-3, 4))
+    hp = np.concatenate([h[-3:], h, h[:3]])
+    hs = sum(hp[3 - k:93 - k] for k in range(-3, 4))  # np.roll(h, k) for k = -3..3, summed in that order
     return float(np.radians(bins[int(np.argmax(hs))] + 0.5))
 
 
@@ -360,36 +383,35 @@ def face_runs(faces: np.ndarray, *, min_length_px: float, band_px: int = 1, max_
     if lines is None:
         lines = wall_lines(faces, min_length_px=min_length_px)
     segs = np.asarray(lines, float).reshape(-1, 4)
-    import cv2
-
-    xy = cv2.findNonZero(np.ascontiguousarray(faces).view(np.uint8))  # the face cells, fast
-    if xy is None:
+    at = np.flatnonzero(faces)  # the face cells, in raster order
+    if not at.size:
         return np.zeros((0, 4))
-    pts = xy.reshape(-1, 2)[:, ::-1].astype(float)
+    pts = np.empty((at.size, 2))
+    pts[:, 0], pts[:, 1] = np.divmod(at, faces.shape[1])
     out = []
     for _, u in _main_directions(segs):
         n = np.array([-u[1], u[0]])
         t = np.rint(pts @ u).astype(np.int64)
         rb = np.rint(pts @ n).astype(np.int64)
         t_lo = int(t.min())
-        span = int(t.max()) - t_lo + 1
-        first = np.argsort((rb - int(rb.min())) * span + (t - t_lo))  # by line, then along it
-        rb, t = rb[first], t[first]
-        # the same order for each shifted copy: a stable sort merges the sorted runs
-        key = np.concatenate([rb + o for o in range(-band_px, band_px + 1)])
-        tt = np.tile(t, 2 * band_px + 1)
-        order = np.argsort((key - int(key.min())) * span + (tt - t_lo), kind="stable")
-        key, tt = key[order], tt[order]
-        new = np.ones(key.size, bool)
-        new[1:] = (key[1:] != key[:-1]) | (tt[1:] - tt[:-1] > max_gap_px + 1)
+        # one integer per cell, by line, then along it, lines apart by more
+        # than a gap so that a run never goes on from one line to the next
+        span = int(t.max()) - t_lo + int(max_gap_px) + 3
+        rb_lo = int(rb.min()) - band_px
+        v = np.sort((rb - rb_lo) * span + (t - t_lo))
+        # the cells of each line shifted by -band_px..band_px lines: the
+        # sorted copies merge
+        v = np.sort(np.concatenate([v + o * span for o in range(-band_px, band_px + 1)]), kind="stable")
+        new = np.ones(v.size, bool)
+        np.greater(np.diff(v), max_gap_px + 1, out=new[1:])
         start = np.flatnonzero(new)
-        end = np.r_[start[1:], key.size] - 1
-        t0, t1 = tt[start], tt[end]
+        end = np.r_[start[1:], v.size] - 1
+        t0, t1 = v[start] % span + t_lo, v[end] % span + t_lo
         keep = t1 - t0 >= min_length_px
-        for kb, a, b in zip(key[start][keep], t0[keep], t1[keep]):
-            p, q = kb * n + a * u, kb * n + b * u
-            out.append((p[0], p[1], q[0], q[1]))
-    return np.array(out, float).reshape(-1, 4)
+        kb = (v[start[keep]] // span + rb_lo)[:, None]
+        t0, t1 = t0[keep], t1[keep]
+        out.append(np.concatenate([kb * n + t0[:, None] * u, kb * n + t1[:, None] * u], axis=1))
+    return np.concatenate(out).astype(float).reshape(-1, 4)
 
 
 def long_walls(lines: np.ndarray, *, max_gap_px: float, offset_px: float, min_span_px: float,
@@ -419,33 +441,51 @@ def long_walls(lines: np.ndarray, *, max_gap_px: float, offset_px: float, min_sp
         t1, t2 = segs[sel, :2] @ u, segs[sel, 2:] @ u
         lo, hi = np.minimum(t1, t2), np.maximum(t1, t2)
         order = np.argsort(rho)
-        groups, cur = [], [order[0]]
-        for a, b in zip(order[:-1], order[1:]):
-            if rho[b] - rho[a] <= offset_px and rho[b] - rho[cur[0]] <= 2 * offset_px:
-                cur.append(b)
-            else:
-                groups.append(cur)
-                cur = [b]
-        groups.append(cur)
-        for grp in groups:
-            grp = np.array(grp)
-            w = L[sel[grp]]
-            r0 = float((rho[grp] * w).sum() / w.sum())
-            chains, runs = [], []
-            for j in grp[np.argsort(lo[grp])]:
-                if runs and lo[j] <= runs[-1][1] + 1.0:
-                    runs[-1][1] = max(runs[-1][1], hi[j])
-                elif runs and lo[j] - runs[-1][1] <= max_gap_px:
-                    runs.append([lo[j], hi[j]])
-                else:
-                    if runs:
-                        chains.append(runs)
-                    runs = [[lo[j], hi[j]]]
-            chains.append(runs)
-            for runs in chains:
-                span = runs[-1][1] - runs[0][0]
-                if span >= min_span_px and sum(r[1] - r[0] for r in runs) >= support * span:
-                    out.append((r0 * n, u, n, runs))
+        rl = rho.tolist()  # the grouping loop on Python floats: the same comparisons, faster
+        bounds, g0 = [0], int(order[0])
+        for i, (a, b) in enumerate(zip(order[:-1].tolist(), order[1:].tolist()), 1):
+            if not (rl[b] - rl[a] <= offset_px and rl[b] - rl[g0] <= 2 * offset_px):
+                bounds.append(i)
+                g0 = b
+        bounds.append(len(order))
+        # the pieces of each group (order[bounds[g]:bounds[g + 1]]) along the
+        # wall, all groups at once: by group, then by their start
+        gid = np.repeat(np.arange(len(bounds) - 1), np.diff(bounds))
+        by = order[np.lexsort((lo[order], gid))]
+        glo, ghi = lo[by], hi[by]
+        # the pieces so far reach the running maximum of their ends within the
+        # group (of the ranks of the ends, offset by group: exact): a piece
+        # starting within a cell of it extends the run, one within max_gap_px
+        # starts the next run of the chain, any other the next chain
+        m = len(by)
+        rank = np.empty(m, np.int64)
+        rank[np.argsort(ghi, kind="stable")] = np.arange(m)
+        acc = np.sort(ghi, kind="stable")[np.maximum.accumulate(gid * m + rank) - gid * m]
+        head = np.ones(m, bool)
+        np.not_equal(gid[1:], gid[:-1], out=head[1:])
+        reach = np.empty(m)
+        reach[0], reach[1:] = -np.inf, acc[:-1]
+        run = head | ~(glo <= reach + 1.0)
+        chain = head | (run & ~(glo - reach <= max_gap_px))
+        first = np.flatnonzero(run)
+        last = np.empty_like(first)
+        last[:-1], last[-1] = first[1:] - 1, m - 1
+        run_lo, run_hi = glo[first], acc[last]
+        c_first = np.flatnonzero(chain[first])                 # the first run of each chain
+        c_last = np.empty_like(c_first)
+        c_last[:-1], c_last[-1] = c_first[1:] - 1, len(first) - 1
+        span = run_hi[c_last] - run_lo[c_first]
+        r0 = {}
+        for c in np.flatnonzero(span >= min_span_px).tolist():
+            runs = [[a, b] for a, b in zip(run_lo[c_first[c]:c_last[c] + 1].tolist(),
+                                           run_hi[c_first[c]:c_last[c] + 1].tolist())]
+            if sum(r[1] - r[0] for r in runs) >= support * float(span[c]):
+                k = int(gid[first[c_first[c]]])
+                if k not in r0:
+                    grp = order[bounds[k]:bounds[k + 1]]
+                    w = L[sel[grp]]
+                    r0[k] = float((rho[grp] * w).sum() / w.sum())
+                out.append((r0[k] * n, u, n, [[np.float64(a), np.float64(b)] for a, b in runs]))
     return out
 
 
@@ -503,7 +543,8 @@ def partition_gaps(obstacle: np.ndarray, free: np.ndarray, lines: np.ndarray, *,
     if segs.shape[0] < 2:
         return []
     classes = _main_classes(segs, angle_tol)
-    crossing = [_line_mask(segs[sel], obstacle.shape, 3) for _, sel in classes]
+    crossing = {}  # the cells of each class's lines, drawn when the other class needs them
+    ob, fr = np.ravel(obstacle), np.ravel(free)
     back = 3  # samples start inside the piece, as in wall_openings
     n_gap = int(np.ceil(max_gap_px)) + back + 1
     offsets = np.arange(-band_px, band_px + 1)
@@ -519,37 +560,47 @@ def partition_gaps(obstacle: np.ndarray, free: np.ndarray, lines: np.ndarray, *,
         d = np.sign((b - a) @ u)[:, None] * u
         ends, dirs = np.concatenate([b, a]), np.concatenate([d, -d])
         start = ends - (back + 1) * dirs
-        r, c, inside = _sample_cells(obstacle.shape, start, dirs, n_gap, offsets)
-        hit = (obstacle[r, c] & inside).any(axis=1)
-        s0 = np.argmax(~hit, axis=1)
-        ok = (~hit).any(axis=1) & (s0 != 0) & (s0 <= back + 2)
-        met = (crossing[1 - k][r, c] & inside).any(axis=1) & (j >= s0[:, None])
+        # only the ends where the piece ends within its last cells (the first
+        # samples tell) are followed further
+        m = min(back + 3, n_gap)
+        at, inside = _sample_cells(obstacle.shape, start, dirs, m, offsets)
+        hit = (ob[at] & inside).any(axis=1)
+        todo = np.flatnonzero(hit[:, 0] & ~hit[:, 1:].all(axis=1))
+        if not todo.size:
+            continue
+        s0 = np.argmax(~hit[todo], axis=1)  # the first free sample, among those
+        start, dirs, line_of = start[todo], dirs[todo], line_of[todo]
+        if 1 - k not in crossing:
+            crossing[1 - k] = np.ravel(_line_mask(segs[classes[1 - k][1]], obstacle.shape, 3))
+        at, inside = _sample_cells(obstacle.shape, start, dirs, n_gap, offsets)
+        met = (crossing[1 - k][at] & inside).any(axis=1) & (j >= s0[:, None])
         e0 = np.argmax(met, axis=1)
-        ok &= met.any(axis=1)
+        ok = met.any(axis=1)
         # the gap ends at the crossing wall's first cell on the line
-        wall = obstacle[r[:, band_px], c[:, band_px]] & inside[:, band_px] & (j >= e0[:, None])
+        wall = ob[at[:, band_px]] & inside[:, band_px] & (j >= e0[:, None])
         e1 = np.argmax(wall, axis=1)
         ok &= wall.any(axis=1) & (e1 - e0 <= 2 * band_px + 1)
         gap = e1 - s0
         ok &= (gap >= min_gap_px) & (gap <= max_gap_px)
         within = (j >= s0[:, None]) & (j < e1[:, None])
-        line_free = free[r[:, band_px], c[:, band_px]] & inside[:, band_px]
+        line_free = fr[at[:, band_px]] & inside[:, band_px]
         ok &= (line_free & within).sum(axis=1) >= 0.5 * np.maximum(gap, 1)
         i = np.flatnonzero(ok)
         if not i.size:
             continue
         hb = max(int(round(hits_band_px)), band_px)
-        rh, ch, inh = _sample_cells(obstacle.shape, start[i], dirs[i], n_gap, np.arange(-hb, hb + 1))
-        seen = (hits[rh, ch] & inh).any(axis=1)
+        ah, inh = _sample_cells(obstacle.shape, start[i], dirs[i], n_gap, np.arange(-hb, hb + 1))
+        seen = (np.ravel(hits)[ah] & inh).any(axis=1)
         i = i[(seen & within[i]).sum(axis=1) >= min_hits_px]
-        if min_structure_px > 0:
-            i = np.array([t for t in i if _on_structure(obstacle, segs[line_of[t]], min_structure_px)], int)
         if not i.size:
             continue
         p = start[i] + s0[i, None] * dirs[i]
         q = start[i] + (e1[i] + 1)[:, None] * dirs[i]
         good = _depth_ok(obstacle, p, q, depth_px)
         good[good] = ~_spans_passage(obstacle, p[good], q[good], depth_px)
+        if min_structure_px > 0:  # the costliest test last
+            for t in np.flatnonzero(good):
+                good[t] = _on_structure(obstacle, segs[line_of[i[t]]], min_structure_px)
         out.extend((p[t], q[t]) for t in np.flatnonzero(good))
     return out
 
@@ -557,7 +608,7 @@ def partition_gaps(obstacle: np.ndarray, free: np.ndarray, lines: np.ndarray, *,
 def _on_structure(obstacle: np.ndarray, seg, min_px: float) -> bool:
     """Whether the obstacle (8-connected) at the middle of the face line
     ``seg`` (or a cell beside it) is at least ``min_px`` long or wide. Its
-    components are labelled only in a window of ``min_px`` (and a margin)
+    components are filled only in a window of ``min_px`` (and a margin)
     round the line: one that leaves the window at a side inside the map is
     at least that large."""
     import cv2
@@ -568,18 +619,19 @@ def _on_structure(obstacle: np.ndarray, seg, min_px: float) -> bool:
     r1 = min(int(max(seg[0], seg[2])) + m + 1, H)
     c0 = max(int(min(seg[1], seg[3])) - m, 0)
     c1 = min(int(max(seg[1], seg[3])) + m + 1, W)
-    win = np.ascontiguousarray(obstacle[r0:r1, c0:c1]).view(np.uint8)
-    _, obj, st, _ = cv2.connectedComponentsWithStats(win, connectivity=8)
-    x, y, w, h = (st[:, k] for k in range(4))
-    big = np.maximum(w, h) >= min_px
-    # leaving the window at a side that is not the map's edge
-    big |= ((x == 0) & (c0 > 0)) | ((y == 0) & (r0 > 0)) | ((x + w == c1 - c0) & (c1 < W)) | ((y + h == r1 - r0) & (r1 < H))
-    big[0] = False
+    win = np.array(obstacle[r0:r1, c0:c1], np.uint8)  # a copy: the fill marks it
     mr, mc = np.rint((np.asarray(seg[:2], float) + np.asarray(seg[2:], float)) / 2).astype(int)
     for dr in (-1, 0, 1):
         for dc in (-1, 0, 1):
             rr, cc = min(max(mr + dr, 0), H - 1), min(max(mc + dc, 0), W - 1)
-            if r0 <= rr < r1 and c0 <= cc < c1 and big[obj[rr - r0, cc - c0]]:
+            if not (r0 <= rr < r1 and c0 <= cc < c1) or win[rr - r0, cc - c0] != 1:
+                continue  # outside the window, free, or on a component seen already
+            # the component through the cell (8-connected) and its bounding box
+            _, _, _, (x, y, w, h) = cv2.floodFill(win, None, (int(cc - c0), int(rr - r0)), 2, 0, 0, 8)
+            # as long or wide as min_px, or leaving the window at a side that
+            # is not the map's edge
+            if (max(w, h) >= min_px or (x == 0 and c0 > 0) or (y == 0 and r0 > 0)
+                    or (x + w == c1 - c0 and c1 < W) or (y + h == r1 - r0 and r1 < H)):
                 return True
     return False
 
@@ -723,24 +775,32 @@ def long_wall_gaps(obstacle: np.ndarray, free: np.ndarray, walls: list, *, min_g
         Opening segments in pixels.
     """
     H, W = free.shape
+    # every gap of every wall, its cells on the wall's line in a row of a
+    # (gaps, cells) array: cell j of gap g at origin + (ceil(e) + j) u
+    gaps = [(origin, u, e, s0) for origin, u, _, runs in walls
+            for (_, e), (s0, _) in zip(runs[:-1], runs[1:]) if min_gap_px <= s0 - e <= max_gap_px]
+    if not gaps:
+        return []
+    origin = np.array([g[0] for g in gaps], float)
+    u = np.array([g[1] for g in gaps], float)
+    t_lo = np.ceil([g[2] for g in gaps])
+    count = (np.floor([g[3] for g in gaps]) + 1 - t_lo).astype(int)
+    cols = np.arange(max(int(count.max()), 1))
+    valid = cols[None, :] < count[:, None]
+    ts = t_lo[:, None] + cols[None, :]
+    pts = origin[:, None, :] + ts[:, :, None] * u[:, None, :]
+    rr = np.rint(pts[..., 0]).astype(int)
+    cc = np.rint(pts[..., 1]).astype(int)
+    inside = (rr >= 0) & (rr < H) & (cc >= 0) & (cc < W)
+    fr = free[np.clip(rr, 0, H - 1), np.clip(cc, 0, W - 1)] & valid
+    n_free = fr.sum(axis=1)
+    ok = (count > 0) & (inside | ~valid).all(axis=1) & ~(n_free / np.maximum(count, 1) < 0.5)
     out = []
-    for origin, u, _, runs in walls:
-        for (_, e), (s0, _) in zip(runs[:-1], runs[1:]):
-            if not (min_gap_px <= s0 - e <= max_gap_px):
-                continue
-            ts = np.arange(np.ceil(e), np.floor(s0) + 1)
-            pts = origin + ts[:, None] * u
-            rr = np.rint(pts[:, 0]).astype(int)
-            cc = np.rint(pts[:, 1]).astype(int)
-            if not ((rr >= 0) & (rr < H) & (cc >= 0) & (cc < W)).all():
-                continue
-            fr = free[rr, cc]
-            if fr.mean() < 0.5:
-                continue
-            k = np.flatnonzero(fr)
-            p, q = origin + (ts[k[0]] - 1) * u, origin + (ts[k[-1]] + 1) * u
-            if np.hypot(*(q - p)) >= min_gap_px:
-                out.append((p, q))
+    for g in np.flatnonzero(ok):
+        k = np.flatnonzero(fr[g])
+        p, q = origin[g] + (ts[g, k[0]] - 1) * u[g], origin[g] + (ts[g, k[-1]] + 1) * u[g]
+        if np.hypot(*(q - p)) >= min_gap_px:
+            out.append((p, q))
     if not out:
         return out
     deep = _depth_ok(obstacle, np.array([p for p, _ in out]), np.array([q for _, q in out]), depth_px)
