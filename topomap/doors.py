@@ -821,18 +821,27 @@ def suppress_duplicates(accepted, resolution: float, *, kept=()) -> list:
         The door segments kept, pixels, narrowest first.
     """
     accepted = sorted(accepted, key=lambda t: t[0])
+    n0, n = len(kept), len(accepted)
+    if not n:
+        return []
+    A = np.array([p for p, _ in kept] + [c.ip1 for _, c in accepted], float).reshape(-1, 2)
+    B = np.array([q for _, q in kept] + [c.ip2 for _, c in accepted], float).reshape(-1, 2)
+    mids = (A[n0:] + B[n0:]) / 2
+    reach = 0.5 * np.array([w for w, _ in accepted], float) / resolution
+    on = np.zeros(n0 + n, bool)  # the segments kept so far: those given, then the doors kept
+    on[:n0] = True
     segs = []
-    A = np.zeros((len(accepted) + len(kept), 2))
-    B = np.zeros((len(accepted) + len(kept), 2))
-    for k, (p, q) in enumerate(kept):
-        A[k], B[k] = p, q
-    n0 = len(kept)
-    for width, c in accepted:
-        mid = (c.ip1 + c.ip2) / 2
-        k = n0 + len(segs)
-        if k and (point_segment_distances(mid, A[:k], B[:k]) < 0.5 * width / resolution).any():
-            c.status = DUPLICATE
-            continue
-        A[k], B[k] = c.ip1, c.ip2
-        segs.append((c.ip1, c.ip2))
+    step = max(1, (1 << 20) // (n0 + n))  # rows of the distance table at a time: memory linear in n
+    for i0 in range(0, n, step):
+        # distances from these doors' midpoints to every segment (the greedy pass below reads
+        # only the columns of segments kept before each door)
+        near = point_segment_distances(mids[i0:i0 + step, None, :], A[None, :n0 + i0 + step],
+                                       B[None, :n0 + i0 + step]) < reach[i0:i0 + step, None]
+        for i in range(i0, min(i0 + step, n)):
+            c = accepted[i][1]
+            if near[i - i0, :n0 + i][on[:n0 + i]].any():
+                c.status = DUPLICATE
+                continue
+            on[n0 + i] = True
+            segs.append((c.ip1, c.ip2))
     return segs
