@@ -479,13 +479,17 @@ def _coarse_door_distances(mask, pts, f, sources=None):
         sv.append(near)
     E = np.concatenate(pairs + [np.stack([np.concatenate(su), np.concatenate(sv)], 1)]).astype(np.int32)
     # one entry per joined pair (the sparse matrix merges repeats), then its length
-    A = coo_matrix((np.ones(len(E), np.float32), (E[:, 0], E[:, 1])), shape=(n + 1 + k, n + 1 + k)).tocsr()
+    # both directions (a symmetric matrix searched as directed: scipy's undirected search scans every
+    # node's row and its column), one entry per joined pair (the sparse matrix merges repeats)
+    A = coo_matrix((np.ones(2 * len(E), np.float32), (np.concatenate([E[:, 0], E[:, 1]]),
+                                                       np.concatenate([E[:, 1], E[:, 0]]))),
+                   shape=(n + 1 + k, n + 1 + k)).tocsr()
     u = np.repeat(np.arange(n + 1 + k), np.diff(A.indptr))
     v = A.indices
     pr = np.concatenate([cr, pts[:, 0]])
     pc = np.concatenate([ccol, pts[:, 1]])
     A.data = (_octile(pr[u] - pr[v], pc[u] - pc[v]) + 1e-9).astype(float)
-    out[sources] = dijkstra(A, directed=False, indices=n + 1 + sources)[:, n + 1:]
+    out[sources] = dijkstra(A, directed=True, indices=n + 1 + sources)[:, n + 1:]
     return out
 
 
@@ -497,20 +501,53 @@ _WINDOW_SLACK = 1.1
 def _in_sight(mask, pts):
     """(k, k) bool: the digital straight line between two points runs on ``mask`` cells only.
 
-    Such a line (:func:`skimage.draw.line`, steps along one axis and one
-    diagonal) is a shortest 8-connected path, so the map-grid geodesic
-    between the two points is exactly their octile distance.
+    The line from ``p`` to ``q`` takes ``n = max(|dr|, |dc|)`` steps, step ``t`` at ``p +
+    round(t (q - p) / n)``: one cell along the longer axis and 0 or 1 along the other each
+    step, so it is a shortest 8-connected path and the map-grid geodesic between two points
+    in sight is exactly their octile distance. All pairs are tested together: first
+    :data:`_SIGHT_PROBES` cells of each line, then every cell of the lines that passed, in
+    batches of at most :data:`_SIGHT_BATCH` cells.
     """
-    from skimage.draw import line
-
     k = len(pts)
     out = np.zeros((k, k), bool)
-    p = pts.astype(int)
-    for i in range(k):
-        for j in range(i + 1, k):
-            rr, cc = line(p[i, 0], p[i, 1], p[j, 0], p[j, 1])
-            out[i, j] = out[j, i] = bool(mask[rr, cc].all())
-    return out
+    if k < 2:
+        return out
+    p = np.asarray(pts).astype(np.int64)
+    I, J = np.triu_indices(k, 1)
+    flat = np.ascontiguousarray(mask).ravel()
+    w = mask.shape[1]
+    steps = np.abs(p[J] - p[I]).max(axis=1)
+    probe = np.floor(np.linspace(0, 1, _SIGHT_PROBES)[None, :] * steps[:, None] + 0.5).astype(np.int64)
+    keep = np.nonzero(_line_cells(flat, w, p[I], p[J], steps, probe).all(axis=1))[0]
+    ends = np.cumsum(steps[keep] + 1)
+    lo = 0
+    while lo < len(keep):  # the whole lines of the pairs that passed
+        hi = max(int(np.searchsorted(ends, ends[lo] - steps[keep[lo]] - 1 + _SIGHT_BATCH, side="right")), lo + 1)
+        b = keep[lo:hi]
+        n = steps[b] + 1
+        start = np.concatenate([[0], np.cumsum(n)[:-1]])
+        pair = np.repeat(np.arange(len(b)), n)
+        t = (np.arange(int(n.sum())) - start[pair])[:, None]
+        on = _line_cells(flat, w, p[I[b]][pair], p[J[b]][pair], steps[b][pair], t)[:, 0]
+        ok = np.logical_and.reduceat(on, start)
+        out[I[b[ok]], J[b[ok]]] = True
+        lo = hi
+    return out | out.T
+
+
+def _line_cells(flat, w, a, b, steps, t):
+    """``flat[...]`` (the raveled mask, ``w`` columns) at step ``t`` (m, s) of the lines ``a`` -> ``b``
+    ((m, 2) ``(row, col)``, ``steps`` (m,) = their longer axis' length), as in :func:`_in_sight`."""
+    frac = t / np.maximum(steps, 1)[:, None]
+    rr = a[:, :1] + np.floor(frac * (b[:, :1] - a[:, :1]) + 0.5).astype(np.int64)
+    cc = a[:, 1:] + np.floor(frac * (b[:, 1:] - a[:, 1:]) + 0.5).astype(np.int64)
+    return flat[rr * w + cc]
+
+
+#: Cells of each line (evenly spread, both ends included) :func:`_in_sight` tests before the whole line.
+_SIGHT_PROBES = 9
+#: Line cells tested at once by :func:`_in_sight`.
+_SIGHT_BATCH = 1 << 20
 
 
 def _windowed_distances(mask, pts, i, near, bound, f):
