@@ -411,6 +411,54 @@ def _block_components(mask, f):
     return lab[:h, :w], n - 1, cen
 
 
+def _merged_nodes(mask, lab, n, cen, f):
+    """Merge each aligned 2 x 2 group of blocks inside the fully free part of ``mask`` into one node.
+
+    A block is fully free when all its ``f`` x ``f`` cells are on the mask; a group of 2 x 2
+    blocks (aligned on even block rows and columns) is merged when its blocks and the ring of
+    blocks around them are all fully free, so paths along walls, around furniture and into
+    doors keep the blocks' own nodes, and only open floor is crossed on the coarser grid.
+
+    Parameters
+    ----------
+    mask : (h, w) bool ndarray
+        The room's cells.
+    lab, n, cen
+        The block pieces of ``mask`` (:func:`_block_components`).
+    f : int
+        Block side (cells).
+
+    Returns
+    -------
+    node : (n + 1,) int ndarray
+        The node (``1..m``; 0 for label 0) of every piece.
+    cen : (m + 1, 2) float ndarray
+        The ``(row, col)`` centroids of the nodes (the mean of their cells; row 0 unused).
+    """
+    node = np.arange(n + 1)
+    h, w = mask.shape
+    H, W = h // f, w // f  # the whole blocks (a window's last, partial blocks are never fully free)
+    if H < 4 or W < 4:
+        return node, cen
+    full = np.zeros((H + 2, W + 2), bool)  # blocks wholly on the mask, in a ring of blocks that are not
+    full[1:-1, 1:-1] = ~_block_any(~np.ascontiguousarray(mask[:H * f, :W * f]), f)
+    inner = full[1:-1, 1:-1].copy()  # full, with its 8 neighbours full
+    for dr in (0, 1, 2):
+        for dc in (0, 1, 2):
+            inner &= full[dr:dr + H, dc:dc + W]
+    H2, W2 = H // 2, W // 2
+    GR, GC = np.nonzero(inner[:2 * H2, :2 * W2].reshape(H2, 2, W2, 2).all(axis=(1, 3)))
+    if GR.size == 0:
+        return node, cen
+    # a full block holds one piece; the group's pieces become the first one's node, at the group's centre
+    members = lab[:2 * H2 * f:f, :2 * W2 * f:f].reshape(H2, 2, W2, 2)[GR, :, GC, :].reshape(GR.size, 4)
+    node[members] = members[:, :1]
+    cen = cen.copy()
+    cen[members[:, 0]] = np.stack([(GR + 0.5) * 2 * f - 0.5, (GC + 0.5) * 2 * f - 0.5], 1)
+    used, node = np.unique(node, return_inverse=True)
+    return node, cen[used]
+
+
 def _block_any(m, f):
     """(H, W) bool: the ``f`` x ``f`` blocks of ``m`` ((H f, W f) bool, C-contiguous) holding a True cell.
 
@@ -464,7 +512,7 @@ def _coarse_door_distances(mask, pts, f, sources=None):
     if len(sources) == 0:
         return out
     lab, n, cen = _block_components(mask, f)
-    cr, ccol = cen[:, 0], cen[:, 1]
+    node, cen = _merged_nodes(mask, lab, n, cen, f) if f > 1 else (np.arange(n + 1), cen)
     nb = len(lab[f::f])
     pairs = _touching(lab[f - 1::f][:nb], lab[f::f])
     right = np.ascontiguousarray(lab[:, f::f].T)  # the columns at the blocks' edges, as rows
@@ -475,9 +523,13 @@ def _coarse_door_distances(mask, pts, f, sources=None):
         r, c = int(pr), int(pc)
         near = lab[max(r - 1, 0):r + 2, max(c - 1, 0):c + 2].ravel()
         near = near[near > 0]
-        su.append(np.full(len(near), n + 1 + i))
+        su.append(np.full(len(near), -1 - i))
         sv.append(near)
     E = np.concatenate(pairs + [np.stack([np.concatenate(su), np.concatenate(sv)], 1)]).astype(np.int32)
+    n = len(cen) - 1
+    E = np.where(E < 0, n - E, node[np.maximum(E, 0)])  # pieces -> their nodes, point i -> n + 1 + i
+    E = E[E[:, 0] != E[:, 1]]
+    cr, ccol = cen[:, 0], cen[:, 1]
     # one entry per joined pair (the sparse matrix merges repeats), then its length
     # both directions (a symmetric matrix searched as directed: scipy's undirected search scans every
     # node's row and its column), one entry per joined pair (the sparse matrix merges repeats)
