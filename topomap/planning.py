@@ -307,7 +307,7 @@ class _RoomSpace:
         ids = sorted(self.door_px)
         if len(ids) < 2:
             return {}
-        if exact:  # the reference: one search per door on the map's grid
+        if exact or self.mask.size <= EXACT_CELLS:  # the reference: one search per door on the map's grid
             out = {}
             for i, di in enumerate(ids[:-1]):
                 rest = ids[i + 1:]
@@ -315,13 +315,12 @@ class _RoomSpace:
                     if np.isfinite(L):
                         out[(di, dj)] = L
             return out
-        f = 1 if self.mask.size <= EXACT_CELLS else _coarse_factor(self.ctx.res)
+        f = _coarse_factor(self.ctx.res)
         pts = np.array([self.door_px[d] for d in ids], float)
-        k = len(ids)
-        seen = _in_sight(self.mask, pts) if f > 1 else np.zeros((k, k), bool)
-        # the coarse search only from the doors with a pair i < j out of sight (none: no search)
-        sources = [i for i in range(k - 1) if not seen[i, i + 1:].all()]
-        D = _coarse_door_distances(self.mask, pts, f, sources)
+        seen = _in_sight(self.mask, pts) if f > 1 else np.zeros((len(ids), len(ids)), bool)
+        need = ~seen  # the coarse search only for the pairs out of sight (none: no search)
+        np.fill_diagonal(need, False)
+        D = _coarse_door_distances(self.mask, pts, f, need)
         D[seen] = _octile(*(pts[:, None, :] - pts[None, :, :]).transpose(2, 0, 1))[seen]
         short = REFINE_CELLS * f if f > 1 else 0
         for i in range(len(ids)):
@@ -489,27 +488,29 @@ def _touching(a, b):
     return out
 
 
-def _coarse_door_distances(mask, pts, f, sources=None):
+def _coarse_door_distances(mask, pts, f, need=None):
     """(k, k) travel distances (map cells) between the points ``pts`` (local ``(row, col)``
-    cells of ``mask``) on the coarse grid of ``f`` x ``f`` blocks of ``mask``; only the rows
-    ``sources`` (point indices; default all) are searched, the others are inf.
+    cells of ``mask``) on the coarse grid of ``f`` x ``f`` blocks of ``mask``; only the pairs
+    ``need`` ((k, k) bool, symmetric; default all) are searched, the others are inf.
 
     A node is a connected piece of the mask inside one block (so walls and
     furniture within a block are never crossed), placed at the piece's
-    centroid; two pieces are joined when any of their cells are
+    centroid, except that open floor is merged into larger nodes
+    (:func:`_merged_nodes`); two nodes are joined when any of their cells are
     8-neighbours, with the octile distance (steps of 1 and sqrt 2 cells, the
     metric of the map-grid geodesic) between their centroids; each point
-    is joined to the pieces of its 3 x 3 neighbourhood by the octile distance
+    is joined to the nodes of its 3 x 3 neighbourhood by the octile distance
     to their centroids. Shortest paths: Dijkstra
-    (:func:`scipy.sparse.csgraph.dijkstra`) from every point of ``sources``.
+    (:func:`scipy.sparse.csgraph.dijkstra`) from the points :func:`_search_plan`
+    picks, each search stopped beyond its farthest pair (see there).
     """
-    from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import dijkstra
 
     k = len(pts)
-    sources = np.arange(k) if sources is None else np.asarray(sources, int)
+    if need is None:
+        need = ~np.eye(k, dtype=bool)
     out = np.full((k, k), np.inf)
-    if len(sources) == 0:
+    if not need.any():
         return out
     lab, n, cen = _block_components(mask, f)
     node, cen = _merged_nodes(mask, lab, n, cen, f) if f > 1 else (np.arange(n + 1), cen)
@@ -529,20 +530,70 @@ def _coarse_door_distances(mask, pts, f, sources=None):
     n = len(cen) - 1
     E = np.where(E < 0, n - E, node[np.maximum(E, 0)])  # pieces -> their nodes, point i -> n + 1 + i
     E = E[E[:, 0] != E[:, 1]]
-    cr, ccol = cen[:, 0], cen[:, 1]
-    # one entry per joined pair (the sparse matrix merges repeats), then its length
-    # both directions (a symmetric matrix searched as directed: scipy's undirected search scans every
-    # node's row and its column), one entry per joined pair (the sparse matrix merges repeats)
-    A = coo_matrix((np.ones(2 * len(E), np.float32), (np.concatenate([E[:, 0], E[:, 1]]),
-                                                       np.concatenate([E[:, 1], E[:, 0]]))),
-                   shape=(n + 1 + k, n + 1 + k)).tocsr()
-    u = np.repeat(np.arange(n + 1 + k), np.diff(A.indptr))
-    v = A.indices
-    pr = np.concatenate([cr, pts[:, 0]])
-    pc = np.concatenate([ccol, pts[:, 1]])
-    A.data = (_octile(pr[u] - pr[v], pc[u] - pc[v]) + 1e-9).astype(float)
-    out[sources] = dijkstra(A, directed=True, indices=n + 1 + sources)[:, n + 1:]
+    pr = np.concatenate([cen[:, 0], pts[:, 0]])
+    pc = np.concatenate([cen[:, 1], pts[:, 1]])
+    A = _symmetric_graph(E, n + 1 + k, lambda u, v: _octile(pr[u] - pr[v], pc[u] - pc[v]) + 1e-9)
+    for i, targets, limit in _search_plan(need, pts, f):
+        got = dijkstra(A, directed=True, indices=n + 1 + i, limit=limit)[n + 1 + targets]
+        if np.isinf(got).any():  # beyond the limit (or unreachable): search the whole room
+            got = dijkstra(A, directed=True, indices=n + 1 + i)[n + 1 + targets]
+        out[i, targets] = out[targets, i] = got
     return out
+
+
+def _symmetric_graph(E, m, length):
+    """The (m, m) CSR matrix joining both ways each pair of rows of ``E`` ((e, 2) ints, repeats
+    allowed) by ``length(u, v)`` (arrays of node indices -> lengths), one entry per pair.
+
+    Searched as a directed graph (:func:`scipy.sparse.csgraph.dijkstra` with ``directed=True``;
+    an undirected search scans every node's row and its column).
+    """
+    from scipy.sparse import csr_matrix
+
+    E = E.astype(np.int64)
+    keys = np.concatenate([E[:, 0] * m + E[:, 1], E[:, 1] * m + E[:, 0]])
+    keys.sort()
+    if len(keys):
+        keys = keys[np.concatenate([[True], keys[1:] != keys[:-1]])]
+    u, v = np.divmod(keys, m)
+    indptr = np.concatenate([[0], np.cumsum(np.bincount(u, minlength=m))])
+    return csr_matrix((length(u, v).astype(float), v.astype(np.int32), indptr.astype(np.int32)), shape=(m, m))
+
+
+#: A search from a door is stopped beyond this factor times the octile distance to its farthest
+#: pair (plus :data:`_LIMIT_CELLS` coarse cells); a pair found beyond it is searched again in the whole room.
+_LIMIT_FACTOR = 1.6
+_LIMIT_CELLS = 4
+
+
+def _search_plan(need, pts, f):
+    """The searches that give the pairs ``need`` ((k, k) bool, symmetric) of the points ``pts``.
+
+    Each pair is measured from one of its two points: the pairs longest (in octile distance)
+    first, each from the end whose search already reaches farther (so a search from a door
+    near the middle of a corridor does not run to both ends). Returns ``(i, targets,
+    limit)`` triples: a search from point ``i`` up to ``limit`` (cells; :data:`_LIMIT_FACTOR`
+    x the octile distance to its farthest target + :data:`_LIMIT_CELLS` ``f``) gives
+    ``targets``.
+    """
+    I, J = np.nonzero(np.triu(need, 1))
+    est = _octile(*(pts[I] - pts[J]).T)
+    reach = np.full(len(pts), -1.0)
+    ecc = np.zeros(len(pts))  # the longest pair of each point: a tie goes to the point with the shorter
+    np.maximum.at(ecc, I, est)
+    np.maximum.at(ecc, J, est)
+    src = np.empty(len(I), np.intp)
+    for t in np.argsort(-est, kind="stable"):
+        i, j = I[t], J[t]
+        s = i if (reach[i], -ecc[i]) >= (reach[j], -ecc[j]) else j
+        src[t] = s
+        reach[s] = max(reach[s], est[t])
+    plan = []
+    for s in np.unique(src):
+        sel = src == s
+        targets = np.where(I[sel] == s, J[sel], I[sel])
+        plan.append((int(s), targets, float(_LIMIT_FACTOR * est[sel].max() + _LIMIT_CELLS * f)))
+    return plan
 
 
 #: Slack of the refinement windows: a path up to this factor (plus two coarse cells) longer
@@ -565,9 +616,16 @@ def _in_sight(mask, pts):
     if k < 2:
         return out
     p = np.asarray(pts).astype(np.int64)
-    I, J = np.triu_indices(k, 1)
     flat = np.ascontiguousarray(mask).ravel()
     w = mask.shape[1]
+    if k <= 3:  # a few pairs: each whole line at once
+        for i in range(k - 1):
+            for j in range(i + 1, k):
+                n = int(np.abs(p[j] - p[i]).max())
+                t = np.arange(n + 1)[None, :]
+                out[i, j] = out[j, i] = bool(_line_cells(flat, w, p[i:i + 1], p[j:j + 1], np.array([n]), t).all())
+        return out
+    I, J = np.triu_indices(k, 1)
     steps = np.abs(p[J] - p[I]).max(axis=1)
     probe = np.floor(np.linspace(0, 1, _SIGHT_PROBES)[None, :] * steps[:, None] + 0.5).astype(np.int64)
     keep = np.nonzero(_line_cells(flat, w, p[I], p[J], steps, probe).all(axis=1))[0]
