@@ -205,18 +205,6 @@ class _Ctx:
             out[inside & (out == 0)] = r
         return out
 
-    def labels_in(self, win):
-        """The label image (every room) in the window ``(r0, r1, c0, c1)`` (a view for a segmentation)."""
-        r0, r1, c0, c1 = win
-        if self.seg is not None:
-            return self.seg.labels[r0:r1, c0:c1]
-        rooms = []
-        for r in self.G.nodes:
-            b = self.room_bbox(r)
-            if b is not None and b[0] < r1 and b[1] > r0 and b[2] < c1 and b[3] > c0:
-                rooms.append(r)
-        return self.window_labels(rooms, win)
-
     def window_room(self, r, rooms, win):
         """The cells of room ``r`` in the window ``(r0, r1, c0, c1)`` (a new bool array) and a test
         ``(rows, cols) -> bool array``: window cells on one of ``rooms``."""
@@ -266,17 +254,34 @@ class _RoomSpace:
     def __init__(self, ctx: _Ctx, r: int, doors=None):
         self.ctx, self.r = ctx, r
         doors = ctx.doors_of(r) if doors is None else doors
-        self.win = _room_window(ctx, r, doors)
-        if self.win is None:
+        H, W = ctx.shape
+        box = ctx.room_bbox(r)
+        lines = {d: ctx.door_cells(d) for d in doors}
+        rows = [box[0], box[1] - 1] if box else []
+        cols = [box[2], box[3] - 1] if box else []
+        for rr, cc in lines.values():
+            rows += [rr.min(), rr.max()]
+            cols += [cc.min(), cc.max()]
+        if not rows:
             self.win, self.mask, self.door_px = (0, 0, 0, 0), np.zeros((0, 0), bool), {}
             return
-        r0, r1, c0, c1 = self.win
+        r0, r1 = max(min(rows) - 1, 0), min(max(rows) + 2, H)
+        c0, c1 = max(min(cols) - 1, 0), min(max(cols) + 2, W)
+        self.win = (r0, r1, c0, c1)
         rooms = {r} | {x for d in doors for x in ctx.doors[d][:2]}
         mask, on_rooms = ctx.window_room(r, rooms, self.win)
         self.door_px = {}
-        for d, (rr, cc, (pr, pc)) in _door_cells_on(ctx, doors, lambda rr, cc: on_rooms(rr - r0, cc - c0)).items():
-            mask[rr - r0, cc - c0] = True
-            self.door_px[d] = (pr - r0, pc - c0)
+        for d, (rr, cc) in lines.items():
+            rr, cc = rr - r0, cc - c0
+            ok = on_rooms(rr, cc)
+            if not ok.any():
+                continue
+            rr, cc = rr[ok], cc[ok]
+            mask[rr, cc] = True
+            _, _, p1, p2, _, _ = ctx.doors[d]
+            mr, mc = (p1[0] + p2[0]) / 2 - r0, (p1[1] + p2[1]) / 2 - c0
+            i = int(np.argmin((rr - mr) ** 2 + (cc - mc) ** 2))
+            self.door_px[d] = (int(rr[i]), int(cc[i]))
         self.mask = mask
 
     def local(self, row, col):
@@ -292,53 +297,45 @@ class _RoomSpace:
         cum = _mcp_costs(self.mask, [src], targets)
         return [float(cum[t]) * self.ctx.res for t in targets]
 
-    def door_distances(self):
-        """``{(door_i, door_j): metres}`` between this room's doors (``i < j``, reachable pairs only):
-        the 8-connected geodesic on the map's grid, one search per door."""
+    def door_distances(self, *, exact=False):
+        """``{(door_i, door_j): metres}`` between this room's doors (``i < j``, reachable pairs only).
+
+        Exact 8-connected geodesics on the map's grid for small rooms (or
+        ``exact=True``); on a coarse grid with short pairs refined on the
+        map's grid otherwise (see the module notes).
+        """
         ids = sorted(self.door_px)
-        out = {}
-        for i, di in enumerate(ids[:-1]):
-            rest = ids[i + 1:]
-            for dj, L in zip(rest, self.distances(self.door_px[di], [self.door_px[d] for d in rest])):
-                if np.isfinite(L):
-                    out[(di, dj)] = L
-        return out
+        if len(ids) < 2:
+            return {}
+        if exact or self.mask.size <= EXACT_CELLS:  # the reference: one search per door on the map's grid
+            out = {}
+            for i, di in enumerate(ids[:-1]):
+                rest = ids[i + 1:]
+                for dj, L in zip(rest, self.distances(self.door_px[di], [self.door_px[d] for d in rest])):
+                    if np.isfinite(L):
+                        out[(di, dj)] = L
+            return out
+        f = _coarse_factor(self.ctx.res)
+        pts = np.array([self.door_px[d] for d in ids], float)
+        seen = _in_sight(self.mask, pts) if f > 1 else np.zeros((len(ids), len(ids)), bool)
+        need = ~seen  # the coarse search only for the pairs out of sight (none: no search)
+        np.fill_diagonal(need, False)
+        D = _coarse_door_distances(self.mask, pts, f, need)
+        D[seen] = _octile(*(pts[:, None, :] - pts[None, :, :]).transpose(2, 0, 1))[seen]
+        short = REFINE_CELLS * f if f > 1 else 0
+        for i in range(len(ids)):
+            near = [j for j in range(i + 1, len(ids)) if D[i, j] < short and not seen[i, j]]
+            if near:
+                D[i, near] = _windowed_distances(self.mask, pts, i, near, D[i, near], f)
+        res = self.ctx.res
+        return {(ids[i], ids[j]): float(D[i, j]) * res
+                for i in range(len(ids)) for j in range(i + 1, len(ids)) if np.isfinite(D[i, j])}
 
 
-def _room_window(ctx, r, doors):
-    """The half-open box ``(r0, r1, c0, c1)`` of room ``r``'s cells and the cells of ``doors``, one
-    cell around, clipped to the map (None: no cells)."""
-    H, W = ctx.shape
-    box = ctx.room_bbox(r)
-    rows = [box[0], box[1] - 1] if box else []
-    cols = [box[2], box[3] - 1] if box else []
-    for d in doors:
-        rr, cc = ctx.door_cells(d)
-        rows += [rr.min(), rr.max()]
-        cols += [cc.min(), cc.max()]
-    if not rows:
-        return None
-    return (max(int(min(rows)) - 1, 0), min(int(max(rows)) + 2, H),
-            max(int(min(cols)) - 1, 0), min(int(max(cols)) + 2, W))
-
-
-def _door_cells_on(ctx, doors, on):
-    """``{door: (rows, cols, (row, col))}``: the cells of each door's segment where ``on(rows, cols)``
-    (map pixels) and, of these, the one closest to the door's midpoint (doors with none left out)."""
-    out = {}
-    for d in doors:
-        rr, cc = ctx.door_cells(d)
-        ok = on(rr, cc)
-        if not ok.any():
-            continue
-        rr, cc = rr[ok], cc[ok]
-        _, _, p1, p2, _, _ = ctx.doors[d]
-        mr, mc = (p1[0] + p2[0]) / 2, (p1[1] + p2[1]) / 2
-        i = int(np.argmin((rr - mr) ** 2 + (cc - mc) ** 2))
-        out[d] = (rr, cc, (int(rr[i]), int(cc[i])))
-    return out
-
-
+#: Rooms with at least this many doors: open floor merged into larger travel nodes
+#: (:func:`_merged_nodes`), one search per pair planned (:func:`_search_plan`), in-sight tested
+#: for all pairs together (:func:`_in_sight`); fewer doors: the 0.2 m blocks, one search per door.
+MANY_DOORS = 6
 #: Side (m) of the coarse cells on which door-to-door distances are computed in large rooms.
 TRAVEL_CELL = 0.2
 #: Rooms (their window: bounding box of the room and its doors) of at most this many cells get
@@ -367,75 +364,70 @@ def _octile(dr, dc):
     return np.maximum(a, b) + (np.sqrt(2) - 1) * np.minimum(a, b)
 
 
-def _block_components(mask, f, *, with_full=False):
+def _block_components(mask, f):
     """Connected pieces of ``mask`` inside each ``f`` x ``f`` block.
 
     Returns labels ``1..n`` (0 off the mask), ``n`` and the (n + 1, 2)
-    ``(row, col)`` centroids of the pieces (row 0 unused); with
-    ``with_full``, also the (H, W) bool grid of the blocks wholly on the
-    mask. A block wholly on the mask is one piece, centred in the block;
-    the blocks partly on it are labelled side by side in one strip, one
-    empty cell apart, so pieces never join across blocks. A piece's
+    ``(row, col)`` centroids of the pieces (row 0 unused). The blocks are
+    labelled one empty cell apart, so pieces never join across blocks;
+    when most blocks hold no mask cell (a long room's window is mostly
+    other rooms), only those that do, side by side in one strip. A piece's
     centroid is the mean of its cells either way.
     """
     import cv2
 
     h, w = mask.shape
     H, W = -(-h // f), -(-w // f)
-    if (h, w) == (H * f, W * f) and mask.dtype == bool and mask.flags.c_contiguous:
-        m = mask
-    else:
-        m = np.zeros((H * f, W * f), bool)
-        m[:h, :w] = mask
+    m = np.zeros((H * f, W * f), bool)
+    m[:h, :w] = mask
     blocks = m.reshape(H, f, W, f)
-    full = ~_block_any(~m, f)
-    R, C = np.nonzero(_block_any(m, f) & ~full)
-    FR, FC = np.nonzero(full)
+    R, C = np.nonzero(_block_any(m, f))
+    if 3 * R.size > H * W:  # mostly full: all blocks at once, one empty cell apart both ways
+        g = np.zeros((H, f + 1, W, f + 1), np.uint8)
+        g[:, :f, :, :f] = blocks
+        n, lab, _, cen = cv2.connectedComponentsWithStats(g.reshape(H * (f + 1), W * (f + 1)), connectivity=8,
+                                                          ltype=cv2.CV_32S)
+        lab = lab.reshape(H, f + 1, W, f + 1)[:, :f, :, :f].reshape(H * f, W * f)[:h, :w]
+        cen = cen[:, ::-1]  # (row, col) in the spaced image: take out one gap cell per block before it
+        return lab, n - 1, cen - np.floor(cen / (f + 1))
     lab = np.zeros((H * f, W * f), np.int32)
+    if R.size == 0:
+        return lab[:h, :w], 0, np.zeros((1, 2))
     K = R.size
-    n, cen = 0, np.zeros((1, 2))
-    if K:
-        strip = np.zeros((f, K, f + 1), np.uint8)
-        strip[:, :, :f] = blocks.transpose(1, 0, 2, 3)[:, R, C]
-        n, slab, stats, scen = cv2.connectedComponentsWithStats(strip.reshape(f, K * (f + 1)), connectivity=8,
-                                                                ltype=cv2.CV_32S)
-        n -= 1
-        blab = slab.reshape(f, K, f + 1)[:, :, :f]  # (f, K, f): row in block, block, column in block
-        lab.reshape(H, f, W, f).transpose(1, 0, 2, 3)[:, R, C] = blab
-        # the centroids OpenCV gives on the strip (each coordinate's sum over the piece / its area),
-        # moved onto the window's cells: the sums are integers, exact from the centroids
-        area = stats[:, cv2.CC_STAT_AREA].astype(float)
-        area[0] = 1
-        k = stats[:, cv2.CC_STAT_LEFT] // (f + 1)  # each piece's block on the strip
-        sr = np.rint(scen[:, 1] * area) + area * (R[k] * (f + 1))
-        sc = np.rint(scen[:, 0] * area) + area * ((C[k] - k) * (f + 1))
-        cen = np.stack([sr / area, sc / area], 1)
-        cen[0] = 0
-        cen = cen - np.floor(cen / (f + 1))
-    if FR.size:  # a block wholly on the mask: one piece, at the block's centre
-        ids = np.arange(n + 1, n + 1 + FR.size, dtype=np.int32)
-        lab.reshape(H, f, W, f)[FR, :, FC, :] = ids[:, None, None]
-        cen = np.concatenate([cen, np.stack([FR * f + (f - 1) / 2, FC * f + (f - 1) / 2], 1)])
-        n += FR.size
-    out = (lab[:h, :w], n, cen)
-    return out + (full,) if with_full else out
+    strip = np.zeros((f, K, f + 1), np.uint8)
+    strip[:, :, :f] = blocks.transpose(1, 0, 2, 3)[:, R, C]
+    n, slab, stats, scen = cv2.connectedComponentsWithStats(strip.reshape(f, K * (f + 1)), connectivity=8,
+                                                            ltype=cv2.CV_32S)
+    blab = slab.reshape(f, K, f + 1)[:, :, :f]  # (f, K, f): row in block, block, column in block
+    lab.reshape(H, f, W, f).transpose(1, 0, 2, 3)[:, R, C] = blab
+    # the centroids OpenCV gives on the image of all blocks one empty cell apart (each coordinate's
+    # sum over the piece / its area there), then moved back onto the window's cells. The sums are
+    # integers: those on the strip, exact from its centroids, moved to the spaced image's blocks
+    area = stats[:, cv2.CC_STAT_AREA].astype(float)
+    area[0] = 1
+    k = stats[:, cv2.CC_STAT_LEFT] // (f + 1)  # each piece's block on the strip
+    sr = np.rint(scen[:, 1] * area) + area * (R[k] * (f + 1))
+    sc = np.rint(scen[:, 0] * area) + area * ((C[k] - k) * (f + 1))
+    cen = np.stack([sr / area, sc / area], 1)
+    cen[0] = 0
+    cen = cen - np.floor(cen / (f + 1))
+    return lab[:h, :w], n - 1, cen
 
 
-def _merged_nodes(full, lab, n, cen, f):
-    """Merge each aligned 2 x 2 group of blocks inside open floor into one node.
+def _merged_nodes(mask, lab, n, cen, f):
+    """Merge each aligned 2 x 2 group of blocks inside the fully free part of ``mask`` into one node.
 
-    A group of 2 x 2 blocks (aligned on even block rows and columns) is
-    merged when its blocks and the ring of blocks around them are all fully
-    free cells of one room, so paths along walls, around furniture and into
-    doors keep the blocks' own pieces, and only open floor is crossed on the
-    coarser grid.
+    A block is fully free when all its ``f`` x ``f`` cells are on the mask; a group of 2 x 2
+    blocks (aligned on even block rows and columns) is merged when its blocks and the ring of
+    blocks around them are all fully free, so paths along walls, around furniture and into
+    doors keep the blocks' own nodes, and only open floor is crossed on the coarser grid.
 
     Parameters
     ----------
-    full : (H, W) int ndarray
-        The room of each block whose cells are all one piece of that room; 0 for the others.
+    mask : (h, w) bool ndarray
+        The room's cells.
     lab, n, cen
-        The block pieces (:func:`_block_components`; ``lab`` covers the ``H`` x ``W`` blocks).
+        The block pieces of ``mask`` (:func:`_block_components`).
     f : int
         Block side (cells).
 
@@ -447,15 +439,16 @@ def _merged_nodes(full, lab, n, cen, f):
         The ``(row, col)`` centroids of the nodes (the mean of their cells; row 0 unused).
     """
     node = np.arange(n + 1)
-    H, W = full.shape
+    h, w = mask.shape
+    H, W = h // f, w // f  # the whole blocks (a window's last, partial blocks are never fully free)
     if H < 4 or W < 4:
         return node, cen
-    pad = np.zeros((H + 2, W + 2), full.dtype)  # blocks out of the window are not free
-    pad[1:-1, 1:-1] = full
-    inner = full > 0  # full, with its 8 neighbours full of the same room
+    full = np.zeros((H + 2, W + 2), bool)  # blocks wholly on the mask, in a ring of blocks that are not
+    full[1:-1, 1:-1] = ~_block_any(~np.ascontiguousarray(mask[:H * f, :W * f]), f)
+    inner = full[1:-1, 1:-1].copy()  # full, with its 8 neighbours full
     for dr in (0, 1, 2):
         for dc in (0, 1, 2):
-            inner &= pad[dr:dr + H, dc:dc + W] == full
+            inner &= full[dr:dr + H, dc:dc + W]
     H2, W2 = H // 2, W // 2
     GR, GC = np.nonzero(inner[:2 * H2, :2 * W2].reshape(H2, 2, W2, 2).all(axis=(1, 3)))
     if GR.size == 0:
@@ -465,17 +458,8 @@ def _merged_nodes(full, lab, n, cen, f):
     node[members] = members[:, :1]
     cen = cen.copy()
     cen[members[:, 0]] = np.stack([(GR + 0.5) * 2 * f - 0.5, (GC + 0.5) * 2 * f - 0.5], 1)
-    used = node == np.arange(n + 1)  # the nodes kept: renumbered in order
-    return (np.cumsum(used) - 1)[node], cen[used]
-
-
-def _block_reduce(a, f, op):
-    """(H, W): ``op`` (a ufunc, e.g. :data:`numpy.maximum`) over each ``f`` x ``f`` block of ``a``
-    ((H f, W f), C-contiguous): over the rows of each block first, then along them."""
-    Hf, Wf = a.shape
-    H, W = Hf // f, Wf // f
-    rows = op.reduce(a.reshape(H, f, Wf), axis=1)
-    return op.reduce(rows.reshape(H, W, f), axis=2)
+    used, node = np.unique(node, return_inverse=True)
+    return node, cen[used]
 
 
 def _block_any(m, f):
@@ -493,277 +477,101 @@ def _block_any(m, f):
 
 
 def _touching(a, b):
-    """Label pairs of 8-adjacent cells, ``a`` the row above ``b`` (0 = no cell).
+    """Label pairs of 8-adjacent cells, ``a`` the row above ``b`` (0 = no cell)."""
+    out = []
+    w = a.shape[1]
+    on_a, on_b = a > 0, b > 0
+    for dc in (-1, 0, 1):
+        sa, sb = slice(max(0, -dc), w - max(0, dc)), slice(max(0, dc), w - max(0, -dc))
+        x, y = a[:, sa], b[:, sb]
+        ok = on_a[:, sa] & on_b[:, sb] & (x != y)
+        x, y = x[ok], y[ok]
+        keep = np.ones(len(x), bool)  # runs of the same pair along a block edge: keep one
+        keep[1:] = (x[1:] != x[:-1]) | (y[1:] != y[:-1])
+        out.append(np.stack([x[keep], y[keep]], 1))
+    return out
 
-    Returns two arrays ``(x, y)``: ``x`` the label in ``a``, ``y`` the one in
-    ``b`` (different, both nonzero), in order along the rows, the three cells
-    of ``a`` next to each cell of ``b`` together, with runs of the same pair
-    (a block edge between two pieces) kept once.
+
+def _coarse_door_distances(mask, pts, f, need=None):
+    """(k, k) travel distances (map cells) between the points ``pts`` (local ``(row, col)``
+    cells of ``mask``) on the coarse grid of ``f`` x ``f`` blocks of ``mask``; only the pairs
+    ``need`` ((k, k) bool, symmetric; default all) are searched, the others are inf.
+
+    A node is a connected piece of the mask inside one block (so walls and
+    furniture within a block are never crossed), placed at the piece's
+    centroid, except that open floor is merged into larger nodes
+    (:func:`_merged_nodes`); two nodes are joined when any of their cells are
+    8-neighbours, with the octile distance (steps of 1 and sqrt 2 cells, the
+    metric of the map-grid geodesic) between their centroids; each point
+    is joined to the nodes of its 3 x 3 neighbourhood by the octile distance
+    to their centroids. Shortest paths: Dijkstra
+    (:func:`scipy.sparse.csgraph.dijkstra`) from the points :func:`_search_plan`
+    picks, each search stopped beyond its farthest pair (see there).
     """
-    rows, w = a.shape
-    A3 = np.zeros((rows, w, 3), a.dtype)  # the cells up-left, up and up-right of each cell of b
-    A3[:, 1:, 0] = a[:, :-1]
-    A3[:, :, 1] = a
-    A3[:, :-1, 2] = a[:, 1:]
-    B3 = np.broadcast_to(b[:, :, None], A3.shape)
-    ok = (A3 != B3) & (A3 > 0) & (B3 > 0)
-    x, y = A3[ok], B3[ok]
-    keep = np.ones(len(x), bool)
-    keep[1:] = (x[1:] != x[:-1]) | (y[1:] != y[:-1])
-    return x[keep], y[keep]
+    from scipy.sparse.csgraph import dijkstra
+
+    k = len(pts)
+    if need is None:
+        need = ~np.eye(k, dtype=bool)
+    out = np.full((k, k), np.inf)
+    if not need.any():
+        return out
+    many = k >= MANY_DOORS
+    lab, n, cen = _block_components(mask, f)
+    nb = len(lab[f::f])
+    pairs = _touching(lab[f - 1::f][:nb], lab[f::f])
+    right = np.ascontiguousarray(lab[:, f::f].T)  # the columns at the blocks' edges, as rows
+    left = np.ascontiguousarray(lab[:, f - 1::f][:, :len(right)].T)
+    pairs += [p[:, ::-1] for p in _touching(left, right)]
+    if many and f > 1:  # open floor merged: pieces -> their nodes
+        node, cen = _merged_nodes(mask, lab, n, cen, f)
+        E = node[np.concatenate(pairs)]
+        E = E[E[:, 0] != E[:, 1]]
+        pairs = [E]
+        n = len(cen) - 1
+        lab_node = lambda v: node[v]  # noqa: E731
+    else:
+        lab_node = lambda v: v  # noqa: E731
+    su, sv = [], []
+    for i, (pr, pc) in enumerate(pts):
+        r, c = int(pr), int(pc)
+        near = lab[max(r - 1, 0):r + 2, max(c - 1, 0):c + 2].ravel()
+        near = lab_node(near[near > 0])
+        su.append(np.full(len(near), n + 1 + i))
+        sv.append(near)
+    E = np.concatenate(pairs + [np.stack([np.concatenate(su), np.concatenate(sv)], 1)]).astype(np.int32)
+    pr = np.concatenate([cen[:, 0], pts[:, 0]])
+    pc = np.concatenate([cen[:, 1], pts[:, 1]])
+    A = _travel_matrix(E, n + 1 + k, lambda u, v: _octile(pr[u] - pr[v], pc[u] - pc[v]) + 1e-9, both_ways=many)
+    if not many:  # a few doors: one search from each door with a pair i < j to find
+        rows = np.nonzero(np.triu(need, 1).any(axis=1))[0]
+        out[rows] = dijkstra(A, directed=False, indices=n + 1 + rows)[:, n + 1:]
+        return out
+    for i, targets, limit in _search_plan(need, pts, f):
+        got = dijkstra(A, directed=True, indices=n + 1 + i, limit=limit)[n + 1 + targets]
+        if np.isinf(got).any():  # beyond the limit (or unreachable): search the whole room
+            got = dijkstra(A, directed=True, indices=n + 1 + i)[n + 1 + targets]
+        out[i, targets] = out[targets, i] = got
+    return out
 
 
-class _MapTravel:
-    """The coarse travel graph of several rooms at once, built in one pass over their window.
+def _travel_matrix(E, m, length, *, both_ways):
+    """The (m, m) CSR matrix joining each pair of rows of ``E`` ((e, 2) ints, repeats allowed) by
+    ``length(u, v)`` (arrays of node indices -> lengths), one entry per pair.
 
-    Parameters
-    ----------
-    ctx : _Ctx
-    rooms : iterable of int
-        The rooms to measure (each with at least two doors).
-    f : int
-        Block side (cells), :func:`_coarse_factor`.
-
-    Notes
-    -----
-    The window (the rooms' boxes with their doors, one cell around) is
-    aligned on the map's grid of ``f`` x ``f`` blocks, so a room's graph does
-    not depend on which other rooms are measured with it. In every block:
-
-    * a block holding cells of two rooms is *mixed*; its cells with an
-      8-neighbour of another room inside the block are nodes on their own;
-    * the other cells of a block form its pieces (8-connected, of one room
-      each, :func:`_block_components`), nodes at their centroids; aligned 2 x 2
-      groups of open floor are merged (:func:`_merged_nodes`);
-    * a door's cells that belong to the other room it joins (or to a room
-      another door of the room joins) are nodes of the room on their own.
-
-    Two nodes of the same room are joined when any of their cells are
-    8-neighbours, by the octile distance between their positions; each door
-    cell by the octile distance to the nodes of the room in its 3 x 3
-    neighbourhood. Nodes are numbered room by room, so each room's graph is
-    a slice of one sparse matrix.
+    With ``both_ways`` every pair is entered in both directions, to be searched as a directed
+    graph (:func:`scipy.sparse.csgraph.dijkstra` with ``directed=True``: faster than an undirected
+    search, which scans every node's row and its column, when there are several searches);
+    otherwise once, to be searched with ``directed=False``.
     """
+    from scipy.sparse import coo_matrix
 
-    def __init__(self, ctx, rooms, f):
-        self.ctx, self.f = ctx, f
-        rooms = sorted(set(int(r) for r in rooms))
-        H, W = ctx.shape
-        boxes = []
-        for r in rooms:
-            box = ctx.room_bbox(r)
-            rows, cols = ([box[0], box[1] - 1], [box[2], box[3] - 1]) if box else ([], [])
-            for d in ctx.doors_of(r):
-                rr, cc = ctx.door_cells(d)
-                rows += [rr.min(), rr.max()]
-                cols += [cc.min(), cc.max()]
-            if rows:
-                boxes.append((min(rows) - 1, max(rows) + 2, min(cols) - 1, max(cols) + 2))
-        self.rooms, self.px, self.extra = rooms, {}, {}
-        if not boxes:
-            self.win, self.L = (0, 0, 0, 0), np.zeros((0, 0), np.int32)
-            return
-        b = np.array(boxes)
-        r0, c0 = max(int(b[:, 0].min()) // f * f, 0), max(int(b[:, 2].min()) // f * f, 0)
-        r1, c1 = min(-(-int(b[:, 1].max()) // f) * f, H), min(-(-int(b[:, 3].max()) // f) * f, W)
-        self.win = (r0, r1, c0, c1)
-        L = np.asarray(ctx.labels_in(self.win))
-        if L.size and L.min() < 0:
-            L = np.where(L > 0, L, 0)
-        self.L = L = L.astype(np.int32, copy=False)
-        h, w = L.shape
-        # the doors of each room: their cells on the room or on a room one of its doors joins
-        singles = []  # (room, row, col): cells that are nodes on their own
-        side_r, side_d, allowed = [], [], []
-        for r in rooms:
-            doors = ctx.doors_of(r)
-            side_r += [r] * len(doors)
-            side_d += doors
-            allowed += [(r, x) for x in {r} | {x for d in doors for x in ctx.doors[d][:2]}]
-        lines = [ctx.door_cells(d) for d in side_d]
-        n_at = np.array([len(rr) for rr, _ in lines])
-        side = np.repeat(np.arange(len(side_d)), n_at)
-        rr = np.concatenate([rr for rr, _ in lines]) - r0
-        cc = np.concatenate([cc for _, cc in lines]) - c0
-        sr = np.array(side_r, np.int64)[side]
-        lab_at = L[rr, cc].astype(np.int64)
-        K = int(max(L.max(), max(rooms))) + 1
-        ok = np.isin(sr * K + lab_at, np.array([a * K + b for a, b in allowed], np.int64))
-        side, sr, rr, cc, lab_at = side[ok], sr[ok], rr[ok], cc[ok], lab_at[ok]
-        mid = np.array([[(ctx.doors[d][2][0] + ctx.doors[d][3][0]) / 2 - r0,
-                         (ctx.doors[d][2][1] + ctx.doors[d][3][1]) / 2 - c0] for d in side_d]).reshape(-1, 2)
-        dist = (rr - mid[side, 0]) ** 2 + (cc - mid[side, 1]) ** 2
-        # each side's cell closest to the door's midpoint (the first of equals along the segment)
-        order = np.lexsort((np.arange(len(side)), dist, side))
-        first = order[np.concatenate([[True], side[order][1:] != side[order][:-1]])] if len(order) else order
-        for t in first:
-            self.px.setdefault(side_r[side[t]], {})[side_d[side[t]]] = (int(rr[t]), int(cc[t]))
-        other = lab_at != sr  # door cells of another room: nodes of this room on their own
-        xkey = np.unique(sr[other] * (h * w) + rr[other] * w + cc[other])
-        xr_, xflat = xkey // (h * w), xkey % (h * w)
-        for r in rooms:
-            self.px.setdefault(r, {})
-            lo, hi = np.searchsorted(xr_, [r, r + 1])
-            self.extra[r] = xflat[lo:hi]
-        singles.append(np.stack([xr_, xflat // w, xflat % w], 1))
-        # blocks: the labels padded to whole blocks; mixed blocks and their cells next to another room
-        Hb, Wb = -(-h // f), -(-w // f)
-        Lp = np.zeros((Hb * f, Wb * f), np.int32)
-        Lp[:h, :w] = L
-        bmax = _block_reduce(Lp, f, np.maximum)
-        bmin = _block_reduce(Lp.view(np.uint32) - np.uint32(1), f, np.minimum).astype(np.int64) + 1
-        mixed = (bmax > 0) & (bmin < bmax)  # (bmin of a block without free cells wraps to 0)
-        pick = np.zeros(K, np.uint8)  # the rooms measured
-        pick[rooms] = 1
-        m = lookup(pick, Lp).view(bool) if Lp.size else np.zeros(Lp.shape, bool)
-        MR, MC = np.nonzero(mixed)
-        if MR.size:
-            S = Lp.reshape(Hb, f, Wb, f)[MR, :, MC, :]  # (K, f, f)
-            P = np.zeros((len(MR), f + 2, f + 2), np.int32)
-            P[:, 1:-1, 1:-1] = S
-            edge = np.zeros(S.shape, bool)
-            for dr in (0, 1, 2):
-                for dc in (0, 1, 2):
-                    nb = P[:, dr:dr + f, dc:dc + f]
-                    edge |= (nb > 0) & (nb != S)
-            edge &= pick[S].view(bool)
-            k, i, j = np.nonzero(edge)
-            er, ec = MR[k] * f + i, MC[k] * f + j
-            m[er, ec] = False
-            singles.append(np.stack([Lp[er, ec], er, ec], 1))
-        lab, n, cen, whole = _block_components(m, f, with_full=True)
-        proom = np.zeros(n + 1, np.int64)  # the room of every piece
-        br = np.clip(np.floor(cen[1:, 0] / f).astype(np.int64), 0, Hb - 1)
-        bc = np.clip(np.floor(cen[1:, 1] / f).astype(np.int64), 0, Wb - 1)
-        proom[1:] = bmax[br, bc]
-        if MR.size:
-            ml = lab.reshape(Hb, f, Wb, f)[MR, :, MC, :]
-            on = ml > 0
-            proom[ml[on]] = S[on]
-        # pieces touching across block edges (of one room), then open floor merged
-        nb_ = len(lab[f::f])
-        x1, y1 = _touching(lab[f - 1::f][:nb_], lab[f::f])
-        right = np.ascontiguousarray(lab[:, f::f].T)  # the columns at the blocks' edges, as rows
-        left = np.ascontiguousarray(lab[:, f - 1::f][:, :len(right)].T)
-        x2, y2 = _touching(left, right)
-        eu, ev = np.concatenate([x1, x2]), np.concatenate([y1, y2])
-        same = proom[eu] == proom[ev]
-        full = np.where(whole, bmax, 0) if f > 1 else np.zeros((Hb, Wb), np.int32)
-        node, cen = _merged_nodes(full, lab, n, cen, f)
-        nroom = np.zeros(len(cen), np.int64)
-        nroom[node] = proom
-        us, vs = [node[eu[same]]], [node[ev[same]]]
-        npc = len(cen)  # merged pieces 0..npc-1 (0 unused)
-        # single cells, then the door cells
-        Sg = np.concatenate(singles).astype(np.int64)
-        skey = Sg[:, 0] * (h * w) + Sg[:, 1] * w + Sg[:, 2]
-        o = np.argsort(skey)
-        skey = skey[o]
-        firsts = np.concatenate([[True], skey[1:] != skey[:-1]]) if len(skey) else np.zeros(0, bool)
-        skey, Sg = skey[firsts], Sg[o][firsts]
-        ids = [(r, d) for r in rooms for d in sorted(self.px[r])]
-        Pt = np.array([(r,) + self.px[r][d] for r, d in ids], np.int64).reshape(-1, 3)
-        ns, nq = len(Sg), len(Pt)
-        pos = np.concatenate([cen, Sg[:, 1:].astype(float), Pt[:, 1:].astype(float)])
-        room_of = np.concatenate([nroom, Sg[:, 0], Pt[:, 0]])
-
-        def around(src, R, rr, cc, offsets):
-            """Join nodes ``src`` (of rooms ``R``, at cells ``rr, cc``) to the nodes of their rooms at
-            the cells ``offsets`` away: the pieces there, and the single cells."""
-            for dr, dc in offsets:
-                qr, qc = rr + dr, cc + dc
-                ok = (qr >= 0) & (qr < h) & (qc >= 0) & (qc < w)
-                s_, R_, qr, qc = src[ok], R[ok], qr[ok], qc[ok]
-                t = lab[qr, qc]
-                hit = (t > 0) & (proom[t] == R_)
-                us.append(s_[hit])
-                vs.append(node[t[hit]])
-                if len(skey):
-                    key = R_ * (h * w) + qr * w + qc
-                    at = np.minimum(np.searchsorted(skey, key), len(skey) - 1)
-                    hit = skey[at] == key
-                    us.append(s_[hit])
-                    vs.append(npc + at[hit])
-
-        ring = [(dr, dc) for dr in (-1, 0, 1) for dc in (-1, 0, 1) if dr or dc]
-        around(npc + np.arange(ns), Sg[:, 0], Sg[:, 1], Sg[:, 2], ring)
-        around(npc + ns + np.arange(nq), Pt[:, 0], Pt[:, 1], Pt[:, 2], ring + [(0, 0)])
-        # number the nodes room by room, then one sparse matrix
-        order = np.argsort(room_of[1:] * len(room_of) + np.arange(1, len(room_of))) + 1
-        new = np.empty(len(room_of), np.int64)
-        new[order] = np.arange(len(order))
-        new[0] = -1
-        eu, ev = new[np.concatenate(us)], new[np.concatenate(vs)]
-        loop = eu != ev
-        px, pc = pos[order, 0], pos[order, 1]
-        self.A = _symmetric_graph(eu[loop], ev[loop], len(order),
-                                  lambda u, v: _octile(px[u] - px[v], pc[u] - pc[v]) + 1e-9)
-        rs = room_of[order]
-        self.span = {r: (int(np.searchsorted(rs, r)), int(np.searchsorted(rs, r, side="right"))) for r in rooms}
-        self.node = {rd: int(new[npc + ns + i]) for i, rd in enumerate(ids)}
-
-    def door_distances(self, r):
-        """``{(door_i, door_j): metres}`` between room ``r``'s doors (``i < j``, reachable pairs only)."""
-        from scipy.sparse import csr_matrix
-        from scipy.sparse.csgraph import dijkstra
-
-        px = self.px.get(r, {})
-        ids = sorted(px)
-        if len(ids) < 2:
-            return {}
-        L, f, extra = self.L, self.f, self.extra[r]
-        w = L.shape[1]
-        pts = np.array([px[d] for d in ids], float)
-
-        def on(rr, cc):
-            ok = L[rr, cc] == r
-            return ok | np.isin(rr * w + cc, extra) if len(extra) else ok
-
-        def window(r0, r1, c0, c1):
-            out = L[r0:r1, c0:c1] == r
-            er, ec = extra // w, extra % w
-            sel = (er >= r0) & (er < r1) & (ec >= c0) & (ec < c1)
-            out[er[sel] - r0, ec[sel] - c0] = True
-            return out
-
-        lo, hi = self.span[r]
-        A = self.A
-        a, b = A.indptr[lo], A.indptr[hi]
-        sub = csr_matrix((A.data[a:b], A.indices[a:b] - lo, A.indptr[lo:hi + 1] - a), shape=(hi - lo, hi - lo))
-        at = np.array([self.node[(r, d)] - lo for d in ids])
-
-        def search(need):
-            out = np.full(need.shape, np.inf)
-            for i, targets, limit in _search_plan(need, pts, f):
-                got = dijkstra(sub, directed=True, indices=at[i], limit=limit)[at[targets]]
-                if np.isinf(got).any():  # beyond the limit (or unreachable): search the whole room
-                    got = dijkstra(sub, directed=True, indices=at[i])[at[targets]]
-                out[i, targets] = out[targets, i] = got
-            return out
-
-        D = _door_pairs(pts, f, on, window, L.shape, search)
-        res = self.ctx.res
-        return {(ids[i], ids[j]): float(D[i, j]) * res
-                for i in range(len(ids)) for j in range(i + 1, len(ids)) if np.isfinite(D[i, j])}
-
-
-def _symmetric_graph(u, v, m, length):
-    """The (m, m) CSR matrix joining both ways each pair ``(u[i], v[i])`` (node indices, repeats
-    allowed, no loops) by ``length(u, v)`` (arrays of node indices -> lengths), one entry per pair.
-
-    Searched as a directed graph (:func:`scipy.sparse.csgraph.dijkstra` with ``directed=True``;
-    an undirected search scans every node's row and its column).
-    """
-    from scipy.sparse import csr_matrix
-
-    u, v = np.asarray(u, np.int64), np.asarray(v, np.int64)
-    keys = np.concatenate([u * m + v, v * m + u])
-    keys.sort()
-    if len(keys):
-        keys = keys[np.concatenate([[True], keys[1:] != keys[:-1]])]
-    u, v = np.divmod(keys, m)
-    indptr = np.concatenate([[0], np.cumsum(np.bincount(u, minlength=m))])
-    return csr_matrix((length(u, v).astype(float), v.astype(np.int32), indptr.astype(np.int32)), shape=(m, m))
+    rows, cols = (np.concatenate([E[:, 0], E[:, 1]]), np.concatenate([E[:, 1], E[:, 0]])) if both_ways else E.T
+    # one entry per pair (the sparse matrix merges repeats), then its length
+    A = coo_matrix((np.ones(len(rows), np.float32), (rows, cols)), shape=(m, m)).tocsr()
+    u = np.repeat(np.arange(m), np.diff(A.indptr))
+    A.data = length(u, A.indices).astype(float)
+    return A
 
 
 #: A search from a door is stopped beyond this factor times the octile distance to its farthest
@@ -807,34 +615,38 @@ def _search_plan(need, pts, f):
 _WINDOW_SLACK = 1.1
 
 
-def _in_sight(on, pts):
-    """(k, k) bool: the digital straight line between two points runs on traversable cells only.
+def _in_sight(mask, pts):
+    """(k, k) bool: the digital straight line between two points runs on ``mask`` cells only.
 
-    ``on(rows, cols)`` tells which cells are traversable (a bool array). The
-    line from ``p`` to ``q`` takes ``n = max(|dr|, |dc|)`` steps, step ``t``
-    at ``p + round(t (q - p) / n)``: one cell along the longer axis and 0 or
-    1 along the other each step, so it is a shortest 8-connected path and the
-    map-grid geodesic between two points in sight is exactly their octile
-    distance. All pairs are tested together: first :data:`_SIGHT_PROBES`
-    cells of each line, then every cell of the lines that passed, in batches
-    of at most :data:`_SIGHT_BATCH` cells.
+    A digital straight line from ``p`` to ``q`` takes ``n = max(|dr|, |dc|)``
+    steps, one cell along the longer axis and 0 or 1 along the other each
+    step, so it is a shortest 8-connected path and the map-grid geodesic
+    between two points in sight is exactly their octile distance. Fewer than
+    :data:`MANY_DOORS` points: Bresenham's line
+    (:func:`skimage.draw.line`), pair by pair. More: step ``t`` at ``p +
+    round(t (q - p) / n)``, all pairs together, first
+    :data:`_SIGHT_PROBES` cells of each line, then every cell of the lines
+    that passed, in batches of at most :data:`_SIGHT_BATCH` cells.
     """
     k = len(pts)
     out = np.zeros((k, k), bool)
     if k < 2:
         return out
     p = np.asarray(pts).astype(np.int64)
-    if k <= 3:  # a few pairs: each whole line at once
+    flat = np.ascontiguousarray(mask).ravel()
+    w = mask.shape[1]
+    if k < MANY_DOORS:  # a few pairs: Bresenham's line (skimage.draw.line) pair by pair
+        from skimage.draw import line
+
         for i in range(k - 1):
             for j in range(i + 1, k):
-                n = int(np.abs(p[j] - p[i]).max())
-                t = np.arange(n + 1)[None, :]
-                out[i, j] = out[j, i] = bool(on(*_line_cells(p[i:i + 1], p[j:j + 1], np.array([n]), t)).all())
+                rr, cc = line(p[i, 0], p[i, 1], p[j, 0], p[j, 1])
+                out[i, j] = out[j, i] = bool(mask[rr, cc].all())
         return out
     I, J = np.triu_indices(k, 1)
     steps = np.abs(p[J] - p[I]).max(axis=1)
     probe = np.floor(np.linspace(0, 1, _SIGHT_PROBES)[None, :] * steps[:, None] + 0.5).astype(np.int64)
-    keep = np.nonzero(on(*_line_cells(p[I], p[J], steps, probe)).all(axis=1))[0]
+    keep = np.nonzero(_line_cells(flat, w, p[I], p[J], steps, probe).all(axis=1))[0]
     ends = np.cumsum(steps[keep] + 1)
     lo = 0
     while lo < len(keep):  # the whole lines of the pairs that passed
@@ -844,19 +656,20 @@ def _in_sight(on, pts):
         start = np.concatenate([[0], np.cumsum(n)[:-1]])
         pair = np.repeat(np.arange(len(b)), n)
         t = (np.arange(int(n.sum())) - start[pair])[:, None]
-        ok = np.logical_and.reduceat(on(*_line_cells(p[I[b]][pair], p[J[b]][pair], steps[b][pair], t))[:, 0], start)
+        on = _line_cells(flat, w, p[I[b]][pair], p[J[b]][pair], steps[b][pair], t)[:, 0]
+        ok = np.logical_and.reduceat(on, start)
         out[I[b[ok]], J[b[ok]]] = True
         lo = hi
     return out | out.T
 
 
-def _line_cells(a, b, steps, t):
-    """``(rows, cols)``, each (m, s): step ``t`` (m, s) of the lines ``a`` -> ``b`` ((m, 2) ``(row, col)``,
-    ``steps`` (m,) = their longer axis' length), as in :func:`_in_sight`."""
+def _line_cells(flat, w, a, b, steps, t):
+    """``flat[...]`` (the raveled mask, ``w`` columns) at step ``t`` (m, s) of the lines ``a`` -> ``b``
+    ((m, 2) ``(row, col)``, ``steps`` (m,) = their longer axis' length), as in :func:`_in_sight`."""
     frac = t / np.maximum(steps, 1)[:, None]
     rr = a[:, :1] + np.floor(frac * (b[:, :1] - a[:, :1]) + 0.5).astype(np.int64)
     cc = a[:, 1:] + np.floor(frac * (b[:, 1:] - a[:, 1:]) + 0.5).astype(np.int64)
-    return rr, cc
+    return flat[rr * w + cc]
 
 
 #: Cells of each line (evenly spread, both ends included) :func:`_in_sight` tests before the whole line.
@@ -865,20 +678,18 @@ _SIGHT_PROBES = 9
 _SIGHT_BATCH = 1 << 20
 
 
-def _windowed_distances(window, shape, pts, i, near, bound, f):
-    """Exact distances (cells) from point ``i`` to points ``near``, searched in a window.
+def _windowed_distances(mask, pts, i, near, bound, f):
+    """Exact distances (cells) from point ``i`` to points ``near`` on ``mask``, searched in a window.
 
-    ``window(r0, r1, c0, c1)`` gives the traversable cells (bool) of a window
-    of the frame ``shape`` the points ``pts`` are given in. A path of length
-    at most ``L`` between two points stays inside the ellipse with the two
-    points as foci and ``L`` as the sum of the distances to them, so inside
-    their bounding box padded by ``(L - |pq|) / 2``; the window is the union
-    of these boxes for ``L`` = :data:`_WINDOW_SLACK` x the coarse distance
-    ``bound`` + 2 ``f``. Where the window holds no path, the coarse distance
-    is kept.
+    A path of length at most ``L`` between two points stays inside the
+    ellipse with the two points as foci and ``L`` as the sum of the
+    distances to them, so inside their bounding box padded by ``(L - |pq|) /
+    2``; the window is the union of these boxes for ``L`` =
+    :data:`_WINDOW_SLACK` x the coarse distance ``bound`` + 2 ``f``. Where the
+    window holds no path, the coarse distance is kept.
     """
     p = pts[[i] + list(near)]
-    h, w = shape
+    h, w = mask.shape
     L = np.where(np.isfinite(bound), bound, max(h, w) * 2.0) * _WINDOW_SLACK + 2 * f
     pad = np.ceil(np.maximum(L - np.hypot(*(p[1:] - p[0]).T), 0) / 2) + 1
     r0 = max(int(np.min(np.minimum(p[0, 0], p[1:, 0]) - pad)), 0)
@@ -886,31 +697,9 @@ def _windowed_distances(window, shape, pts, i, near, bound, f):
     r1 = min(int(np.max(np.maximum(p[0, 0], p[1:, 0]) + pad)) + 1, h)
     c1 = min(int(np.max(np.maximum(p[0, 1], p[1:, 1]) + pad)) + 1, w)
     loc = [(int(r) - r0, int(c) - c0) for r, c in p]
-    cum = _mcp_costs(window(r0, r1, c0, c1), loc[:1], loc[1:])
+    cum = _mcp_costs(mask[r0:r1, c0:c1], loc[:1], loc[1:])
     got = np.array([cum[t] for t in loc[1:]], float)
     return np.where(np.isfinite(got), got, bound)
-
-
-def _door_pairs(pts, f, on, window, shape, search):
-    """(k, k) distances (cells) between the door cells ``pts`` ((k, 2) ``(row, col)``) of one room.
-
-    Doors in sight of each other (:func:`_in_sight` with ``on``) get their
-    octile distance; ``search(need)`` ((k, k) bool: the pairs out of sight)
-    gives the coarse distances of the others; pairs closer than
-    :data:`REFINE_CELLS` ``f`` are measured again exactly
-    (:func:`_windowed_distances` with ``window``, ``shape``).
-    """
-    seen = _in_sight(on, pts)
-    need = ~seen
-    np.fill_diagonal(need, False)
-    D = search(need) if need.any() else np.full(seen.shape, np.inf)
-    D[seen] = _octile(*(pts[:, None, :] - pts[None, :, :]).transpose(2, 0, 1))[seen]
-    short = REFINE_CELLS * f
-    for i in range(len(pts)):
-        near = [j for j in range(i + 1, len(pts)) if D[i, j] < short and not seen[i, j]]
-        if near:
-            D[i, near] = _windowed_distances(window, shape, pts, i, near, D[i, near], f)
-    return D
 
 
 # --------------------------------------------------------------------------
@@ -1021,24 +810,7 @@ def room_distances(seg_or_G, room: int, *, exact: bool = False) -> dict:
 def _room_distances(ctx, room, exact=False):
     if len(ctx.doors_of(room)) < 2:
         return {}
-    return _distances(ctx, [room], exact=exact)[room]
-
-
-def _distances(ctx, rooms, *, exact=False):
-    """``{room: {(door_i, door_j): metres}}`` for ``rooms`` (each with at least two doors): the exact
-    search for small rooms (or all with ``exact``), one coarse graph (:class:`_MapTravel`) for the others."""
-    out, coarse = {}, []
-    for r in rooms:
-        win = _room_window(ctx, r, ctx.doors_of(r))
-        if exact or win is None or (win[1] - win[0]) * (win[3] - win[2]) <= EXACT_CELLS:
-            out[r] = _RoomSpace(ctx, r).door_distances()
-        else:
-            coarse.append(r)
-    if coarse:
-        travel = _MapTravel(ctx, coarse, _coarse_factor(ctx.res))
-        for r in coarse:
-            out[r] = travel.door_distances(r)
-    return out
+    return _RoomSpace(ctx, room).door_distances(exact=exact)
 
 
 def travel_graph(seg_or_G, *, exact: bool = False) -> nx.MultiGraph:
@@ -1067,9 +839,8 @@ def travel_graph(seg_or_G, *, exact: bool = False) -> nx.MultiGraph:
     """
     ctx = _Ctx(seg_or_G)
     G = ctx.G.copy()
-    found = _distances(ctx, [r for r in G.nodes if len(ctx.doors_of(r)) >= 2], exact=exact)
     for r in G.nodes:
-        dist = found.get(r, {})
+        dist = _room_distances(ctx, r, exact=exact)
         G.nodes[r]["door_distances"] = tuple((int(i), int(j), float(L)) for (i, j), L in sorted(dist.items()))
     G.graph["travel_distances"] = "geodesic"
     return G
