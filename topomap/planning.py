@@ -32,32 +32,46 @@ geodesic on the map's grid (steps of 1 and √2 cells, as
 :class:`skimage.graph.MCP_Geometric`), converted to metres.
 
 Door-to-door distances (:func:`room_distances`, :func:`travel_graph`) are
-computed on a coarse grid, so that a room with many doors costs little:
+computed per room, in a window (the room's bounding box with its doors,
+one cell around):
 
-* the room's window (its bounding box with its doors) is cut into blocks of
-  ``f`` x ``f`` cells, ``f`` = :data:`TRAVEL_CELL` / resolution (4 at
-  0.05 m/px; 1, i.e. the map's grid, for windows of at most
-  :data:`EXACT_CELLS` cells);
-* a node is one connected piece of the room's cells inside one block (so a
-  wall or a piece of furniture inside a block is never crossed), placed at
-  the piece's centroid; two pieces are joined when any of their cells are
-  8-neighbours, with the octile distance between their centroids; each door
-  cell is joined to the pieces around it;
-* Dijkstra (:func:`scipy.sparse.csgraph.dijkstra`) from every door that
-  has a pair out of sight (below) gives those pairs at once; a room whose
+* a window of at most :data:`EXACT_CELLS` cells gets the map-grid geodesic
+  itself (one search per door, as ``exact=True``);
+* a larger one is cut into blocks of ``f`` x ``f`` cells, ``f`` =
+  :data:`TRAVEL_CELL` / resolution (4 at 0.05 m/px); a node is one
+  connected piece of the room's cells inside one block (so a wall or a
+  piece of furniture inside a block is never crossed), placed at the
+  piece's centroid. In a room with at least :data:`MANY_DOORS` doors, open
+  floor is coarser: each 2 x 2 group of blocks (on even block rows and
+  columns) whose four blocks and the ring of blocks around them are all
+  wholly on the room's cells is one node, at the group's centre
+  (:func:`_merged_nodes`), so walls, furniture and doors keep their 0.2 m
+  blocks;
+* two nodes are joined when any of their cells are 8-neighbours, by the
+  octile distance between their centroids; each door cell is joined to the
+  nodes of its 3 x 3 neighbourhood the same way;
+* two doors in sight of each other (a digital straight line between their
+  cells runs on the room's cells only, :func:`_in_sight`) get their octile
+  distance, which is then exactly the map-grid geodesic;
+* the other pairs come from Dijkstra (:func:`scipy.sparse.csgraph.dijkstra`)
+  on the coarse graph: with fewer than :data:`MANY_DOORS` doors one search
+  from every door that has such a pair with a later door; with more, each
+  pair is measured from one of its two doors (:func:`_search_plan`: the
+  longest pairs first, each from the door whose search already reaches
+  farther), each search stopped beyond :data:`_LIMIT_FACTOR` times the
+  octile distance to its farthest pair plus :data:`_LIMIT_CELLS` blocks, and
+  run again over the whole room if a pair lies beyond that; a room whose
   doors all see each other needs no search;
-* two doors in sight of each other (the digital straight line between
-  their cells runs on the room's cells only) get their octile distance,
-  which is then exactly the map-grid geodesic;
-* other pairs closer than :data:`REFINE_CELLS` coarse cells (3.2 m at 0.05 m/px)
-  are measured again exactly on the map's grid, in a window around the two
-  doors large enough to hold every path not much longer than the coarse
-  one.
+* pairs closer than :data:`REFINE_CELLS` blocks on the coarse graph (3.2 m
+  at 0.05 m/px) are measured again exactly on the map's grid, in a window
+  around the two doors large enough to hold every path not much longer than
+  the coarse one.
 
-On the 28 images of the ipa benchmark this stays within 5.5 % of the
-map-grid geodesic for every door pair (mean +0.5 %, 95 % of the pairs within
-1.5 %; ``benchmarks/travel_accuracy.py`` measures it) at a small fraction of
-its cost. ``exact=True`` gives the map-grid geodesic for every pair (one
+On the 28 images of the ipa benchmark (7,011 door pairs) this stays within
+5.5 % (and 0.99 m) of the map-grid geodesic for every pair (mean +0.56 %,
+95 % of the pairs within 1.7 %, 0.09 % of the pairs beyond 5 %;
+``benchmarks/travel_accuracy.py`` measures it) at a small fraction of its
+cost. ``exact=True`` gives the map-grid geodesic for every pair (one
 search per door over the whole room). The legs from a start or goal point
 to the doors of its room (:func:`plan_path`) are always measured on the
 map's grid.
@@ -499,14 +513,17 @@ def _coarse_door_distances(mask, pts, f, need=None):
 
     A node is a connected piece of the mask inside one block (so walls and
     furniture within a block are never crossed), placed at the piece's
-    centroid, except that open floor is merged into larger nodes
-    (:func:`_merged_nodes`); two nodes are joined when any of their cells are
-    8-neighbours, with the octile distance (steps of 1 and sqrt 2 cells, the
-    metric of the map-grid geodesic) between their centroids; each point
-    is joined to the nodes of its 3 x 3 neighbourhood by the octile distance
-    to their centroids. Shortest paths: Dijkstra
-    (:func:`scipy.sparse.csgraph.dijkstra`) from the points :func:`_search_plan`
-    picks, each search stopped beyond its farthest pair (see there).
+    centroid; with at least :data:`MANY_DOORS` points, open floor is merged
+    into larger nodes (:func:`_merged_nodes`). Two nodes are joined when any
+    of their cells are 8-neighbours, with the octile distance (steps of 1
+    and sqrt 2 cells, the metric of the map-grid geodesic) between their
+    centroids; each point is joined to the nodes of its 3 x 3 neighbourhood
+    by the octile distance to their centroids. Shortest paths: Dijkstra
+    (:func:`scipy.sparse.csgraph.dijkstra`), with fewer than
+    :data:`MANY_DOORS` points from every point with a pair ``i < j`` in
+    ``need`` (undirected searches; the rows of those points are filled),
+    with more from the points :func:`_search_plan` picks, each search
+    stopped beyond its farthest pair (see there).
     """
     from scipy.sparse.csgraph import dijkstra
 
