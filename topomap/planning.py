@@ -54,14 +54,8 @@ one cell around):
   cells runs on the room's cells only, :func:`_in_sight`) get their octile
   distance, which is then exactly the map-grid geodesic;
 * the other pairs come from Dijkstra (:func:`scipy.sparse.csgraph.dijkstra`)
-  on the coarse graph: with fewer than :data:`MANY_DOORS` doors one search
-  from every door that has such a pair with a later door; with more, each
-  pair is measured from one of its two doors (:func:`_search_plan`: the
-  longest pairs first, each from the door whose search already reaches
-  farther), each search stopped beyond :data:`_LIMIT_FACTOR` times the
-  octile distance to its farthest pair plus :data:`_LIMIT_CELLS` blocks, and
-  run again over the whole room if a pair lies beyond that; a room whose
-  doors all see each other needs no search;
+  on the coarse graph, one search from every door that has such a pair with
+  a later door; a room whose doors all see each other needs no search;
 * pairs closer than :data:`REFINE_CELLS` blocks on the coarse graph (3.2 m
   at 0.05 m/px) are measured again exactly on the map's grid, in a window
   around the two doors large enough to hold every path not much longer than
@@ -347,8 +341,8 @@ class _RoomSpace:
 
 
 #: Rooms with at least this many doors: open floor merged into larger travel nodes
-#: (:func:`_merged_nodes`), one search per pair planned (:func:`_search_plan`), in-sight tested
-#: for all pairs together (:func:`_in_sight`); fewer doors: the 0.2 m blocks, one search per door.
+#: (:func:`_merged_nodes`), searched on a matrix of both directions (:func:`_travel_matrix`),
+#: in-sight tested for all pairs together (:func:`_in_sight`); fewer doors: the 0.2 m blocks.
 MANY_DOORS = 6
 #: Side (m) of the coarse cells on which door-to-door distances are computed in large rooms.
 TRAVEL_CELL = 0.2
@@ -519,11 +513,10 @@ def _coarse_door_distances(mask, pts, f, need=None):
     and sqrt 2 cells, the metric of the map-grid geodesic) between their
     centroids; each point is joined to the nodes of its 3 x 3 neighbourhood
     by the octile distance to their centroids. Shortest paths: Dijkstra
-    (:func:`scipy.sparse.csgraph.dijkstra`), with fewer than
-    :data:`MANY_DOORS` points from every point with a pair ``i < j`` in
-    ``need`` (undirected searches; the rows of those points are filled),
-    with more from the points :func:`_search_plan` picks, each search
-    stopped beyond its farthest pair (see there).
+    (:func:`scipy.sparse.csgraph.dijkstra`) from every point with a pair
+    ``i < j`` in ``need`` (the rows of those points are filled); with
+    :data:`MANY_DOORS` points or more on a matrix holding both directions of
+    every edge, searched as directed (see :func:`_travel_matrix`).
     """
     from scipy.sparse.csgraph import dijkstra
 
@@ -560,15 +553,8 @@ def _coarse_door_distances(mask, pts, f, need=None):
     pr = np.concatenate([cen[:, 0], pts[:, 0]])
     pc = np.concatenate([cen[:, 1], pts[:, 1]])
     A = _travel_matrix(E, n + 1 + k, lambda u, v: _octile(pr[u] - pr[v], pc[u] - pc[v]) + 1e-9, both_ways=many)
-    if not many:  # a few doors: one search from each door with a pair i < j to find
-        rows = np.nonzero(np.triu(need, 1).any(axis=1))[0]
-        out[rows] = dijkstra(A, directed=False, indices=n + 1 + rows)[:, n + 1:]
-        return out
-    for i, targets, limit in _search_plan(need, pts, f):
-        got = dijkstra(A, directed=True, indices=n + 1 + i, limit=limit)[n + 1 + targets]
-        if np.isinf(got).any():  # beyond the limit (or unreachable): search the whole room
-            got = dijkstra(A, directed=True, indices=n + 1 + i)[n + 1 + targets]
-        out[i, targets] = out[targets, i] = got
+    rows = np.nonzero(np.triu(need, 1).any(axis=1))[0]  # one search from each door with a pair i < j
+    out[rows] = dijkstra(A, directed=many, indices=n + 1 + rows)[:, n + 1:]
     return out
 
 
@@ -589,42 +575,6 @@ def _travel_matrix(E, m, length, *, both_ways):
     u = np.repeat(np.arange(m), np.diff(A.indptr))
     A.data = length(u, A.indices).astype(float)
     return A
-
-
-#: A search from a door is stopped beyond this factor times the octile distance to its farthest
-#: pair (plus :data:`_LIMIT_CELLS` coarse cells); a pair found beyond it is searched again in the whole room.
-_LIMIT_FACTOR = 1.6
-_LIMIT_CELLS = 4
-
-
-def _search_plan(need, pts, f):
-    """The searches that give the pairs ``need`` ((k, k) bool, symmetric) of the points ``pts``.
-
-    Each pair is measured from one of its two points: the pairs longest (in octile distance)
-    first, each from the end whose search already reaches farther (so a search from a door
-    near the middle of a corridor does not run to both ends). Returns ``(i, targets,
-    limit)`` triples: a search from point ``i`` up to ``limit`` (cells; :data:`_LIMIT_FACTOR`
-    x the octile distance to its farthest target + :data:`_LIMIT_CELLS` ``f``) gives
-    ``targets``.
-    """
-    I, J = np.nonzero(np.triu(need, 1))
-    est = _octile(*(pts[I] - pts[J]).T)
-    reach = np.full(len(pts), -1.0)
-    ecc = np.zeros(len(pts))  # the longest pair of each point: a tie goes to the point with the shorter
-    np.maximum.at(ecc, I, est)
-    np.maximum.at(ecc, J, est)
-    src = np.empty(len(I), np.intp)
-    for t in np.argsort(-est, kind="stable"):
-        i, j = I[t], J[t]
-        s = i if (reach[i], -ecc[i]) >= (reach[j], -ecc[j]) else j
-        src[t] = s
-        reach[s] = max(reach[s], est[t])
-    plan = []
-    for s in np.unique(src):
-        sel = src == s
-        targets = np.where(I[sel] == s, J[sel], I[sel])
-        plan.append((int(s), targets, float(_LIMIT_FACTOR * est[sel].max() + _LIMIT_CELLS * f)))
-    return plan
 
 
 #: Slack of the refinement windows: a path up to this factor (plus two coarse cells) longer
