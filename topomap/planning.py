@@ -32,32 +32,40 @@ geodesic on the map's grid (steps of 1 and √2 cells, as
 :class:`skimage.graph.MCP_Geometric`), converted to metres.
 
 Door-to-door distances (:func:`room_distances`, :func:`travel_graph`) are
-computed on a coarse grid, so that a room with many doors costs little:
+computed per room, in a window (the room's bounding box with its doors,
+one cell around):
 
-* the room's window (its bounding box with its doors) is cut into blocks of
-  ``f`` x ``f`` cells, ``f`` = :data:`TRAVEL_CELL` / resolution (4 at
-  0.05 m/px; 1, i.e. the map's grid, for windows of at most
-  :data:`EXACT_CELLS` cells);
-* a node is one connected piece of the room's cells inside one block (so a
-  wall or a piece of furniture inside a block is never crossed), placed at
-  the piece's centroid; two pieces are joined when any of their cells are
-  8-neighbours, with the octile distance between their centroids; each door
-  cell is joined to the pieces around it;
-* Dijkstra (:func:`scipy.sparse.csgraph.dijkstra`) from every door that
-  has a pair out of sight (below) gives those pairs at once; a room whose
-  doors all see each other needs no search;
-* two doors in sight of each other (the digital straight line between
-  their cells runs on the room's cells only) get their octile distance,
-  which is then exactly the map-grid geodesic;
-* other pairs closer than :data:`REFINE_CELLS` coarse cells (3.2 m at 0.05 m/px)
-  are measured again exactly on the map's grid, in a window around the two
-  doors large enough to hold every path not much longer than the coarse
-  one.
+* a window of at most :data:`EXACT_CELLS` cells gets the map-grid geodesic
+  itself (one search per door, as ``exact=True``);
+* a larger one is cut into blocks of ``f`` x ``f`` cells, ``f`` =
+  :data:`TRAVEL_CELL` / resolution (4 at 0.05 m/px); a node is one
+  connected piece of the room's cells inside one block (so a wall or a
+  piece of furniture inside a block is never crossed), placed at the
+  piece's centroid. In a room with at least :data:`MANY_DOORS` doors, open
+  floor is coarser: each 2 x 2 group of blocks (on even block rows and
+  columns) whose four blocks and the ring of blocks around them are all
+  wholly on the room's cells is one node, at the group's centre
+  (:func:`_merged_nodes`), so walls, furniture and doors keep their 0.2 m
+  blocks;
+* two nodes are joined when any of their cells are 8-neighbours, by the
+  octile distance between their centroids; each door cell is joined to the
+  nodes of its 3 x 3 neighbourhood the same way;
+* two doors in sight of each other (a digital straight line between their
+  cells runs on the room's cells only, :func:`_in_sight`) get their octile
+  distance, which is then exactly the map-grid geodesic;
+* the other pairs come from Dijkstra (:func:`scipy.sparse.csgraph.dijkstra`)
+  on the coarse graph, one search from every door that has such a pair with
+  a later door; a room whose doors all see each other needs no search;
+* pairs closer than :data:`REFINE_CELLS` blocks on the coarse graph (3.2 m
+  at 0.05 m/px) are measured again exactly on the map's grid, in a window
+  around the two doors large enough to hold every path not much longer than
+  the coarse one.
 
-On the 28 images of the ipa benchmark this stays within 5.5 % of the
-map-grid geodesic for every door pair (mean +0.5 %, 95 % of the pairs within
-1.5 %; ``benchmarks/travel_accuracy.py`` measures it) at a small fraction of
-its cost. ``exact=True`` gives the map-grid geodesic for every pair (one
+On the 28 images of the ipa benchmark (7,011 door pairs) this stays within
+5.5 % (and 0.99 m) of the map-grid geodesic for every pair (mean +0.56 %,
+95 % of the pairs within 1.7 %, 0.09 % of the pairs beyond 5 %;
+``benchmarks/travel_accuracy.py`` measures it) at a small fraction of its
+cost. ``exact=True`` gives the map-grid geodesic for every pair (one
 search per door over the whole room). The legs from a start or goal point
 to the doors of its room (:func:`plan_path`) are always measured on the
 map's grid.
@@ -307,7 +315,7 @@ class _RoomSpace:
         ids = sorted(self.door_px)
         if len(ids) < 2:
             return {}
-        if exact:  # the reference: one search per door on the map's grid
+        if exact or self.mask.size <= EXACT_CELLS:  # the reference: one search per door on the map's grid
             out = {}
             for i, di in enumerate(ids[:-1]):
                 rest = ids[i + 1:]
@@ -315,13 +323,12 @@ class _RoomSpace:
                     if np.isfinite(L):
                         out[(di, dj)] = L
             return out
-        f = 1 if self.mask.size <= EXACT_CELLS else _coarse_factor(self.ctx.res)
+        f = _coarse_factor(self.ctx.res)
         pts = np.array([self.door_px[d] for d in ids], float)
-        k = len(ids)
-        seen = _in_sight(self.mask, pts) if f > 1 else np.zeros((k, k), bool)
-        # the coarse search only from the doors with a pair i < j out of sight (none: no search)
-        sources = [i for i in range(k - 1) if not seen[i, i + 1:].all()]
-        D = _coarse_door_distances(self.mask, pts, f, sources)
+        seen = _in_sight(self.mask, pts) if f > 1 else np.zeros((len(ids), len(ids)), bool)
+        need = ~seen  # the coarse search only for the pairs out of sight (none: no search)
+        np.fill_diagonal(need, False)
+        D = _coarse_door_distances(self.mask, pts, f, need)
         D[seen] = _octile(*(pts[:, None, :] - pts[None, :, :]).transpose(2, 0, 1))[seen]
         short = REFINE_CELLS * f if f > 1 else 0
         for i in range(len(ids)):
@@ -333,6 +340,10 @@ class _RoomSpace:
                 for i in range(len(ids)) for j in range(i + 1, len(ids)) if np.isfinite(D[i, j])}
 
 
+#: Rooms with at least this many doors: open floor merged into larger travel nodes
+#: (:func:`_merged_nodes`), searched on a matrix of both directions (:func:`_travel_matrix`),
+#: in-sight tested for all pairs together (:func:`_in_sight`); fewer doors: the 0.2 m blocks.
+MANY_DOORS = 6
 #: Side (m) of the coarse cells on which door-to-door distances are computed in large rooms.
 TRAVEL_CELL = 0.2
 #: Rooms (their window: bounding box of the room and its doors) of at most this many cells get
@@ -411,6 +422,54 @@ def _block_components(mask, f):
     return lab[:h, :w], n - 1, cen
 
 
+def _merged_nodes(mask, lab, n, cen, f):
+    """Merge each aligned 2 x 2 group of blocks inside the fully free part of ``mask`` into one node.
+
+    A block is fully free when all its ``f`` x ``f`` cells are on the mask; a group of 2 x 2
+    blocks (aligned on even block rows and columns) is merged when its blocks and the ring of
+    blocks around them are all fully free, so paths along walls, around furniture and into
+    doors keep the blocks' own nodes, and only open floor is crossed on the coarser grid.
+
+    Parameters
+    ----------
+    mask : (h, w) bool ndarray
+        The room's cells.
+    lab, n, cen
+        The block pieces of ``mask`` (:func:`_block_components`).
+    f : int
+        Block side (cells).
+
+    Returns
+    -------
+    node : (n + 1,) int ndarray
+        The node (``1..m``; 0 for label 0) of every piece.
+    cen : (m + 1, 2) float ndarray
+        The ``(row, col)`` centroids of the nodes (the mean of their cells; row 0 unused).
+    """
+    node = np.arange(n + 1)
+    h, w = mask.shape
+    H, W = h // f, w // f  # the whole blocks (a window's last, partial blocks are never fully free)
+    if H < 4 or W < 4:
+        return node, cen
+    full = np.zeros((H + 2, W + 2), bool)  # blocks wholly on the mask, in a ring of blocks that are not
+    full[1:-1, 1:-1] = ~_block_any(~np.ascontiguousarray(mask[:H * f, :W * f]), f)
+    inner = full[1:-1, 1:-1].copy()  # full, with its 8 neighbours full
+    for dr in (0, 1, 2):
+        for dc in (0, 1, 2):
+            inner &= full[dr:dr + H, dc:dc + W]
+    H2, W2 = H // 2, W // 2
+    GR, GC = np.nonzero(inner[:2 * H2, :2 * W2].reshape(H2, 2, W2, 2).all(axis=(1, 3)))
+    if GR.size == 0:
+        return node, cen
+    # a full block holds one piece; the group's pieces become the first one's node, at the group's centre
+    members = lab[:2 * H2 * f:f, :2 * W2 * f:f].reshape(H2, 2, W2, 2)[GR, :, GC, :].reshape(GR.size, 4)
+    node[members] = members[:, :1]
+    cen = cen.copy()
+    cen[members[:, 0]] = np.stack([(GR + 0.5) * 2 * f - 0.5, (GC + 0.5) * 2 * f - 0.5], 1)
+    used, node = np.unique(node, return_inverse=True)
+    return node, cen[used]
+
+
 def _block_any(m, f):
     """(H, W) bool: the ``f`` x ``f`` blocks of ``m`` ((H f, W f) bool, C-contiguous) holding a True cell.
 
@@ -441,52 +500,81 @@ def _touching(a, b):
     return out
 
 
-def _coarse_door_distances(mask, pts, f, sources=None):
+def _coarse_door_distances(mask, pts, f, need=None):
     """(k, k) travel distances (map cells) between the points ``pts`` (local ``(row, col)``
-    cells of ``mask``) on the coarse grid of ``f`` x ``f`` blocks of ``mask``; only the rows
-    ``sources`` (point indices; default all) are searched, the others are inf.
+    cells of ``mask``) on the coarse grid of ``f`` x ``f`` blocks of ``mask``; only the pairs
+    ``need`` ((k, k) bool, symmetric; default all) are searched, the others are inf.
 
     A node is a connected piece of the mask inside one block (so walls and
     furniture within a block are never crossed), placed at the piece's
-    centroid; two pieces are joined when any of their cells are
-    8-neighbours, with the octile distance (steps of 1 and sqrt 2 cells, the
-    metric of the map-grid geodesic) between their centroids; each point
-    is joined to the pieces of its 3 x 3 neighbourhood by the octile distance
-    to their centroids. Shortest paths: Dijkstra
-    (:func:`scipy.sparse.csgraph.dijkstra`) from every point of ``sources``.
+    centroid; with at least :data:`MANY_DOORS` points, open floor is merged
+    into larger nodes (:func:`_merged_nodes`). Two nodes are joined when any
+    of their cells are 8-neighbours, with the octile distance (steps of 1
+    and sqrt 2 cells, the metric of the map-grid geodesic) between their
+    centroids; each point is joined to the nodes of its 3 x 3 neighbourhood
+    by the octile distance to their centroids. Shortest paths: Dijkstra
+    (:func:`scipy.sparse.csgraph.dijkstra`) from every point with a pair
+    ``i < j`` in ``need`` (the rows of those points are filled); with
+    :data:`MANY_DOORS` points or more on a matrix holding both directions of
+    every edge, searched as directed (see :func:`_travel_matrix`).
     """
-    from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import dijkstra
 
     k = len(pts)
-    sources = np.arange(k) if sources is None else np.asarray(sources, int)
+    if need is None:
+        need = ~np.eye(k, dtype=bool)
     out = np.full((k, k), np.inf)
-    if len(sources) == 0:
+    if not need.any():
         return out
+    many = k >= MANY_DOORS
     lab, n, cen = _block_components(mask, f)
-    cr, ccol = cen[:, 0], cen[:, 1]
     nb = len(lab[f::f])
     pairs = _touching(lab[f - 1::f][:nb], lab[f::f])
     right = np.ascontiguousarray(lab[:, f::f].T)  # the columns at the blocks' edges, as rows
     left = np.ascontiguousarray(lab[:, f - 1::f][:, :len(right)].T)
     pairs += [p[:, ::-1] for p in _touching(left, right)]
+    if many and f > 1:  # open floor merged: pieces -> their nodes
+        node, cen = _merged_nodes(mask, lab, n, cen, f)
+        E = node[np.concatenate(pairs)]
+        E = E[E[:, 0] != E[:, 1]]
+        pairs = [E]
+        n = len(cen) - 1
+        lab_node = lambda v: node[v]  # noqa: E731
+    else:
+        lab_node = lambda v: v  # noqa: E731
     su, sv = [], []
     for i, (pr, pc) in enumerate(pts):
         r, c = int(pr), int(pc)
         near = lab[max(r - 1, 0):r + 2, max(c - 1, 0):c + 2].ravel()
-        near = near[near > 0]
+        near = lab_node(near[near > 0])
         su.append(np.full(len(near), n + 1 + i))
         sv.append(near)
     E = np.concatenate(pairs + [np.stack([np.concatenate(su), np.concatenate(sv)], 1)]).astype(np.int32)
-    # one entry per joined pair (the sparse matrix merges repeats), then its length
-    A = coo_matrix((np.ones(len(E), np.float32), (E[:, 0], E[:, 1])), shape=(n + 1 + k, n + 1 + k)).tocsr()
-    u = np.repeat(np.arange(n + 1 + k), np.diff(A.indptr))
-    v = A.indices
-    pr = np.concatenate([cr, pts[:, 0]])
-    pc = np.concatenate([ccol, pts[:, 1]])
-    A.data = (_octile(pr[u] - pr[v], pc[u] - pc[v]) + 1e-9).astype(float)
-    out[sources] = dijkstra(A, directed=False, indices=n + 1 + sources)[:, n + 1:]
+    pr = np.concatenate([cen[:, 0], pts[:, 0]])
+    pc = np.concatenate([cen[:, 1], pts[:, 1]])
+    A = _travel_matrix(E, n + 1 + k, lambda u, v: _octile(pr[u] - pr[v], pc[u] - pc[v]) + 1e-9, both_ways=many)
+    rows = np.nonzero(np.triu(need, 1).any(axis=1))[0]  # one search from each door with a pair i < j
+    out[rows] = dijkstra(A, directed=many, indices=n + 1 + rows)[:, n + 1:]
     return out
+
+
+def _travel_matrix(E, m, length, *, both_ways):
+    """The (m, m) CSR matrix joining each pair of rows of ``E`` ((e, 2) ints, repeats allowed) by
+    ``length(u, v)`` (arrays of node indices -> lengths), one entry per pair.
+
+    With ``both_ways`` every pair is entered in both directions, to be searched as a directed
+    graph (:func:`scipy.sparse.csgraph.dijkstra` with ``directed=True``: faster than an undirected
+    search, which scans every node's row and its column, when there are several searches);
+    otherwise once, to be searched with ``directed=False``.
+    """
+    from scipy.sparse import coo_matrix
+
+    rows, cols = (np.concatenate([E[:, 0], E[:, 1]]), np.concatenate([E[:, 1], E[:, 0]])) if both_ways else E.T
+    # one entry per pair (the sparse matrix merges repeats), then its length
+    A = coo_matrix((np.ones(len(rows), np.float32), (rows, cols)), shape=(m, m)).tocsr()
+    u = np.repeat(np.arange(m), np.diff(A.indptr))
+    A.data = length(u, A.indices).astype(float)
+    return A
 
 
 #: Slack of the refinement windows: a path up to this factor (plus two coarse cells) longer
@@ -497,20 +585,64 @@ _WINDOW_SLACK = 1.1
 def _in_sight(mask, pts):
     """(k, k) bool: the digital straight line between two points runs on ``mask`` cells only.
 
-    Such a line (:func:`skimage.draw.line`, steps along one axis and one
-    diagonal) is a shortest 8-connected path, so the map-grid geodesic
-    between the two points is exactly their octile distance.
+    A digital straight line from ``p`` to ``q`` takes ``n = max(|dr|, |dc|)``
+    steps, one cell along the longer axis and 0 or 1 along the other each
+    step, so it is a shortest 8-connected path and the map-grid geodesic
+    between two points in sight is exactly their octile distance. Fewer than
+    :data:`MANY_DOORS` points: Bresenham's line
+    (:func:`skimage.draw.line`), pair by pair. More: step ``t`` at ``p +
+    round(t (q - p) / n)``, all pairs together, first
+    :data:`_SIGHT_PROBES` cells of each line, then every cell of the lines
+    that passed, in batches of at most :data:`_SIGHT_BATCH` cells.
     """
-    from skimage.draw import line
-
     k = len(pts)
     out = np.zeros((k, k), bool)
-    p = pts.astype(int)
-    for i in range(k):
-        for j in range(i + 1, k):
-            rr, cc = line(p[i, 0], p[i, 1], p[j, 0], p[j, 1])
-            out[i, j] = out[j, i] = bool(mask[rr, cc].all())
-    return out
+    if k < 2:
+        return out
+    p = np.asarray(pts).astype(np.int64)
+    flat = np.ascontiguousarray(mask).ravel()
+    w = mask.shape[1]
+    if k < MANY_DOORS:  # a few pairs: Bresenham's line (skimage.draw.line) pair by pair
+        from skimage.draw import line
+
+        for i in range(k - 1):
+            for j in range(i + 1, k):
+                rr, cc = line(p[i, 0], p[i, 1], p[j, 0], p[j, 1])
+                out[i, j] = out[j, i] = bool(mask[rr, cc].all())
+        return out
+    I, J = np.triu_indices(k, 1)
+    steps = np.abs(p[J] - p[I]).max(axis=1)
+    probe = np.floor(np.linspace(0, 1, _SIGHT_PROBES)[None, :] * steps[:, None] + 0.5).astype(np.int64)
+    keep = np.nonzero(_line_cells(flat, w, p[I], p[J], steps, probe).all(axis=1))[0]
+    ends = np.cumsum(steps[keep] + 1)
+    lo = 0
+    while lo < len(keep):  # the whole lines of the pairs that passed
+        hi = max(int(np.searchsorted(ends, ends[lo] - steps[keep[lo]] - 1 + _SIGHT_BATCH, side="right")), lo + 1)
+        b = keep[lo:hi]
+        n = steps[b] + 1
+        start = np.concatenate([[0], np.cumsum(n)[:-1]])
+        pair = np.repeat(np.arange(len(b)), n)
+        t = (np.arange(int(n.sum())) - start[pair])[:, None]
+        on = _line_cells(flat, w, p[I[b]][pair], p[J[b]][pair], steps[b][pair], t)[:, 0]
+        ok = np.logical_and.reduceat(on, start)
+        out[I[b[ok]], J[b[ok]]] = True
+        lo = hi
+    return out | out.T
+
+
+def _line_cells(flat, w, a, b, steps, t):
+    """``flat[...]`` (the raveled mask, ``w`` columns) at step ``t`` (m, s) of the lines ``a`` -> ``b``
+    ((m, 2) ``(row, col)``, ``steps`` (m,) = their longer axis' length), as in :func:`_in_sight`."""
+    frac = t / np.maximum(steps, 1)[:, None]
+    rr = a[:, :1] + np.floor(frac * (b[:, :1] - a[:, :1]) + 0.5).astype(np.int64)
+    cc = a[:, 1:] + np.floor(frac * (b[:, 1:] - a[:, 1:]) + 0.5).astype(np.int64)
+    return flat[rr * w + cc]
+
+
+#: Cells of each line (evenly spread, both ends included) :func:`_in_sight` tests before the whole line.
+_SIGHT_PROBES = 9
+#: Line cells tested at once by :func:`_in_sight`.
+_SIGHT_BATCH = 1 << 20
 
 
 def _windowed_distances(mask, pts, i, near, bound, f):
