@@ -307,6 +307,11 @@ def segment_cmd(maps, outdir, resolution, method, skeletons, no_overlay, no_geoj
             warm = _warm_up(method)
         except Exception:  # noqa: BLE001 - a failed warm-up only leaves those costs in the first map
             warm = None
+    # the modules just imported (hundreds of thousands of objects) live as long as the command:
+    # the garbage collector's full passes need not walk them again while the maps run
+    import gc
+
+    gc.freeze()
 
     try:
         outdir = _check_outdir(outdir)
