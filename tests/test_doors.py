@@ -117,3 +117,36 @@ def test_posts_on_unexplored_edges_only_on_maps_whose_walls_are_hits():
     grid = from_array(free, resolution=0.05)
     assert _near_hits(grid, walls, 2.0) is not None            # walls occupied: a laser map
     assert _near_hits(grid, np.zeros_like(free), 2.0) is None  # walls drawn as unknown: a plan
+
+
+@pytest.mark.parametrize("depth", [0.0, 2.0, 4.5, 12.0])
+def test_nearest_wall_points_batched_equals_one_window_at_a_time(depth):
+    """All candidates at once give the posts of one window per candidate, bit
+    for bit (windows cut by the map's edges, empty windows, no opposite side)."""
+    free = _map()
+    free[:, 140:] = True  # a strip without obstacles: empty windows
+    rng = np.random.default_rng(7)
+    pts = [(r, c) for r, c in zip(rng.integers(0, 120, 60), rng.integers(0, 150, 60))] + [(0, 0), (119, 149), (5, 146)]
+    cands = [D.Candidate(edge=(0, 1, 0), centroid=np.array(p, float), direction=np.array([1.0, 0.0]),
+                         radius=float(rng.uniform(0.5, 15)), status=D.MOUTH if n % 7 == 3 else D.CANDIDATE)
+             for n, p in enumerate(pts)]
+    one = [D.Candidate(edge=c.edge, centroid=c.centroid.copy(), direction=c.direction, radius=c.radius,
+                       status=c.status) for c in cands]
+    D.nearest_wall_points(cands, ~free, max_px=25, depth_px=depth)
+    for c in one:
+        D._nearest_wall_points_one(c, ~free, 25, depth)
+    assert sum(c.ip2 is not None for c in one) > 20
+    for c, o in zip(cands, one):
+        for p, q in ((c.ip1, o.ip1), (c.ip2, o.ip2)):
+            assert (p is None) == (q is None)
+            if p is not None:
+                assert p.dtype == q.dtype and np.array_equal(p, q)
+
+
+def test_nearest_wall_points_off_cell_centroid_takes_its_own_window():
+    free = _two_rooms_with_door()
+    c = D.Candidate(edge=(0, 1, 0), centroid=np.array([35.25, 66.5]), direction=np.array([0.0, 1.0]), radius=9.0)
+    o = D.Candidate(edge=(0, 1, 0), centroid=c.centroid.copy(), direction=c.direction, radius=9.0)
+    D.nearest_wall_points([c], ~free, max_px=40, depth_px=4)
+    D._nearest_wall_points_one(o, ~free, 40, 4)
+    assert c.ip2 is not None and np.array_equal(c.ip1, o.ip1) and np.array_equal(c.ip2, o.ip2)

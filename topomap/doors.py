@@ -521,6 +521,100 @@ def protrusion(obstacle_like_free: np.ndarray, radius_px: float) -> np.ndarray:
     return cv2.filter2D(obstacle_like_free.astype(np.float32), -1, k, borderType=cv2.BORDER_CONSTANT)
 
 
+#: Pairs of cells :func:`nearest_wall_points` measures at once, at most (or one candidate's).
+_PAIR_BLOCK = 1 << 20
+
+
+def _ranges(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """``lo[0]..hi[0]-1, lo[1]..hi[1]-1, ...`` in one array (``hi >= lo``)."""
+    n = hi - lo
+    return np.arange(int(n.sum())) + np.repeat(lo - (np.cumsum(n) - n), n)
+
+
+def _window_obstacle_cells(obstacle: np.ndarray, ra, rb, ca, cb):
+    """The obstacle cells of windows ``[ra:rb, ca:cb]``, all windows at once.
+
+    Parameters
+    ----------
+    obstacle : (M, N) ndarray of bool
+    ra, rb, ca, cb : (K,) ndarray of int
+        Window bounds, inside the map.
+
+    Returns
+    -------
+    rows, cols, seg : ndarray of int
+        The cells window after window, each window's in the order of
+        :func:`numpy.nonzero` of its slice (row-major); ``seg`` the window of
+        each cell.
+    """
+    W = obstacle.shape[1]
+    top = int(ra.min()) if ra.size else 0
+    lin = np.flatnonzero(obstacle[top:int(rb.max()) if rb.size else 0]) + top * W
+    win = np.repeat(np.arange(len(ra)), rb - ra)
+    row = _ranges(ra, rb)
+    lo = np.searchsorted(lin, row * W + ca[win])
+    hi = np.searchsorted(lin, row * W + cb[win])
+    n = hi - lo
+    rows = np.repeat(row, n)
+    return rows, lin[_ranges(lo, hi)] - rows * W, np.repeat(win, n)
+
+
+def _first_minima(x: np.ndarray, seg: np.ndarray, K: int):
+    """Per segment of ``x`` (``seg`` sorted, segments ``0..K-1``): the
+    smallest value (inf for an empty segment) and the index of its first
+    occurrence (what :func:`numpy.argmin` gives; -1 for an empty one)."""
+    xmin = np.full(K, np.inf)
+    idx = np.full(K, -1)
+    if x.size:
+        starts = np.flatnonzero(np.r_[True, seg[1:] != seg[:-1]])
+        xmin[seg[starts]] = np.minimum.reduceat(x, starts)
+        pos = np.flatnonzero(x == xmin[seg])
+        first = np.r_[True, seg[pos[1:]] != seg[pos[:-1]]]
+        idx[seg[pos[first]]] = pos[first]
+    return xmin, idx
+
+
+def _nearest_wall_points_one(c, obstacle: np.ndarray, max_px: float, depth_px: float) -> None:
+    """:func:`nearest_wall_points` for one candidate, on its own window."""
+    H, W = obstacle.shape
+    R = int(np.ceil(min(c.radius * 1.5 + 3 + depth_px, max_px + depth_px)))
+    r0, c0 = int(round(c.centroid[0])), int(round(c.centroid[1]))
+    ra, rb = max(r0 - R, 0), min(r0 + R + 1, H)
+    ca, cb = max(c0 - R, 0), min(c0 + R + 1, W)
+    win = obstacle[ra:rb, ca:cb]
+    rr, cc = np.nonzero(win)
+    c.ip1 = c.ip2 = None
+    if rr.size == 0:
+        return
+    q = np.stack([rr + ra, cc + ca], 1).astype(float)
+    v = q - c.centroid
+    d = np.hypot(v[:, 0], v[:, 1])
+    i = int(np.argmin(d))
+    if d[i] > max_px:
+        return
+    opp = (v @ v[i]) <= 0
+    if not opp.any():
+        c.ip1 = q[i]
+        return
+    j = np.flatnonzero(opp)[np.argmin(d[opp])]
+    if d[j] > max_px:
+        c.ip1 = q[i]
+        return
+    c.ip1, c.ip2 = q[i], q[j]
+    if depth_px <= 0 or c.status == MOUTH:
+        return
+    # closest pairs of cells across a passage lie on the obstacles'
+    # surface: only cells with a free 4-neighbour are paired (keeps the
+    # pairing linear in the window's side, not in its area)
+    on_surface = wall_faces(win, ~win)[rr, cc]
+    a = q[(~opp) & (d <= d[i] + depth_px) & on_surface]
+    b = q[opp & (d <= d[j] + depth_px) & on_surface]
+    if a.size and b.size:
+        D = np.hypot(a[:, None, 0] - b[None, :, 0], a[:, None, 1] - b[None, :, 1])
+        ia, ib = np.nonzero(D <= D.min() + 0.75)
+        c.ip1, c.ip2 = a[ia].mean(axis=0), b[ib].mean(axis=0)
+
+
 def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, depth_px: float = 0.0):
     """Set ``ip1``, ``ip2``: the two door posts of each bottleneck.
 
@@ -533,45 +627,102 @@ def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, dept
     runs through the middle of the wall's thickness, wherever along the
     passage the skeleton's minimum lies. Cells farther than ``max_px`` are
     not searched.
+
+    Candidates centred on a cell (all of :func:`passage_minima`'s) are
+    handled all at once: every difference, dot product and sum is then
+    exact in floating point, so batching gives the same posts bit for bit
+    as one window at a time; other candidates take one window each.
     """
     H, W = obstacle.shape
-    for c in candidates:
-        R = int(np.ceil(min(c.radius * 1.5 + 3 + depth_px, max_px + depth_px)))
-        r0, c0 = int(round(c.centroid[0])), int(round(c.centroid[1]))
-        ra, rb = max(r0 - R, 0), min(r0 + R + 1, H)
-        ca, cb = max(c0 - R, 0), min(c0 + R + 1, W)
-        win = obstacle[ra:rb, ca:cb]
-        rr, cc = np.nonzero(win)
+    cands = list(candidates)
+    cen = np.array([c.centroid for c in cands], float).reshape(len(cands), 2)
+    whole = np.all((cen == np.round(cen)) & (np.abs(cen) < 2 ** 24), axis=1)
+    batch = [c for c, w in zip(cands, whole) if w]
+    for c, w in zip(cands, whole):
+        if not w:
+            _nearest_wall_points_one(c, obstacle, max_px, depth_px)
+    K = len(batch)
+    if K == 0:
+        return candidates
+    cen = cen[whole]
+    R = np.array([int(np.ceil(min(c.radius * 1.5 + 3 + depth_px, max_px + depth_px))) for c in batch])
+    r0, c0 = cen[:, 0].astype(int), cen[:, 1].astype(int)
+    ra, rb = np.maximum(r0 - R, 0), np.minimum(r0 + R + 1, H)
+    ca, cb = np.maximum(c0 - R, 0), np.minimum(c0 + R + 1, W)
+    rb, cb = np.maximum(rb, ra), np.maximum(cb, ca)
+    rr, cc, seg = _window_obstacle_cells(obstacle, ra, rb, ca, cb)
+    for c in batch:
         c.ip1 = c.ip2 = None
-        if rr.size == 0:
+    if rr.size == 0:
+        return candidates
+    q0, q1 = rr.astype(float), cc.astype(float)
+    v0, v1 = q0 - cen[seg, 0], q1 - cen[seg, 1]
+    d = np.hypot(v0, v1)
+    di, i = _first_minima(d, seg, K)
+    # integers: the sign of v @ v[i] is exact whatever the order of the sums
+    opp = v0 * v0[i][seg] + v1 * v1[i][seg] <= 0
+    dj, j = _first_minima(d[opp], seg[opp], K)
+    j = np.append(np.flatnonzero(opp), -1)[j]  # -1 stays -1: no cell on the other side
+    for k, c in enumerate(batch):
+        if i[k] < 0 or di[k] > max_px:
             continue
-        q = np.stack([rr + ra, cc + ca], 1).astype(float)
-        v = q - c.centroid
-        d = np.hypot(v[:, 0], v[:, 1])
-        i = int(np.argmin(d))
-        if d[i] > max_px:
-            continue
-        opp = (v @ v[i]) <= 0
-        if not opp.any():
-            c.ip1 = q[i]
-            continue
-        j = np.flatnonzero(opp)[np.argmin(d[opp])]
-        if d[j] > max_px:
-            c.ip1 = q[i]
-            continue
-        c.ip1, c.ip2 = q[i], q[j]
-        if depth_px <= 0 or c.status == MOUTH:
-            continue
-        # closest pairs of cells across a passage lie on the obstacles'
-        # surface: only cells with a free 4-neighbour are paired (keeps the
-        # pairing linear in the window's side, not in its area)
-        on_surface = wall_faces(win, ~win)[rr, cc]
-        a = q[(~opp) & (d <= d[i] + depth_px) & on_surface]
-        b = q[opp & (d <= d[j] + depth_px) & on_surface]
-        if a.size and b.size:
-            D = np.hypot(a[:, None, 0] - b[None, :, 0], a[:, None, 1] - b[None, :, 1])
-            ia, ib = np.nonzero(D <= D.min() + 0.75)
-            c.ip1, c.ip2 = a[ia].mean(axis=0), b[ib].mean(axis=0)
+        c.ip1 = np.array([q0[i[k]], q1[i[k]]])
+        if j[k] >= 0 and dj[k] <= max_px:
+            c.ip2 = np.array([q0[j[k]], q1[j[k]]])
+    if depth_px <= 0:
+        return candidates
+    pair = np.array([c.ip2 is not None and c.status != MOUTH for c in batch])
+    sel = pair[seg] & np.where(opp, d <= dj[seg] + depth_px, d <= di[seg] + depth_px)
+    # on the surface: an obstacle cell with a free 4-neighbour inside its window
+    r, col, s = rr[sel], cc[sel], seg[sel]
+    surf = np.zeros(r.size, bool)
+    for dr, dc in ((-1, 0), (1, 0), (0, -1), (0, 1)):
+        rn, cn = r + dr, col + dc
+        inside = (rn >= ra[s]) & (rn < rb[s]) & (cn >= ca[s]) & (cn < cb[s])
+        surf |= inside & ~obstacle[np.clip(rn, 0, H - 1), np.clip(cn, 0, W - 1)]
+    keep = np.flatnonzero(sel)[surf]
+    side = opp[keep]
+    a, b = keep[~side], keep[side]
+    sa, sb = seg[a], seg[b]
+    ks = np.arange(K)
+    a_lo, na = np.searchsorted(sa, ks), np.bincount(sa, minlength=K)
+    b_lo, nb = np.searchsorted(sb, ks), np.bincount(sb, minlength=K)
+    ks = ks[(na > 0) & (nb > 0)]
+    qa0, qa1, qb0, qb1 = q0[a], q1[a], q0[b], q1[b]
+    # every pair of cells (one per side) of a candidate, a block of
+    # candidates at a time (memory bounded by the largest candidate's pairs)
+    npair = na[ks] * nb[ks]
+    cum = np.cumsum(npair)
+    start = 0
+    while start < ks.size:
+        stop = max(int(np.searchsorted(cum, cum[start] - npair[start] + _PAIR_BLOCK, "right")), start + 1)
+        kk, nk = ks[start:stop], npair[start:stop]
+        start = stop
+        ai = _ranges(a_lo[kk], a_lo[kk] + na[kk])
+        rep = nb[sa[ai]]
+        first = np.cumsum(rep) - rep
+        pb = np.arange(int(rep.sum())) + np.repeat(b_lo[sa[ai]] - first, rep)
+        # squared distances are exact integers: the closest pairs are found
+        # on them, and only pairs that can be within 0.75 px of the closest
+        # measured as the windowed search did (np.hypot)
+        dr, dc = np.repeat(qa0[ai], rep) - qb0[pb], np.repeat(qa1[ai], rep) - qb1[pb]
+        sq = dr * dr + dc * dc
+        starts = np.cumsum(nk) - nk
+        bound = (np.sqrt(np.minimum.reduceat(sq, starts)) + 0.76) ** 2
+        near = np.flatnonzero(sq <= np.repeat(bound, nk))
+        ps = np.repeat(kk, nk)[near]
+        D = np.hypot(dr[near], dc[near])
+        pos = np.searchsorted(near, starts)
+        Dmin = np.empty(K)
+        Dmin[kk] = np.minimum.reduceat(D, pos)
+        ok = D <= Dmin[ps] + 0.75
+        pa, pb, ps = np.repeat(ai, rep)[near[ok]], pb[near[ok]], ps[ok]
+        n = np.bincount(ps, minlength=K)
+        # integer coordinates: the sums are exact, the means those of numpy.mean
+        sums = [np.bincount(ps, weights=x, minlength=K) for x in (qa0[pa], qa1[pa], qb0[pb], qb1[pb])]
+        for k in kk:
+            batch[k].ip1 = np.array([sums[0][k], sums[1][k]]) / n[k]
+            batch[k].ip2 = np.array([sums[2][k], sums[3][k]]) / n[k]
     return candidates
 
 
