@@ -150,3 +150,11 @@ def test_nearest_wall_points_off_cell_centroid_takes_its_own_window():
     D.nearest_wall_points([c], ~free, max_px=40, depth_px=4)
     D._nearest_wall_points_one(o, ~free, 40, 4)
     assert c.ip2 is not None and np.array_equal(c.ip1, o.ip1) and np.array_equal(c.ip2, o.ip2)
+
+
+def test_protrusion_at_posts_on_one_cell_get_the_value_of_each_alone():
+    free = _map()
+    pts = [np.array(p, float) for p in [(50, 69), (45.3, 30.7), (50.2, 68.9), (45, 31), (0, 101), (50, 69)]]
+    got = D.protrusion_at(free, pts, 9, 4)
+    alone = [D.protrusion_at(free, [p], 9, 4)[0] for p in pts]
+    assert got.tolist() == alone and got[0] > 0

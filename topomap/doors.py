@@ -434,8 +434,13 @@ def protrusion_at(free: np.ndarray, points, radius_px: float, look_px: int) -> n
             out[n] = fr[min(max(int(round(float(p[0]))), 0), H - 1), min(max(int(round(float(p[1]))), 0), W - 1)]
         return out
     kernels = {}
+    seen = {}  # posts on the same cell share a window, hence a value
     for n, p in enumerate(points):
         pr, pc = int(round(float(p[0]))), int(round(float(p[1])))
+        if (pr, pc) in seen:
+            out[n] = out[seen[pr, pc]]
+            continue
+        seen[pr, pc] = n
         ra, rb = max(pr - pad, 0), min(pr + pad + 1, H)
         ca, cb = max(pc - pad, 0), min(pc + pad + 1, W)
         win = free[ra:rb, ca:cb].astype(np.float32)
@@ -559,18 +564,19 @@ def _window_obstacle_cells(obstacle: np.ndarray, ra, rb, ca, cb):
     return rows, lin[_ranges(lo, hi)] - rows * W, np.repeat(win, n)
 
 
-def _first_minima(x: np.ndarray, seg: np.ndarray, K: int):
-    """Per segment of ``x`` (``seg`` sorted, segments ``0..K-1``): the
-    smallest value (inf for an empty segment) and the index of its first
-    occurrence (what :func:`numpy.argmin` gives; -1 for an empty one)."""
-    xmin = np.full(K, np.inf)
-    idx = np.full(K, -1)
+def _first_minima(x: np.ndarray, counts: np.ndarray):
+    """Per segment of ``x`` (``counts[k]`` values each, one segment after
+    the other): the smallest value (inf for an empty segment) and the index
+    in ``x`` of its first occurrence (what :func:`numpy.argmin` gives; -1 for
+    an empty segment)."""
+    xmin = np.full(counts.size, np.inf)
+    idx = np.full(counts.size, -1)
+    has = counts > 0
     if x.size:
-        starts = np.flatnonzero(np.r_[True, seg[1:] != seg[:-1]])
-        xmin[seg[starts]] = np.minimum.reduceat(x, starts)
-        pos = np.flatnonzero(x == xmin[seg])
-        first = np.r_[True, seg[pos[1:]] != seg[pos[:-1]]]
-        idx[seg[pos[first]]] = pos[first]
+        starts = (np.cumsum(counts) - counts)[has]
+        xmin[has] = np.minimum.reduceat(x, starts)
+        pos = np.flatnonzero(x == np.repeat(xmin, counts))
+        idx[has] = pos[np.searchsorted(pos, starts)]
     return xmin, idx
 
 
@@ -655,13 +661,14 @@ def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, dept
         c.ip1 = c.ip2 = None
     if rr.size == 0:
         return candidates
+    counts = np.bincount(seg, minlength=K)
     q0, q1 = rr.astype(float), cc.astype(float)
-    v0, v1 = q0 - cen[seg, 0], q1 - cen[seg, 1]
+    v0, v1 = q0 - np.repeat(cen[:, 0], counts), q1 - np.repeat(cen[:, 1], counts)
     d = np.hypot(v0, v1)
-    di, i = _first_minima(d, seg, K)
+    di, i = _first_minima(d, counts)
     # integers: the sign of v @ v[i] is exact whatever the order of the sums
-    opp = v0 * v0[i][seg] + v1 * v1[i][seg] <= 0
-    dj, j = _first_minima(d[opp], seg[opp], K)
+    opp = v0 * np.repeat(v0[i], counts) + v1 * np.repeat(v1[i], counts) <= 0
+    dj, j = _first_minima(d[opp], np.bincount(seg[opp], minlength=K))
     j = np.append(np.flatnonzero(opp), -1)[j]  # -1 stays -1: no cell on the other side
     for k, c in enumerate(batch):
         if i[k] < 0 or di[k] > max_px:
@@ -672,7 +679,8 @@ def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, dept
     if depth_px <= 0:
         return candidates
     pair = np.array([c.ip2 is not None and c.status != MOUTH for c in batch])
-    sel = pair[seg] & np.where(opp, d <= dj[seg] + depth_px, d <= di[seg] + depth_px)
+    sel = np.repeat(pair, counts) & np.where(opp, d <= np.repeat(dj, counts) + depth_px,
+                                             d <= np.repeat(di, counts) + depth_px)
     # on the surface: an obstacle cell with a free 4-neighbour inside its window
     r, col, s = rr[sel], cc[sel], seg[sel]
     surf = np.zeros(r.size, bool)
