@@ -158,3 +158,22 @@ def test_protrusion_at_posts_on_one_cell_get_the_value_of_each_alone():
     got = D.protrusion_at(free, pts, 9, 4)
     alone = [D.protrusion_at(free, [p], 9, 4)[0] for p in pts]
     assert got.tolist() == alone and got[0] > 0
+
+
+def test_strip_cells_are_the_edge_of_the_half_plane():
+    """``_strip_cells``: exactly the window cells with ``-max|u| < v . u <= 0``."""
+    rng = np.random.default_rng(3)
+    u0, u1 = rng.integers(-9, 10, 40), rng.integers(-9, 10, 40)
+    u0[(u0 == 0) & (u1 == 0)] = 1
+    u0[:4], u1[:4] = [0, 5, 0, -3], [4, 0, -1, 3]
+    r0, c0 = rng.integers(0, 30, 40), rng.integers(0, 30, 40)
+    ra, ca = np.maximum(r0 - rng.integers(0, 9, 40), 0), np.maximum(c0 - rng.integers(0, 9, 40), 0)
+    rb, cb = r0 + rng.integers(1, 9, 40), c0 + rng.integers(1, 9, 40)
+    rows, cols, seg = D._strip_cells(u0, u1, r0, c0, ra, rb, ca, cb)
+    for k in range(40):
+        y, x = np.mgrid[ra[k]:rb[k], ca[k]:cb[k]]
+        dot = (y - r0[k]) * u0[k] + (x - c0[k]) * u1[k]
+        want = (dot > -max(abs(u0[k]), abs(u1[k]))) & (dot <= 0)
+        got = np.zeros_like(want)
+        got[rows[seg == k] - ra[k], cols[seg == k] - ca[k]] = True
+        assert np.array_equal(got, want)

@@ -536,14 +536,16 @@ def _ranges(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     return np.arange(int(n.sum())) + np.repeat(lo - (np.cumsum(n) - n), n)
 
 
-def _window_obstacle_cells(obstacle: np.ndarray, ra, rb, ca, cb):
-    """The obstacle cells of windows ``[ra:rb, ca:cb]``, all windows at once.
+def _window_cells(mask: np.ndarray, top: int, width: int, ra, rb, ca, cb):
+    """The cells of ``mask`` in windows ``[ra:rb, ca:cb]``, all windows at once.
 
     Parameters
     ----------
-    obstacle : (M, N) ndarray of bool
+    mask : (M, width) ndarray of bool
+        Rows ``top`` to ``top + M`` of a map ``width`` columns wide.
+    top, width : int
     ra, rb, ca, cb : (K,) ndarray of int
-        Window bounds, inside the map.
+        Window bounds, inside the map's rows ``top`` to ``top + M``.
 
     Returns
     -------
@@ -552,16 +554,42 @@ def _window_obstacle_cells(obstacle: np.ndarray, ra, rb, ca, cb):
         :func:`numpy.nonzero` of its slice (row-major); ``seg`` the window of
         each cell.
     """
-    W = obstacle.shape[1]
-    top = int(ra.min()) if ra.size else 0
-    lin = np.flatnonzero(obstacle[top:int(rb.max()) if rb.size else 0]) + top * W
+    lin = np.flatnonzero(mask) + top * width
     win = np.repeat(np.arange(len(ra)), rb - ra)
     row = _ranges(ra, rb)
-    lo = np.searchsorted(lin, row * W + ca[win])
-    hi = np.searchsorted(lin, row * W + cb[win])
+    lo = np.searchsorted(lin, row * width + ca[win])
+    hi = np.searchsorted(lin, row * width + cb[win])
     n = hi - lo
     rows = np.repeat(row, n)
-    return rows, lin[_ranges(lo, hi)] - rows * W, np.repeat(win, n)
+    return rows, lin[_ranges(lo, hi)] - rows * width, np.repeat(win, n)
+
+
+def _strip_cells(u0, u1, r0, c0, ra, rb, ca, cb):
+    """Per window, the cells ``x`` with ``-m < (x - p) . u <= 0`` (``p = (r0,
+    c0)``, ``u`` a non-zero integer vector, ``m = max(|u0|, |u1|)``): one cell a
+    row (``|u1| >= |u0|``) or a column, the edge of the half-plane
+    ``(x - p) . u <= 0``.
+
+    Returns
+    -------
+    rows, cols, seg : ndarray of int
+        The cells inside their windows; ``seg`` the window of each.
+    """
+    by_row = np.abs(u1) >= np.abs(u0)
+    # along the rows: t = -y u0, x u1 in (t - m, t]; along the columns the same, transposed
+    lo, hi = np.where(by_row, ra - r0, ca - c0), np.where(by_row, rb - r0, cb - c0)
+    seg = np.repeat(np.arange(len(ra)), hi - lo)
+    y = _ranges(lo, hi)
+    a, b = np.where(by_row, u0, u1)[seg], np.where(by_row, u1, u0)[seg]
+    t = -y * a
+    x = np.where(b > 0, t // np.where(b == 0, 1, b), -((-t) // np.where(b == 0, 1, b)))
+    rows = np.where(by_row[seg], y + r0[seg], x + r0[seg])
+    cols = np.where(by_row[seg], x + c0[seg], y + c0[seg])
+    dot = (rows - r0[seg]) * u0[seg] + (cols - c0[seg]) * u1[seg]
+    m = np.maximum(np.abs(u0), np.abs(u1))[seg]
+    ok = ((dot > -m) & (dot <= 0) & (rows >= ra[seg]) & (rows < rb[seg])
+          & (cols >= ca[seg]) & (cols < cb[seg]))
+    return rows[ok], cols[ok], seg[ok]
 
 
 def _first_minima(x: np.ndarray, counts: np.ndarray):
@@ -634,17 +662,22 @@ def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, dept
     passage the skeleton's minimum lies. Cells farther than ``max_px`` are
     not searched.
 
-    Candidates centred on a cell (all of :func:`passage_minima`'s) are
-    handled all at once: every difference, dot product and sum is then
-    exact in floating point, so batching gives the same posts bit for bit
-    as one window at a time; other candidates take one window each.
+    Candidates centred on a free cell (all of :func:`passage_minima`'s)
+    are handled all at once, on the surface cells of their windows (and
+    the few cells on the edge of the opposite side that can be nearest
+    there): every difference, dot product and sum is then exact in
+    floating point, so the posts are bit for bit those of one window at a
+    time; other candidates take one window each. Time and memory are linear
+    in the map's rows spanned by the windows, plus the windows' cells.
     """
     H, W = obstacle.shape
     cands = list(candidates)
     cen = np.array([c.centroid for c in cands], float).reshape(len(cands), 2)
-    whole = np.all((cen == np.round(cen)) & (np.abs(cen) < 2 ** 24), axis=1)
+    whole = np.all((cen == np.round(cen)) & (cen >= 0) & (cen < (H, W)), axis=1)
+    whole[whole] = ~obstacle[cen[whole, 0].astype(int), cen[whole, 1].astype(int)]
     batch = [c for c, w in zip(cands, whole) if w]
     for c, w in zip(cands, whole):
+        c.ip1 = c.ip2 = None
         if not w:
             _nearest_wall_points_one(c, obstacle, max_px, depth_px)
     K = len(batch)
@@ -655,10 +688,23 @@ def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, dept
     r0, c0 = cen[:, 0].astype(int), cen[:, 1].astype(int)
     ra, rb = np.maximum(r0 - R, 0), np.minimum(r0 + R + 1, H)
     ca, cb = np.maximum(c0 - R, 0), np.minimum(c0 + R + 1, W)
-    rb, cb = np.maximum(rb, ra), np.maximum(cb, ca)
-    rr, cc, seg = _window_obstacle_cells(obstacle, ra, rb, ca, cb)
-    for c in batch:
-        c.ip1 = c.ip2 = None
+    # Only surface cells (an obstacle cell with a free 4-neighbour inside its
+    # window) can be nearest to a free centre: the neighbour towards the
+    # centre is nearer. The map's faces, over the windows' rows, hold them.
+    top, bot = int(ra.min()), int(rb.max())
+    band = obstacle[top:bot]
+    rr, cc, seg = _window_cells(wall_faces(band, ~band), top, W, ra, rb, ca, cb)
+    # on a window's edge, the free neighbour may lie outside the window
+    edge = np.flatnonzero((rr == ra[seg]) | (rr == rb[seg] - 1) | (cc == ca[seg]) | (cc == cb[seg] - 1))
+    er, ec, es = rr[edge], cc[edge], seg[edge]
+    surf = np.zeros(edge.size, bool)
+    for dr, dc in ((-1, 0), (1, 0), (0, -1), (0, 1)):
+        rn, cn = er + dr, ec + dc
+        inside = (rn >= ra[es]) & (rn < rb[es]) & (cn >= ca[es]) & (cn < cb[es])
+        surf |= inside & ~obstacle[np.clip(rn, 0, H - 1), np.clip(cn, 0, W - 1)]
+    on = np.ones(rr.size, bool)
+    on[edge[~surf]] = False
+    rr, cc, seg = rr[on], cc[on], seg[on]
     if rr.size == 0:
         return candidates
     counts = np.bincount(seg, minlength=K)
@@ -667,30 +713,59 @@ def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, dept
     d = np.hypot(v0, v1)
     di, i = _first_minima(d, counts)
     # integers: the sign of v @ v[i] is exact whatever the order of the sums
-    opp = v0 * np.repeat(v0[i], counts) + v1 * np.repeat(v1[i], counts) <= 0
-    dj, j = _first_minima(d[opp], np.bincount(seg[opp], minlength=K))
-    j = np.append(np.flatnonzero(opp), -1)[j]  # -1 stays -1: no cell on the other side
+    u0, u1 = v0[i].astype(int), v1[i].astype(int)
+    dot = v0 * np.repeat(v0[i], counts) + v1 * np.repeat(v1[i], counts)
+    opp = dot <= 0
+    # The nearest cell on the other side (v . u <= 0) is on the surface too,
+    # or its neighbour towards the centre lies on the near side: then it is
+    # on the half-plane's edge, -max(|u|) < v . u <= 0, one cell a row or a
+    # column; the first of the nearest in row-major order, as in one window.
+    has = (counts > 0) & (di <= max_px)
+    sr, sc, ss = _strip_cells(u0[has], u1[has], r0[has], c0[has], ra[has], rb[has], ca[has], cb[has])
+    ss = np.flatnonzero(has)[ss]
+    o = obstacle[sr, sc]
+    sr, sc, ss = sr[o], sc[o], ss[o]
+    jr, jc, js = np.r_[rr[opp], sr], np.r_[cc[opp], sc], np.r_[seg[opp], ss]
+    order = np.argsort(js, kind="stable")
+    jr, jc, js = jr[order], jc[order], js[order]
+    jd = np.hypot(jr - cen[js, 0], jc - cen[js, 1])
+    jn = np.bincount(js, minlength=K)
+    dj, _ = _first_minima(jd, jn)
+    at = np.flatnonzero(jd == np.repeat(dj, jn))
+    lin = jr[at] * W + jc[at]
+    firsts = np.full(K, -1)
+    if at.size:
+        # the smallest linear index of the nearest cells, per candidate
+        o = np.lexsort((lin, js[at]))
+        at = at[o][np.r_[True, js[at][o][1:] != js[at][o][:-1]]]
+        firsts[js[at]] = at
     for k, c in enumerate(batch):
         if i[k] < 0 or di[k] > max_px:
             continue
         c.ip1 = np.array([q0[i[k]], q1[i[k]]])
-        if j[k] >= 0 and dj[k] <= max_px:
-            c.ip2 = np.array([q0[j[k]], q1[j[k]]])
+        if firsts[k] >= 0 and dj[k] <= max_px:
+            c.ip2 = np.array([float(jr[firsts[k]]), float(jc[firsts[k]])])
     if depth_px <= 0:
         return candidates
     pair = np.array([c.ip2 is not None and c.status != MOUTH for c in batch])
     sel = np.repeat(pair, counts) & np.where(opp, d <= np.repeat(dj, counts) + depth_px,
                                              d <= np.repeat(di, counts) + depth_px)
-    # on the surface: an obstacle cell with a free 4-neighbour inside its window
-    r, col, s = rr[sel], cc[sel], seg[sel]
-    surf = np.zeros(r.size, bool)
-    for dr, dc in ((-1, 0), (1, 0), (0, -1), (0, 1)):
-        rn, cn = r + dr, col + dc
-        inside = (rn >= ra[s]) & (rn < rb[s]) & (cn >= ca[s]) & (cn < cb[s])
-        surf |= inside & ~obstacle[np.clip(rn, 0, H - 1), np.clip(cn, 0, W - 1)]
-    keep = np.flatnonzero(sel)[surf]
+    keep = np.flatnonzero(sel)
     side = opp[keep]
     a, b = keep[~side], keep[side]
+    # A pair is at least as long as its cells' distances to the line between
+    # the sides (h); the pair of the nearest cell with its closest partner
+    # bounds the closest pair (ub): cells that cannot be in a pair within
+    # 0.75 px of the closest are left out (0.05 px to spare for rounding).
+    h = np.abs(dot) / np.repeat(np.hypot(u0, u1), counts)
+    ub2 = np.full(K, np.inf)
+    np.minimum.at(ub2, seg[b], (q0[b] - q0[i][seg[b]]) ** 2 + (q1[b] - q1[i][seg[b]]) ** 2)
+    ha, hb = np.full(K, np.inf), np.full(K, np.inf)
+    np.minimum.at(ha, seg[a], h[a])
+    np.minimum.at(hb, seg[b], h[b])
+    lim = np.sqrt(ub2) + 0.8
+    a = a[h[a] + hb[seg[a]] <= lim[seg[a]]]
+    b = b[h[b] + ha[seg[b]] <= lim[seg[b]]]
     sa, sb = seg[a], seg[b]
     ks = np.arange(K)
     a_lo, na = np.searchsorted(sa, ks), np.bincount(sa, minlength=K)
