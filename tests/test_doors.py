@@ -177,3 +177,23 @@ def test_strip_cells_are_the_edge_of_the_half_plane():
         got = np.zeros_like(want)
         got[rows[seg == k] - ra[k], cols[seg == k] - ca[k]] = True
         assert np.array_equal(got, want)
+
+
+@pytest.mark.parametrize("n", [3, 400])
+def test_window_faces_are_the_faces_of_each_window(n):
+    """Both ways of ``_window_faces`` (a few windows far apart on a large map,
+    many windows): the faces of each window on its own, in row-major order."""
+    from topomap.walls import wall_faces
+
+    rng = np.random.default_rng(n)
+    obstacle = rng.random((900, 700)) > 0.6
+    r0, c0 = rng.integers(0, 900, n), rng.integers(0, 700, n)
+    R = rng.integers(1, 40, n)
+    ra, rb = np.maximum(r0 - R, 0), np.minimum(r0 + R + 1, 900)
+    ca, cb = np.maximum(c0 - R, 0), np.minimum(c0 + R + 1, 700)
+    rows, cols, seg = D._window_faces(obstacle, ra, rb, ca, cb)
+    assert np.all(np.diff(seg) >= 0)
+    for k in range(n):
+        win = obstacle[ra[k]:rb[k], ca[k]:cb[k]]
+        r, c = np.nonzero(wall_faces(win, ~win))
+        assert np.array_equal(rows[seg == k], r + ra[k]) and np.array_equal(cols[seg == k], c + ca[k])

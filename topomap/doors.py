@@ -564,6 +564,52 @@ def _window_cells(mask: np.ndarray, top: int, width: int, ra, rb, ca, cb):
     return rows, lin[_ranges(lo, hi)] - rows * width, np.repeat(win, n)
 
 
+def _window_faces(obstacle: np.ndarray, ra, rb, ca, cb):
+    """:func:`~topomap.walls.wall_faces` of the windows ``[ra:rb, ca:cb]`` of
+    ``obstacle`` (a cell outside its window is not free), all windows at once.
+
+    From the map's faces over the rows the windows span, the cells on a
+    window's edge checked again, when that is cheaper than one window at a
+    time (windows far apart on a large map).
+
+    Parameters
+    ----------
+    obstacle : (M, N) ndarray of bool
+    ra, rb, ca, cb : (K,) ndarray of int
+        Window bounds, inside the map.
+
+    Returns
+    -------
+    rows, cols, seg : ndarray of int
+        As :func:`_window_cells`.
+    """
+    H, W = obstacle.shape
+    top, bot = int(ra.min()), int(rb.max())
+    area = int(((rb - ra) * (cb - ca)).sum())
+    if (bot - top) * W > 4 * area + 4000 * len(ra):
+        parts = []
+        for k in range(len(ra)):
+            win = obstacle[ra[k]:rb[k], ca[k]:cb[k]]
+            r, c = np.nonzero(wall_faces(win, ~win))
+            parts.append((r + ra[k], c + ca[k]))
+        n = [p[0].size for p in parts]
+        return (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]),
+                np.repeat(np.arange(len(ra)), n))
+    band = obstacle[top:bot]
+    rr, cc, seg = _window_cells(wall_faces(band, ~band), top, W, ra, rb, ca, cb)
+    # on a window's edge, the free neighbour may lie outside the window
+    edge = np.flatnonzero((rr == ra[seg]) | (rr == rb[seg] - 1) | (cc == ca[seg]) | (cc == cb[seg] - 1))
+    er, ec, es = rr[edge], cc[edge], seg[edge]
+    surf = np.zeros(edge.size, bool)
+    for dr, dc in ((-1, 0), (1, 0), (0, -1), (0, 1)):
+        rn, cn = er + dr, ec + dc
+        inside = (rn >= ra[es]) & (rn < rb[es]) & (cn >= ca[es]) & (cn < cb[es])
+        surf |= inside & ~obstacle[np.clip(rn, 0, H - 1), np.clip(cn, 0, W - 1)]
+    on = np.ones(rr.size, bool)
+    on[edge[~surf]] = False
+    return rr[on], cc[on], seg[on]
+
+
 def _strip_cells(u0, u1, r0, c0, ra, rb, ca, cb):
     """Per window, the cells ``x`` with ``-m < (x - p) . u <= 0`` (``p = (r0,
     c0)``, ``u`` a non-zero integer vector, ``m = max(|u0|, |u1|)``): one cell a
@@ -690,21 +736,8 @@ def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, dept
     ca, cb = np.maximum(c0 - R, 0), np.minimum(c0 + R + 1, W)
     # Only surface cells (an obstacle cell with a free 4-neighbour inside its
     # window) can be nearest to a free centre: the neighbour towards the
-    # centre is nearer. The map's faces, over the windows' rows, hold them.
-    top, bot = int(ra.min()), int(rb.max())
-    band = obstacle[top:bot]
-    rr, cc, seg = _window_cells(wall_faces(band, ~band), top, W, ra, rb, ca, cb)
-    # on a window's edge, the free neighbour may lie outside the window
-    edge = np.flatnonzero((rr == ra[seg]) | (rr == rb[seg] - 1) | (cc == ca[seg]) | (cc == cb[seg] - 1))
-    er, ec, es = rr[edge], cc[edge], seg[edge]
-    surf = np.zeros(edge.size, bool)
-    for dr, dc in ((-1, 0), (1, 0), (0, -1), (0, 1)):
-        rn, cn = er + dr, ec + dc
-        inside = (rn >= ra[es]) & (rn < rb[es]) & (cn >= ca[es]) & (cn < cb[es])
-        surf |= inside & ~obstacle[np.clip(rn, 0, H - 1), np.clip(cn, 0, W - 1)]
-    on = np.ones(rr.size, bool)
-    on[edge[~surf]] = False
-    rr, cc, seg = rr[on], cc[on], seg[on]
+    # centre is nearer.
+    rr, cc, seg = _window_faces(obstacle, ra, rb, ca, cb)
     if rr.size == 0:
         return candidates
     counts = np.bincount(seg, minlength=K)
