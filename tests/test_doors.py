@@ -117,3 +117,83 @@ def test_posts_on_unexplored_edges_only_on_maps_whose_walls_are_hits():
     grid = from_array(free, resolution=0.05)
     assert _near_hits(grid, walls, 2.0) is not None            # walls occupied: a laser map
     assert _near_hits(grid, np.zeros_like(free), 2.0) is None  # walls drawn as unknown: a plan
+
+
+@pytest.mark.parametrize("depth", [0.0, 2.0, 4.5, 12.0])
+def test_nearest_wall_points_batched_equals_one_window_at_a_time(depth):
+    """All candidates at once give the posts of one window per candidate, bit
+    for bit (windows cut by the map's edges, empty windows, no opposite side)."""
+    free = _map()
+    free[:, 140:] = True  # a strip without obstacles: empty windows
+    rng = np.random.default_rng(7)
+    pts = [(r, c) for r, c in zip(rng.integers(0, 120, 60), rng.integers(0, 150, 60))] + [(0, 0), (119, 149), (5, 146)]
+    cands = [D.Candidate(edge=(0, 1, 0), centroid=np.array(p, float), direction=np.array([1.0, 0.0]),
+                         radius=float(rng.uniform(0.5, 15)), status=D.MOUTH if n % 7 == 3 else D.CANDIDATE)
+             for n, p in enumerate(pts)]
+    one = [D.Candidate(edge=c.edge, centroid=c.centroid.copy(), direction=c.direction, radius=c.radius,
+                       status=c.status) for c in cands]
+    D.nearest_wall_points(cands, ~free, max_px=25, depth_px=depth)
+    for c in one:
+        D._nearest_wall_points_one(c, ~free, 25, depth)
+    assert sum(c.ip2 is not None for c in one) > 20
+    for c, o in zip(cands, one):
+        for p, q in ((c.ip1, o.ip1), (c.ip2, o.ip2)):
+            assert (p is None) == (q is None)
+            if p is not None:
+                assert p.dtype == q.dtype and np.array_equal(p, q)
+
+
+def test_nearest_wall_points_off_cell_centroid_takes_its_own_window():
+    free = _two_rooms_with_door()
+    c = D.Candidate(edge=(0, 1, 0), centroid=np.array([35.25, 66.5]), direction=np.array([0.0, 1.0]), radius=9.0)
+    o = D.Candidate(edge=(0, 1, 0), centroid=c.centroid.copy(), direction=c.direction, radius=9.0)
+    D.nearest_wall_points([c], ~free, max_px=40, depth_px=4)
+    D._nearest_wall_points_one(o, ~free, 40, 4)
+    assert c.ip2 is not None and np.array_equal(c.ip1, o.ip1) and np.array_equal(c.ip2, o.ip2)
+
+
+def test_protrusion_at_posts_on_one_cell_get_the_value_of_each_alone():
+    free = _map()
+    pts = [np.array(p, float) for p in [(50, 69), (45.3, 30.7), (50.2, 68.9), (45, 31), (0, 101), (50, 69)]]
+    got = D.protrusion_at(free, pts, 9, 4)
+    alone = [D.protrusion_at(free, [p], 9, 4)[0] for p in pts]
+    assert got.tolist() == alone and got[0] > 0
+
+
+def test_strip_cells_are_the_edge_of_the_half_plane():
+    """``_strip_cells``: exactly the window cells with ``-max|u| < v . u <= 0``."""
+    rng = np.random.default_rng(3)
+    u0, u1 = rng.integers(-9, 10, 40), rng.integers(-9, 10, 40)
+    u0[(u0 == 0) & (u1 == 0)] = 1
+    u0[:4], u1[:4] = [0, 5, 0, -3], [4, 0, -1, 3]
+    r0, c0 = rng.integers(0, 30, 40), rng.integers(0, 30, 40)
+    ra, ca = np.maximum(r0 - rng.integers(0, 9, 40), 0), np.maximum(c0 - rng.integers(0, 9, 40), 0)
+    rb, cb = r0 + rng.integers(1, 9, 40), c0 + rng.integers(1, 9, 40)
+    rows, cols, seg = D._strip_cells(u0, u1, r0, c0, ra, rb, ca, cb)
+    for k in range(40):
+        y, x = np.mgrid[ra[k]:rb[k], ca[k]:cb[k]]
+        dot = (y - r0[k]) * u0[k] + (x - c0[k]) * u1[k]
+        want = (dot > -max(abs(u0[k]), abs(u1[k]))) & (dot <= 0)
+        got = np.zeros_like(want)
+        got[rows[seg == k] - ra[k], cols[seg == k] - ca[k]] = True
+        assert np.array_equal(got, want)
+
+
+@pytest.mark.parametrize("n", [3, 400])
+def test_window_faces_are_the_faces_of_each_window(n):
+    """Both ways of ``_window_faces`` (a few windows far apart on a large map,
+    many windows): the faces of each window on its own, in row-major order."""
+    from topomap.walls import wall_faces
+
+    rng = np.random.default_rng(n)
+    obstacle = rng.random((900, 700)) > 0.6
+    r0, c0 = rng.integers(0, 900, n), rng.integers(0, 700, n)
+    R = rng.integers(1, 40, n)
+    ra, rb = np.maximum(r0 - R, 0), np.minimum(r0 + R + 1, 900)
+    ca, cb = np.maximum(c0 - R, 0), np.minimum(c0 + R + 1, 700)
+    rows, cols, seg = D._window_faces(obstacle, ra, rb, ca, cb)
+    assert np.all(np.diff(seg) >= 0)
+    for k in range(n):
+        win = obstacle[ra[k]:rb[k], ca[k]:cb[k]]
+        r, c = np.nonzero(wall_faces(win, ~win))
+        assert np.array_equal(rows[seg == k], r + ra[k]) and np.array_equal(cols[seg == k], c + ca[k])

@@ -434,8 +434,13 @@ def protrusion_at(free: np.ndarray, points, radius_px: float, look_px: int) -> n
             out[n] = fr[min(max(int(round(float(p[0]))), 0), H - 1), min(max(int(round(float(p[1]))), 0), W - 1)]
         return out
     kernels = {}
+    seen = {}  # posts on the same cell share a window, hence a value
     for n, p in enumerate(points):
         pr, pc = int(round(float(p[0]))), int(round(float(p[1])))
+        if (pr, pc) in seen:
+            out[n] = out[seen[pr, pc]]
+            continue
+        seen[pr, pc] = n
         ra, rb = max(pr - pad, 0), min(pr + pad + 1, H)
         ca, cb = max(pc - pad, 0), min(pc + pad + 1, W)
         win = free[ra:rb, ca:cb].astype(np.float32)
@@ -521,6 +526,175 @@ def protrusion(obstacle_like_free: np.ndarray, radius_px: float) -> np.ndarray:
     return cv2.filter2D(obstacle_like_free.astype(np.float32), -1, k, borderType=cv2.BORDER_CONSTANT)
 
 
+#: Pairs of cells :func:`nearest_wall_points` measures at once, at most (or one candidate's).
+_PAIR_BLOCK = 1 << 20
+
+
+def _ranges(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """``lo[0]..hi[0]-1, lo[1]..hi[1]-1, ...`` in one array (``hi >= lo``)."""
+    n = hi - lo
+    return np.arange(int(n.sum())) + np.repeat(lo - (np.cumsum(n) - n), n)
+
+
+def _window_cells(mask: np.ndarray, top: int, width: int, ra, rb, ca, cb):
+    """The cells of ``mask`` in windows ``[ra:rb, ca:cb]``, all windows at once.
+
+    Parameters
+    ----------
+    mask : (M, width) ndarray of bool
+        Rows ``top`` to ``top + M`` of a map ``width`` columns wide.
+    top, width : int
+    ra, rb, ca, cb : (K,) ndarray of int
+        Window bounds, inside the map's rows ``top`` to ``top + M``.
+
+    Returns
+    -------
+    rows, cols, seg : ndarray of int
+        The cells window after window, each window's in the order of
+        :func:`numpy.nonzero` of its slice (row-major); ``seg`` the window of
+        each cell.
+    """
+    lin = np.flatnonzero(mask) + top * width
+    win = np.repeat(np.arange(len(ra)), rb - ra)
+    row = _ranges(ra, rb)
+    lo = np.searchsorted(lin, row * width + ca[win])
+    hi = np.searchsorted(lin, row * width + cb[win])
+    n = hi - lo
+    rows = np.repeat(row, n)
+    return rows, lin[_ranges(lo, hi)] - rows * width, np.repeat(win, n)
+
+
+def _window_faces(obstacle: np.ndarray, ra, rb, ca, cb):
+    """:func:`~topomap.walls.wall_faces` of the windows ``[ra:rb, ca:cb]`` of
+    ``obstacle`` (a cell outside its window is not free), all windows at once.
+
+    From the map's faces over the rows the windows span, the cells on a
+    window's edge checked again, when that is cheaper than one window at a
+    time (windows far apart on a large map).
+
+    Parameters
+    ----------
+    obstacle : (M, N) ndarray of bool
+    ra, rb, ca, cb : (K,) ndarray of int
+        Window bounds, inside the map.
+
+    Returns
+    -------
+    rows, cols, seg : ndarray of int
+        As :func:`_window_cells`.
+    """
+    H, W = obstacle.shape
+    top, bot = int(ra.min()), int(rb.max())
+    area = int(((rb - ra) * (cb - ca)).sum())
+    if (bot - top) * W > 4 * area + 4000 * len(ra):
+        parts = []
+        for k in range(len(ra)):
+            win = obstacle[ra[k]:rb[k], ca[k]:cb[k]]
+            r, c = np.nonzero(wall_faces(win, ~win))
+            parts.append((r + ra[k], c + ca[k]))
+        n = [p[0].size for p in parts]
+        return (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]),
+                np.repeat(np.arange(len(ra)), n))
+    band = obstacle[top:bot]
+    rr, cc, seg = _window_cells(wall_faces(band, ~band), top, W, ra, rb, ca, cb)
+    # on a window's edge, the free neighbour may lie outside the window
+    edge = np.flatnonzero((rr == ra[seg]) | (rr == rb[seg] - 1) | (cc == ca[seg]) | (cc == cb[seg] - 1))
+    er, ec, es = rr[edge], cc[edge], seg[edge]
+    surf = np.zeros(edge.size, bool)
+    for dr, dc in ((-1, 0), (1, 0), (0, -1), (0, 1)):
+        rn, cn = er + dr, ec + dc
+        inside = (rn >= ra[es]) & (rn < rb[es]) & (cn >= ca[es]) & (cn < cb[es])
+        surf |= inside & ~obstacle[np.clip(rn, 0, H - 1), np.clip(cn, 0, W - 1)]
+    on = np.ones(rr.size, bool)
+    on[edge[~surf]] = False
+    return rr[on], cc[on], seg[on]
+
+
+def _strip_cells(u0, u1, r0, c0, ra, rb, ca, cb):
+    """Per window, the cells ``x`` with ``-m < (x - p) . u <= 0`` (``p = (r0,
+    c0)``, ``u`` a non-zero integer vector, ``m = max(|u0|, |u1|)``): one cell a
+    row (``|u1| >= |u0|``) or a column, the edge of the half-plane
+    ``(x - p) . u <= 0``.
+
+    Returns
+    -------
+    rows, cols, seg : ndarray of int
+        The cells inside their windows; ``seg`` the window of each.
+    """
+    by_row = np.abs(u1) >= np.abs(u0)
+    # along the rows: t = -y u0, x u1 in (t - m, t]; along the columns the same, transposed
+    lo, hi = np.where(by_row, ra - r0, ca - c0), np.where(by_row, rb - r0, cb - c0)
+    seg = np.repeat(np.arange(len(ra)), hi - lo)
+    y = _ranges(lo, hi)
+    a, b = np.where(by_row, u0, u1)[seg], np.where(by_row, u1, u0)[seg]
+    t = -y * a
+    x = np.where(b > 0, t // np.where(b == 0, 1, b), -((-t) // np.where(b == 0, 1, b)))
+    rows = np.where(by_row[seg], y + r0[seg], x + r0[seg])
+    cols = np.where(by_row[seg], x + c0[seg], y + c0[seg])
+    dot = (rows - r0[seg]) * u0[seg] + (cols - c0[seg]) * u1[seg]
+    m = np.maximum(np.abs(u0), np.abs(u1))[seg]
+    ok = ((dot > -m) & (dot <= 0) & (rows >= ra[seg]) & (rows < rb[seg])
+          & (cols >= ca[seg]) & (cols < cb[seg]))
+    return rows[ok], cols[ok], seg[ok]
+
+
+def _first_minima(x: np.ndarray, counts: np.ndarray):
+    """Per segment of ``x`` (``counts[k]`` values each, one segment after
+    the other): the smallest value (inf for an empty segment) and the index
+    in ``x`` of its first occurrence (what :func:`numpy.argmin` gives; -1 for
+    an empty segment)."""
+    xmin = np.full(counts.size, np.inf)
+    idx = np.full(counts.size, -1)
+    has = counts > 0
+    if x.size:
+        starts = (np.cumsum(counts) - counts)[has]
+        xmin[has] = np.minimum.reduceat(x, starts)
+        pos = np.flatnonzero(x == np.repeat(xmin, counts))
+        idx[has] = pos[np.searchsorted(pos, starts)]
+    return xmin, idx
+
+
+def _nearest_wall_points_one(c, obstacle: np.ndarray, max_px: float, depth_px: float) -> None:
+    """:func:`nearest_wall_points` for one candidate, on its own window."""
+    H, W = obstacle.shape
+    R = int(np.ceil(min(c.radius * 1.5 + 3 + depth_px, max_px + depth_px)))
+    r0, c0 = int(round(c.centroid[0])), int(round(c.centroid[1]))
+    ra, rb = max(r0 - R, 0), min(r0 + R + 1, H)
+    ca, cb = max(c0 - R, 0), min(c0 + R + 1, W)
+    win = obstacle[ra:rb, ca:cb]
+    rr, cc = np.nonzero(win)
+    c.ip1 = c.ip2 = None
+    if rr.size == 0:
+        return
+    q = np.stack([rr + ra, cc + ca], 1).astype(float)
+    v = q - c.centroid
+    d = np.hypot(v[:, 0], v[:, 1])
+    i = int(np.argmin(d))
+    if d[i] > max_px:
+        return
+    opp = (v @ v[i]) <= 0
+    if not opp.any():
+        c.ip1 = q[i]
+        return
+    j = np.flatnonzero(opp)[np.argmin(d[opp])]
+    if d[j] > max_px:
+        c.ip1 = q[i]
+        return
+    c.ip1, c.ip2 = q[i], q[j]
+    if depth_px <= 0 or c.status == MOUTH:
+        return
+    # closest pairs of cells across a passage lie on the obstacles'
+    # surface: only cells with a free 4-neighbour are paired (keeps the
+    # pairing linear in the window's side, not in its area)
+    on_surface = wall_faces(win, ~win)[rr, cc]
+    a = q[(~opp) & (d <= d[i] + depth_px) & on_surface]
+    b = q[opp & (d <= d[j] + depth_px) & on_surface]
+    if a.size and b.size:
+        D = np.hypot(a[:, None, 0] - b[None, :, 0], a[:, None, 1] - b[None, :, 1])
+        ia, ib = np.nonzero(D <= D.min() + 0.75)
+        c.ip1, c.ip2 = a[ia].mean(axis=0), b[ib].mean(axis=0)
+
+
 def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, depth_px: float = 0.0):
     """Set ``ip1``, ``ip2``: the two door posts of each bottleneck.
 
@@ -533,45 +707,138 @@ def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, dept
     runs through the middle of the wall's thickness, wherever along the
     passage the skeleton's minimum lies. Cells farther than ``max_px`` are
     not searched.
+
+    Candidates centred on a free cell (all of :func:`passage_minima`'s)
+    are handled all at once, on the surface cells of their windows (and
+    the few cells on the edge of the opposite side that can be nearest
+    there): every difference, dot product and sum is then exact in
+    floating point, so the posts are bit for bit those of one window at a
+    time; other candidates take one window each. Time and memory are linear
+    in the map's rows spanned by the windows, plus the windows' cells.
     """
     H, W = obstacle.shape
-    for c in candidates:
-        R = int(np.ceil(min(c.radius * 1.5 + 3 + depth_px, max_px + depth_px)))
-        r0, c0 = int(round(c.centroid[0])), int(round(c.centroid[1]))
-        ra, rb = max(r0 - R, 0), min(r0 + R + 1, H)
-        ca, cb = max(c0 - R, 0), min(c0 + R + 1, W)
-        win = obstacle[ra:rb, ca:cb]
-        rr, cc = np.nonzero(win)
+    cands = list(candidates)
+    cen = np.array([c.centroid for c in cands], float).reshape(len(cands), 2)
+    whole = np.all((cen == np.round(cen)) & (cen >= 0) & (cen < (H, W)), axis=1)
+    whole[whole] = ~obstacle[cen[whole, 0].astype(int), cen[whole, 1].astype(int)]
+    batch = [c for c, w in zip(cands, whole) if w]
+    for c, w in zip(cands, whole):
         c.ip1 = c.ip2 = None
-        if rr.size == 0:
+        if not w:
+            _nearest_wall_points_one(c, obstacle, max_px, depth_px)
+    K = len(batch)
+    if K == 0:
+        return candidates
+    cen = cen[whole]
+    R = np.array([int(np.ceil(min(c.radius * 1.5 + 3 + depth_px, max_px + depth_px))) for c in batch])
+    r0, c0 = cen[:, 0].astype(int), cen[:, 1].astype(int)
+    ra, rb = np.maximum(r0 - R, 0), np.minimum(r0 + R + 1, H)
+    ca, cb = np.maximum(c0 - R, 0), np.minimum(c0 + R + 1, W)
+    # Only surface cells (an obstacle cell with a free 4-neighbour inside its
+    # window) can be nearest to a free centre: the neighbour towards the
+    # centre is nearer.
+    rr, cc, seg = _window_faces(obstacle, ra, rb, ca, cb)
+    if rr.size == 0:
+        return candidates
+    counts = np.bincount(seg, minlength=K)
+    q0, q1 = rr.astype(float), cc.astype(float)
+    v0, v1 = q0 - np.repeat(cen[:, 0], counts), q1 - np.repeat(cen[:, 1], counts)
+    d = np.hypot(v0, v1)
+    di, i = _first_minima(d, counts)
+    # integers: the sign of v @ v[i] is exact whatever the order of the sums
+    u0, u1 = v0[i].astype(int), v1[i].astype(int)
+    dot = v0 * np.repeat(v0[i], counts) + v1 * np.repeat(v1[i], counts)
+    opp = dot <= 0
+    # The nearest cell on the other side (v . u <= 0) is on the surface too,
+    # or its neighbour towards the centre lies on the near side: then it is
+    # on the half-plane's edge, -max(|u|) < v . u <= 0, one cell a row or a
+    # column; the first of the nearest in row-major order, as in one window.
+    has = (counts > 0) & (di <= max_px)
+    sr, sc, ss = _strip_cells(u0[has], u1[has], r0[has], c0[has], ra[has], rb[has], ca[has], cb[has])
+    ss = np.flatnonzero(has)[ss]
+    o = obstacle[sr, sc]
+    sr, sc, ss = sr[o], sc[o], ss[o]
+    jr, jc, js = np.r_[rr[opp], sr], np.r_[cc[opp], sc], np.r_[seg[opp], ss]
+    order = np.argsort(js, kind="stable")
+    jr, jc, js = jr[order], jc[order], js[order]
+    jd = np.hypot(jr - cen[js, 0], jc - cen[js, 1])
+    jn = np.bincount(js, minlength=K)
+    dj, _ = _first_minima(jd, jn)
+    at = np.flatnonzero(jd == np.repeat(dj, jn))
+    lin = jr[at] * W + jc[at]
+    firsts = np.full(K, -1)
+    if at.size:
+        # the smallest linear index of the nearest cells, per candidate
+        o = np.lexsort((lin, js[at]))
+        at = at[o][np.r_[True, js[at][o][1:] != js[at][o][:-1]]]
+        firsts[js[at]] = at
+    for k, c in enumerate(batch):
+        if i[k] < 0 or di[k] > max_px:
             continue
-        q = np.stack([rr + ra, cc + ca], 1).astype(float)
-        v = q - c.centroid
-        d = np.hypot(v[:, 0], v[:, 1])
-        i = int(np.argmin(d))
-        if d[i] > max_px:
-            continue
-        opp = (v @ v[i]) <= 0
-        if not opp.any():
-            c.ip1 = q[i]
-            continue
-        j = np.flatnonzero(opp)[np.argmin(d[opp])]
-        if d[j] > max_px:
-            c.ip1 = q[i]
-            continue
-        c.ip1, c.ip2 = q[i], q[j]
-        if depth_px <= 0 or c.status == MOUTH:
-            continue
-        # closest pairs of cells across a passage lie on the obstacles'
-        # surface: only cells with a free 4-neighbour are paired (keeps the
-        # pairing linear in the window's side, not in its area)
-        on_surface = wall_faces(win, ~win)[rr, cc]
-        a = q[(~opp) & (d <= d[i] + depth_px) & on_surface]
-        b = q[opp & (d <= d[j] + depth_px) & on_surface]
-        if a.size and b.size:
-            D = np.hypot(a[:, None, 0] - b[None, :, 0], a[:, None, 1] - b[None, :, 1])
-            ia, ib = np.nonzero(D <= D.min() + 0.75)
-            c.ip1, c.ip2 = a[ia].mean(axis=0), b[ib].mean(axis=0)
+        c.ip1 = np.array([q0[i[k]], q1[i[k]]])
+        if firsts[k] >= 0 and dj[k] <= max_px:
+            c.ip2 = np.array([float(jr[firsts[k]]), float(jc[firsts[k]])])
+    if depth_px <= 0:
+        return candidates
+    pair = np.array([c.ip2 is not None and c.status != MOUTH for c in batch])
+    sel = np.repeat(pair, counts) & np.where(opp, d <= np.repeat(dj, counts) + depth_px,
+                                             d <= np.repeat(di, counts) + depth_px)
+    keep = np.flatnonzero(sel)
+    side = opp[keep]
+    a, b = keep[~side], keep[side]
+    # A pair is at least as long as its cells' distances to the line between
+    # the sides (h); the pair of the nearest cell with its closest partner
+    # bounds the closest pair (ub): cells that cannot be in a pair within
+    # 0.75 px of the closest are left out (0.05 px to spare for rounding).
+    h = np.abs(dot) / np.repeat(np.hypot(u0, u1), counts)
+    ub2 = np.full(K, np.inf)
+    np.minimum.at(ub2, seg[b], (q0[b] - q0[i][seg[b]]) ** 2 + (q1[b] - q1[i][seg[b]]) ** 2)
+    ha, hb = np.full(K, np.inf), np.full(K, np.inf)
+    np.minimum.at(ha, seg[a], h[a])
+    np.minimum.at(hb, seg[b], h[b])
+    lim = np.sqrt(ub2) + 0.8
+    a = a[h[a] + hb[seg[a]] <= lim[seg[a]]]
+    b = b[h[b] + ha[seg[b]] <= lim[seg[b]]]
+    sa, sb = seg[a], seg[b]
+    ks = np.arange(K)
+    a_lo, na = np.searchsorted(sa, ks), np.bincount(sa, minlength=K)
+    b_lo, nb = np.searchsorted(sb, ks), np.bincount(sb, minlength=K)
+    ks = ks[(na > 0) & (nb > 0)]
+    qa0, qa1, qb0, qb1 = q0[a], q1[a], q0[b], q1[b]
+    # every pair of cells (one per side) of a candidate, a block of
+    # candidates at a time (memory bounded by the largest candidate's pairs)
+    npair = na[ks] * nb[ks]
+    cum = np.cumsum(npair)
+    start = 0
+    while start < ks.size:
+        stop = max(int(np.searchsorted(cum, cum[start] - npair[start] + _PAIR_BLOCK, "right")), start + 1)
+        kk, nk = ks[start:stop], npair[start:stop]
+        start = stop
+        ai = _ranges(a_lo[kk], a_lo[kk] + na[kk])
+        rep = nb[sa[ai]]
+        first = np.cumsum(rep) - rep
+        pb = np.arange(int(rep.sum())) + np.repeat(b_lo[sa[ai]] - first, rep)
+        # squared distances are exact integers: the closest pairs are found
+        # on them, and only pairs that can be within 0.75 px of the closest
+        # measured as the windowed search did (np.hypot)
+        dr, dc = np.repeat(qa0[ai], rep) - qb0[pb], np.repeat(qa1[ai], rep) - qb1[pb]
+        sq = dr * dr + dc * dc
+        starts = np.cumsum(nk) - nk
+        bound = (np.sqrt(np.minimum.reduceat(sq, starts)) + 0.76) ** 2
+        near = np.flatnonzero(sq <= np.repeat(bound, nk))
+        ps = np.repeat(kk, nk)[near]
+        D = np.hypot(dr[near], dc[near])
+        pos = np.searchsorted(near, starts)
+        Dmin = np.empty(K)
+        Dmin[kk] = np.minimum.reduceat(D, pos)
+        ok = D <= Dmin[ps] + 0.75
+        pa, pb, ps = np.repeat(ai, rep)[near[ok]], pb[near[ok]], ps[ok]
+        n = np.bincount(ps, minlength=K)
+        # integer coordinates: the sums are exact, the means those of numpy.mean
+        sums = [np.bincount(ps, weights=x, minlength=K) for x in (qa0[pa], qa1[pa], qb0[pb], qb1[pb])]
+        for k in kk:
+            batch[k].ip1 = np.array([sums[0][k], sums[1][k]]) / n[k]
+            batch[k].ip2 = np.array([sums[2][k], sums[3][k]]) / n[k]
     return candidates
 
 
