@@ -298,6 +298,30 @@ def preprocess_masks(grid: OccupancyGrid, opts, *, occupied=None):
     return f, d_free, occ
 
 
+def furniture_keep(grid: OccupancyGrid, looked: OccupancyGrid, clutter, opts) -> np.ndarray:
+    """Stage "furniture": the cells of bulky furniture that are not looked through.
+
+    They are the cells of the long walls of ``looked`` (``grid`` with its
+    small clutter, ``clutter``, looked through), chained from Hough lines
+    only, except the long walls at least half of whose cells are bulky
+    furniture in two or more separate pieces: a row of desks or round tables
+    (:func:`topomap.walls.furniture_rows`).
+
+    Returns
+    -------
+    (M, N) ndarray of bool
+    """
+    from . import walls as W
+
+    res = grid.resolution
+    wk = _Walls(looked, opts, runs=False)
+    _, every = without_clutter(grid, opts.min_wall_length, furniture_size=opts.furniture_size,
+                               wall_thickness=opts.wall_thickness)
+    bulky = every if clutter is None else every & ~clutter
+    rows = W.furniture_rows(W.scale_walls(wk.lw, wk.k), ~looked.free, bulky, band_px=opts.wall_wander / res)
+    return wk.mask(looked.free.shape, keep=~rows)
+
+
 def close_wall_gaps(grid: OccupancyGrid, wall_gap: float):
     """Stage "masks": the map with gaps between obstacles narrower than
     ``wall_gap`` (m) closed (a morphological closing of the non-free cells
@@ -816,17 +840,10 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
             # cupboards) would chain into long walls and keep it (measured:
             # precision -2.0 on the Freiburg partial maps, -4.6 on
             # bremen_cartesium_full)
-            # a long wall whose cells are mostly bulky furniture in separate
-            # pieces (a row of desks or round tables) keeps none of it
-            wk = _Walls(looked, opts, runs=False)
-            _, every = without_clutter(rooms_grid, opts.min_wall_length, furniture_size=opts.furniture_size,
-                                       wall_thickness=opts.wall_thickness)
-            bulky = every if clutter is None else every & ~clutter
-            rows = W.furniture_rows(W.scale_walls(wk.lw, wk.k), ~looked.free, bulky, band_px=opts.wall_wander / res)
             looked2, clutter2 = without_clutter(rooms_grid, opts.min_wall_length,
                                                 furniture_size=opts.furniture_size,
                                                 wall_thickness=opts.wall_thickness,
-                                                keep=wk.mask(looked.free.shape, keep=~rows))
+                                                keep=furniture_keep(rooms_grid, looked, clutter, opts))
             if clutter2 is not None and (clutter is None or not np.array_equal(clutter2, clutter)):
                 looked, clutter = looked2, clutter2
                 search, closed = close_wall_gaps(looked, opts.wall_gap)
