@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["edt", "label", "lookup"]
+__all__ = ["edt", "label", "lookup", "ranges"]
 
 
 def _bytes(mask: np.ndarray) -> np.ndarray:
@@ -91,3 +91,11 @@ def lookup(table: np.ndarray, labels: np.ndarray) -> np.ndarray:
 
 
 _LUT_TYPES = tuple(np.dtype(t) for t in (np.uint8, np.int8, np.uint16, np.int16, np.int32, np.float32, np.float64))
+
+
+def ranges(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """``lo[0]..hi[0]-1, lo[1]..hi[1]-1, ...`` in one int array (``hi >= lo``): the
+    concatenated :func:`numpy.arange` of every pair, without a Python loop."""
+    lo, hi = np.asarray(lo), np.asarray(hi)
+    n = hi - lo
+    return np.arange(int(n.sum())) + np.repeat(lo - (np.cumsum(n) - n), n)

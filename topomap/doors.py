@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ._fast import ranges as _ranges
 from .geometry import disk, point_segment_distances
 from .walls import wall_faces
 
@@ -530,12 +531,6 @@ def protrusion(obstacle_like_free: np.ndarray, radius_px: float) -> np.ndarray:
 _PAIR_BLOCK = 1 << 20
 
 
-def _ranges(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """``lo[0]..hi[0]-1, lo[1]..hi[1]-1, ...`` in one array (``hi >= lo``)."""
-    n = hi - lo
-    return np.arange(int(n.sum())) + np.repeat(lo - (np.cumsum(n) - n), n)
-
-
 def _window_cells(mask: np.ndarray, top: int, width: int, ra, rb, ca, cb):
     """The cells of ``mask`` in windows ``[ra:rb, ca:cb]``, all windows at once.
 
@@ -816,8 +811,7 @@ def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, dept
         start = stop
         ai = _ranges(a_lo[kk], a_lo[kk] + na[kk])
         rep = nb[sa[ai]]
-        first = np.cumsum(rep) - rep
-        pb = np.arange(int(rep.sum())) + np.repeat(b_lo[sa[ai]] - first, rep)
+        pb = _ranges(b_lo[sa[ai]], b_lo[sa[ai]] + rep)
         # squared distances are exact integers: the closest pairs are found
         # on them, and only pairs that can be within 0.75 px of the closest
         # measured as the windowed search did (np.hypot)

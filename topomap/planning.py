@@ -87,7 +87,7 @@ import numpy as np
 import networkx as nx
 
 from .errors import NoPathError, NotInRoomError, PlanningError  # noqa: F401  (re-exported)
-from ._fast import lookup
+from ._fast import lookup, ranges
 from .geometry import line_pixels
 
 __all__ = ["PlanningError", "NotInRoomError", "NoPathError", "room_at", "neighbors", "doors_between",
@@ -622,7 +622,7 @@ def _in_sight(mask, pts):
         n = steps[b] + 1
         start = np.concatenate([[0], np.cumsum(n)[:-1]])
         pair = np.repeat(np.arange(len(b)), n)
-        t = (np.arange(int(n.sum())) - start[pair])[:, None]
+        t = ranges(np.zeros_like(n), n)[:, None]
         on = _line_cells(flat, w, p[I[b]][pair], p[J[b]][pair], steps[b][pair], t)[:, 0]
         ok = np.logical_and.reduceat(on, start)
         out[I[b[ok]], J[b[ok]]] = True

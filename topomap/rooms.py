@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy import ndimage as ndi
 
-from ._fast import lookup
+from ._fast import lookup, ranges
 from .geometry import line_pixels
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -337,7 +337,7 @@ def _fill_pieces(pieces: np.ndarray, seed: np.ndarray, stats: np.ndarray, free: 
     left, row, width = (stats[kept, k].astype(np.int64) for k in (0, 1, 2))
     # the first cell of a piece is on the top row of its box: the first of that row's cells in the piece
     start = np.cumsum(width) - width
-    cells = np.repeat(row * W + left - start, width) + np.arange(int(width.sum()))
+    cells = ranges(row * W + left, row * W + left + width)
     mine = pieces.ravel()[cells] == np.repeat(kept, width)
     at = np.where(mine, cells, np.iinfo(np.int64).max)
     first[seed[kept]] = np.minimum.reduceat(at, start) if kept.size else []
