@@ -559,7 +559,7 @@ def _window_cells(mask: np.ndarray, top: int, width: int, ra, rb, ca, cb):
     return rows, lin[_ranges(lo, hi)] - rows * width, np.repeat(win, n)
 
 
-def _window_faces(obstacle: np.ndarray, ra, rb, ca, cb):
+def _window_faces(obstacle: np.ndarray, ra, rb, ca, cb, faces=None):
     """:func:`~topomap.walls.wall_faces` of the windows ``[ra:rb, ca:cb]`` of
     ``obstacle`` (a cell outside its window is not free), all windows at once.
 
@@ -572,6 +572,8 @@ def _window_faces(obstacle: np.ndarray, ra, rb, ca, cb):
     obstacle : (M, N) ndarray of bool
     ra, rb, ca, cb : (K,) ndarray of int
         Window bounds, inside the map.
+    faces : (M, N) ndarray of bool, optional
+        ``wall_faces(obstacle, ~obstacle)``, when the caller has them.
 
     Returns
     -------
@@ -590,8 +592,12 @@ def _window_faces(obstacle: np.ndarray, ra, rb, ca, cb):
         n = [p[0].size for p in parts]
         return (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]),
                 np.repeat(np.arange(len(ra)), n))
-    band = obstacle[top:bot]
-    rr, cc, seg = _window_cells(wall_faces(band, ~band), top, W, ra, rb, ca, cb)
+    if faces is None:
+        band = obstacle[top:bot]
+        faces = wall_faces(band, ~band)
+    else:  # a cell's face state depends on its 4-neighbours only: the band's rows away from its edges
+        faces = faces[top:bot]
+    rr, cc, seg = _window_cells(faces, top, W, ra, rb, ca, cb)
     # on a window's edge, the free neighbour may lie outside the window
     edge = np.flatnonzero((rr == ra[seg]) | (rr == rb[seg] - 1) | (cc == ca[seg]) | (cc == cb[seg] - 1))
     er, ec, es = rr[edge], cc[edge], seg[edge]
@@ -690,7 +696,7 @@ def _nearest_wall_points_one(c, obstacle: np.ndarray, max_px: float, depth_px: f
         c.ip1, c.ip2 = a[ia].mean(axis=0), b[ib].mean(axis=0)
 
 
-def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, depth_px: float = 0.0):
+def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, depth_px: float = 0.0, faces=None):
     """Set ``ip1``, ``ip2``: the two door posts of each bottleneck.
 
     The nearest obstacle cell to the bottleneck and the nearest one on the
@@ -701,7 +707,8 @@ def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, dept
     parallel faces, such as a gap between two wall ends, the door line thus
     runs through the middle of the wall's thickness, wherever along the
     passage the skeleton's minimum lies. Cells farther than ``max_px`` are
-    not searched.
+    not searched. ``faces``: :func:`~topomap.walls.wall_faces` of
+    ``obstacle``, when the caller has them (else found here).
 
     Candidates centred on a free cell (all of :func:`passage_minima`'s)
     are handled all at once, on the surface cells of their windows (and
@@ -732,7 +739,7 @@ def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, dept
     # Only surface cells (an obstacle cell with a free 4-neighbour inside its
     # window) can be nearest to a free centre: the neighbour towards the
     # centre is nearer.
-    rr, cc, seg = _window_faces(obstacle, ra, rb, ca, cb)
+    rr, cc, seg = _window_faces(obstacle, ra, rb, ca, cb, faces)
     if rr.size == 0:
         return candidates
     counts = np.bincount(seg, minlength=K)
@@ -850,7 +857,8 @@ def occupied_skeleton_lines(Go):
     return MultiLineString([p.tolist() for p in paths]) if paths else None
 
 
-def find_bottlenecks(Gf, obstacle: np.ndarray, opts, resolution: float, threshold_px: float) -> list:
+def find_bottlenecks(Gf, obstacle: np.ndarray, opts, resolution: float, threshold_px: float, *,
+                     faces=None) -> list:
     """Stage "bottlenecks" of the default method: candidate doors with their posts.
 
     Clearance minima along the free-space skeleton (and, with
@@ -871,6 +879,9 @@ def find_bottlenecks(Gf, obstacle: np.ndarray, opts, resolution: float, threshol
     threshold_px : float
         The map's wall-thickness threshold, pixels: posts are averaged over
         cells up to this deep into the wall (at least 2 px).
+    faces : (M, N) ndarray of bool, optional
+        :func:`~topomap.walls.wall_faces` of ``obstacle``, when the caller
+        has them (the walls stage does).
 
     Returns
     -------
@@ -881,7 +892,8 @@ def find_bottlenecks(Gf, obstacle: np.ndarray, opts, resolution: float, threshol
     cands = passage_minima(Gf, window_px=opts.window / res, rise_px=opts.rise / res, reach_px=opts.reach / res,
                            mouths=opts.mouths, min_run_px=opts.corridor_length / res,
                            max_radius_px=opts.max_door_width / np.sqrt(2) / res)
-    nearest_wall_points(cands, obstacle, max_px=opts.max_door_width / res, depth_px=max(threshold_px, 2.0))
+    nearest_wall_points(cands, obstacle, max_px=opts.max_door_width / res, depth_px=max(threshold_px, 2.0),
+                        faces=faces)
     return cands
 
 

@@ -859,13 +859,13 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
         Gf, Go, d_occ = topomap_graphs(fs, os_, factor, d_free, occ, search, opts.min_occupied_branch)
     with T("doors"):
         thr_px = D.wall_threshold(d_occ, S.graph_pixels(Go))
-        cands = D.find_bottlenecks(Gf, walls, opts, res, thr_px)
+        faces = wl.faces if wl.k == 1 else None  # the faces of ``walls``, when walls were found on the map's cells
+        cands = D.find_bottlenecks(Gf, walls, opts, res, thr_px, faces=faces)
         accepted = D.judge_doors(cands, search.free, S.graph_endpoints(Go), thr_px, opts, res)
         if wl.lw and opts.pillar_depth > 0:
             accepted = D.across_corridor(accepted, wl.index, opts.pillar_depth / res)
         if opts.frontier_post > 0:
-            seen = _near_hits(search, rooms_grid.occupied, opts.frontier_post / res,
-                              faces=wl.faces if wl.k == 1 else None)
+            seen = _near_hits(search, rooms_grid.occupied, opts.frontier_post / res, faces=faces)
             if seen is not None:
                 accepted = D.seen_posts(accepted, seen)
         segs = D.suppress_duplicates(accepted, res)
