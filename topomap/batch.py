@@ -305,7 +305,10 @@ def _pool_init():
     # local workers ignore Ctrl-C; the parent stops them
     import signal
 
+    from ._fast import keep_freed_memory
+
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    keep_freed_memory()  # each worker runs many maps
 
 
 def _crashed(task, exc) -> dict:

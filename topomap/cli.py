@@ -297,6 +297,9 @@ def segment_cmd(maps, outdir, resolution, method, skeletons, no_overlay, no_geoj
     merged room IDs).
     """
     start = _process_age()  # before any import below: those are the "import" stage
+    from ._fast import keep_freed_memory
+
+    keep_freed_memory()  # a batch reuses the pages of the maps before (see there)
     imported = _preload(maps)
     from .batch import ERROR, FAILED, OK, SKIPPED, segment_many
     from .errors import ParameterError
