@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy import ndimage as ndi
 
-from ._fast import lookup, ranges
+from ._fast import label_stats, lookup, ranges
 from .geometry import line_pixels
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -208,12 +208,7 @@ def cut_rooms(grid: OccupancyGrid, segments, *, space=None, min_room_cells: int 
     whole = space.copy()
     for rc in lines:
         whole[rc] = False
-    try:  # 16-bit labels when they fit (OpenCV refuses more): the lookups on them are faster
-        n, pieces, stats, _ = cv2.connectedComponentsWithStats(whole.view(np.uint8), connectivity=4,
-                                                               ltype=cv2.CV_16U)
-    except cv2.error:
-        n, pieces, stats, _ = cv2.connectedComponentsWithStats(whole.view(np.uint8), connectivity=4,
-                                                               ltype=cv2.CV_32S)
+    n, pieces, stats, _ = label_stats(whole, connectivity=4)
     n -= 1
     area = stats[:, cv2.CC_STAT_AREA].astype(np.int64)
     seed = np.arange(n + 1, dtype=np.int32)  # piece -> its seed label (0: none)

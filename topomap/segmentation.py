@@ -384,13 +384,10 @@ def clutter_mask(free: np.ndarray, max_extent_px: float, *, furniture_px: float 
     it touches a cell of ``keep`` (a long wall runs along it)."""
     import cv2
 
-    from ._fast import lookup
+    from ._fast import label_stats, lookup
 
     solid = np.logical_not(free).view(np.uint8)
-    try:  # 16-bit labels when they fit (OpenCV refuses more): the lookup below takes them as they are
-        n, comp, stats, _ = cv2.connectedComponentsWithStats(solid, connectivity=8, ltype=cv2.CV_16U)
-    except cv2.error:
-        n, comp, stats, _ = cv2.connectedComponentsWithStats(solid, connectivity=8, ltype=cv2.CV_32S)
+    n, comp, stats, _ = label_stats(solid, connectivity=8)
     extent = np.maximum(stats[:, cv2.CC_STAT_WIDTH], stats[:, cv2.CC_STAT_HEIGHT])
     small = extent < max_extent_px
     bulky = (extent < furniture_px) & ~small
