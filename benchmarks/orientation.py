@@ -1,0 +1,139 @@
+#!/usr/bin/env python
+"""The same maps turned and mirrored: how much the scores depend on the map's orientation.
+
+Run (not a test)::
+
+    python benchmarks/orientation.py [REAL_DIR] [--ipa IPA_DIR] [--out benchmarks/sections/87_orientation.md]
+
+A robot's map has no preferred orientation: SLAM starts where the robot
+stands. Every map of ``rose2_real`` and of ``ipa_room_segmentation`` is
+turned by 0, 90, 180 and 270 degrees, each with and without a mirror
+image (the eight symmetries of the grid), written as a map_server PGM +
+YAML pair, read back with :func:`topomap.load_map` and segmented with
+:func:`topomap.segment` (what ``topomap segment MAP.yaml`` does with that
+file). The rooms are turned back onto the original cells and scored
+against the original ground truth with the original protocol (mean
+precision / recall in %, per group as in the issue tables).
+"""
+
+from __future__ import annotations
+
+import sys
+import tempfile
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _section  # noqa: E402
+from _section import _commit, _machine  # noqa: E402
+
+GROUPS = [("freiburg079_partial_*", lambda n, v: n.startswith("freiburg079_partial")),
+          ("bremen_cartesium_partial_*", lambda n, v: n.startswith("bremen_cartesium_partial")),
+          ("`freiburg079_full`", lambda n, v: n == "freiburg079_full"),
+          ("`bremen_cartesium_full`", lambda n, v: n == "bremen_cartesium_full"),
+          ("ipa unfurnished", lambda n, v: v == "unfurnished"), ("ipa furnished", lambda n, v: v == "furnished")]
+#: (quarter turns counter-clockwise, mirrored left-right after turning)
+POSES = [(k, m) for m in (False, True) for k in range(4)]
+
+
+def turn(a: np.ndarray, k: int, mirror: bool) -> np.ndarray:
+    """``a`` turned by ``k`` quarter turns (:func:`numpy.rot90`), then mirrored left-right."""
+    a = np.rot90(a, k)
+    return np.ascontiguousarray(a[:, ::-1] if mirror else a)
+
+
+def turn_back(a: np.ndarray, k: int, mirror: bool) -> np.ndarray:
+    """The inverse of :func:`turn`."""
+    return np.ascontiguousarray(np.rot90(a[:, ::-1] if mirror else a, -k))
+
+
+def run(task):
+    from topomap import load_map, segment
+    from topomap.evaluation import evaluate
+    from topomap.io import save_map
+
+    bm, k, mirror, tmp = task
+    grid = bm.load()
+    cells = np.full(grid.free.shape, -1, np.int8)
+    cells[grid.free] = 0
+    cells[grid.occupied] = 100
+    path = save_map(turn(cells, k, mirror), Path(tmp) / f"{bm.name}_{bm.variant}_{k}{'m' if mirror else ''}",
+                    resolution=grid.resolution)
+    seg = segment(load_map(path))
+    labels = turn_back(seg.room_labels, k, mirror)
+    ev = evaluate(labels, bm.map_gray, bm.gt_gray, resolution=grid.resolution, door_map_gray=bm.unfurnished_gray,
+                  scored=grid.free, gt_rooms=bm.gt_rooms)
+    return bm.name, bm.variant, (k, mirror), float(ev["precision"]), float(ev["recall"]), int(seg.n_rooms)
+
+
+def _pose(k, mirror):
+    return f"{90 * k}°" + (", mirrored" if mirror else "") + (" (as given)" if (k, mirror) == (0, False) else "")
+
+
+def main(argv=None) -> int:
+    from topomap.datasets import benchmark_dir, load_benchmark, load_labelled, real_maps_dir
+
+    ap = _section.parser(__doc__, "the rose2_real directory", "87_orientation.md")
+    ap.add_argument("--ipa", default=None, help="the ipa_room_segmentation directory (default: found as for "
+                                                "topomap benchmark; none: the real maps only)")
+    ap.add_argument("--jobs", type=int, default=2)
+    a = ap.parse_args(argv)
+    d = _section.directory(a.directory, real_maps_dir, "TOPOMAP_REAL_MAPS")
+    t0 = time.perf_counter()
+    maps = list(load_labelled(d))
+    ipa = a.ipa or benchmark_dir()
+    if ipa is not None and Path(ipa).is_dir():
+        maps += [bm for v in ("unfurnished", "furnished") for bm in load_benchmark(ipa, variant=v)]
+    with tempfile.TemporaryDirectory() as tmp, ProcessPoolExecutor(a.jobs) as ex:
+        rows = list(ex.map(run, [(bm, k, m, tmp) for k, m in POSES for bm in maps]))
+    groups = [(g, sel) for g, sel in GROUPS if any(sel(r[0], r[1]) for r in rows)]
+    table = "| orientation | " + " | ".join(g for g, _ in groups) + " |\n| --- |" + " --- |" * len(groups) + "\n"
+    means = {}
+    for pose in POSES:
+        cells = []
+        for g, sel in groups:
+            r = [x for x in rows if x[2] == pose and sel(x[0], x[1])]
+            p, rec = 100 * np.mean([x[3] for x in r]), 100 * np.mean([x[4] for x in r])
+            means.setdefault(g, []).append((p, rec))
+            cells.append(f"{p:.1f} / {rec:.1f}")
+        table += f"| {_pose(*pose)} | " + " | ".join(cells) + " |\n"
+    table += "| **mean of the eight** | " + " | ".join(
+        "**{:.1f} / {:.1f}**".format(*np.mean(means[g], axis=0)) for g, _ in groups) + " |\n"
+    table += "| lowest / highest P | " + " | ".join(
+        f"{min(p for p, _ in means[g]):.1f} / {max(p for p, _ in means[g]):.1f}" for g, _ in groups) + " |\n"
+    table += "| lowest / highest R | " + " | ".join(
+        f"{min(r for _, r in means[g]):.1f} / {max(r for _, r in means[g]):.1f}" for g, _ in groups) + " |\n"
+    text = f"""## The same maps turned and mirrored
+
+`python benchmarks/orientation.py` (the `rose2_real` directory as argument, `--ipa` the ipa maps; found as for
+`topomap benchmark`), commit `{_commit()}`; {_machine()}.
+
+A robot's map has no preferred orientation. Every map turned by 0, 90,
+180 and 270 degrees, with and without a mirror image, written as a PGM +
+YAML pair and read back with `topomap.load_map`; the rooms are turned back
+onto the original cells and scored with the **original protocol** against
+the original ground truth (mean P / R in %).
+
+{table}
+The scores depend on the orientation: on the real maps the group means
+move by up to about 3 points of precision or recall between orientations
+(one map can move by more), on the floor plans by less than one. The
+method is not symmetric under turning: OpenCV's probabilistic Hough
+transform (`cv2.HoughLinesP`, the wall lines) visits the wall cells in a
+random order, the thinning of the skeletons (Zhang's two sub-passes) and
+ties broken in row-major order treat the directions differently. An
+experiment that takes the wall lines from the map as stored and turns
+them leaves the spread about as large, so the lines are not the only
+cause. The mean of the eight orientations is the fairer figure for maps
+of other buildings; the tables above this section give the maps as they
+are stored.
+"""
+    _section.write(a.out, text, table, time.perf_counter() - t0)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
