@@ -281,15 +281,24 @@ def _fill_pieces(pieces: np.ndarray, seed: np.ndarray, stats: np.ndarray, free: 
         inside = ok & (todo[pos] == nb)  # the neighbour is itself a cell without a seed
         fixed = np.where(ok & ~inside, seed[flat[nb]], 0)
         del rn, cn, nb, r, c
-        for _ in range(8):  # _grow's steps
-            cur = np.where(inside[open_], val[pos[open_]], fixed[open_]).max(axis=1)
+        # _grow's steps, all cells at once: a cell still open after a step gets a label in the
+        # next only beside a cell labelled in this one, so each step after the first looks at those
+        # cells only (the scan specks no seed reaches are looked at once, not eight times)
+        is_open = np.ones(todo.size, bool)
+        look = open_
+        for _ in range(8):
+            cur = np.where(inside[look], val[pos[look]], fixed[look]).max(axis=1)
             hit = cur > 0
             if not hit.any():
                 break
-            val[open_[hit]] = cur[hit]
-            open_ = open_[~hit]
-            if not open_.size:
+            new = look[hit]
+            val[new] = cur[hit]
+            is_open[new] = False
+            nxt = pos[new][inside[new]]
+            look = np.flatnonzero(np.bincount(nxt, minlength=todo.size).astype(bool) & is_open) if nxt.size else nxt
+            if not look.size:
                 break
+        open_ = np.flatnonzero(is_open)
     n_rest = 0
     if open_.size:
         # the cells left, in 8-connected components, and the labels beside each component
