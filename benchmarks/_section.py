@@ -38,3 +38,13 @@ def write(out: Path, text: str, table: str, wall: float) -> None:
     tmp.replace(out)
     sys.stdout.write(table)
     print(f"-> {out} ({wall:.0f} s)")
+
+
+def ros_cells(grid):
+    """``grid``'s cells as map_server values: 0 free, 100 occupied, -1 every other cell (int8)."""
+    import numpy as np
+
+    cells = np.full(grid.free.shape, -1, np.int8)
+    cells[grid.free] = 0
+    cells[grid.occupied] = 100
+    return cells

@@ -57,9 +57,7 @@ def run(task):
 
     bm, k, mirror, tmp = task
     grid = bm.load()
-    cells = np.full(grid.free.shape, -1, np.int8)
-    cells[grid.free] = 0
-    cells[grid.occupied] = 100
+    cells = _section.ros_cells(grid)
     path = save_map(turn(cells, k, mirror), Path(tmp) / f"{bm.name}_{bm.variant}_{k}{'m' if mirror else ''}",
                     resolution=grid.resolution)
     seg = segment(load_map(path))

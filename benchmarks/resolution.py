@@ -76,9 +76,7 @@ def run(task):
 
     bm, k, options, tmp = task
     grid = bm.load()
-    cells = np.full(grid.free.shape, -1, np.int8)
-    cells[grid.free] = 0
-    cells[grid.occupied] = 100
+    cells = _section.ros_cells(grid)
     res = grid.resolution * (k if k > 0 else 1 / -k)
     path = save_map(resample(cells, k) if k != 1 else cells, Path(tmp) / f"{bm.name}_{k}", resolution=res)
     seg = segment(load_map(path), **options)
