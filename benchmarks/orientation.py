@@ -4,6 +4,7 @@
 Run (not a test)::
 
     python benchmarks/orientation.py [REAL_DIR] [--ipa IPA_DIR] [--out benchmarks/sections/87_orientation.md]
+    python benchmarks/orientation.py --real-only --options '{"rise": 0.2}' --out /tmp/try.md   # a setting
 
 A robot's map has no preferred orientation: SLAM starts where the robot
 stands. Every map of ``rose2_real`` and of ``ipa_room_segmentation`` is
@@ -55,12 +56,12 @@ def run(task):
     from topomap.evaluation import evaluate
     from topomap.io import save_map
 
-    bm, k, mirror, tmp = task
+    bm, k, mirror, tmp, options = task
     grid = bm.load()
     cells = _section.ros_cells(grid)
     path = save_map(turn(cells, k, mirror), Path(tmp) / f"{bm.name}_{bm.variant}_{k}{'m' if mirror else ''}",
                     resolution=grid.resolution)
-    seg = segment(load_map(path))
+    seg = segment(load_map(path), **options)
     labels = turn_back(seg.room_labels, k, mirror)
     ev = evaluate(labels, bm.map_gray, bm.gt_gray, resolution=grid.resolution, door_map_gray=bm.unfurnished_gray,
                   scored=grid.free, gt_rooms=bm.gt_rooms)
@@ -78,15 +79,20 @@ def main(argv=None) -> int:
     ap.add_argument("--ipa", default=None, help="the ipa_room_segmentation directory (default: found as for "
                                                 "topomap benchmark; none: the real maps only)")
     ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--options", default="{}", help="options of topomap.segment as JSON (default: none)")
+    ap.add_argument("--real-only", action="store_true", help="the real maps only")
     a = ap.parse_args(argv)
+    import json
+
+    options = json.loads(a.options)
     d = _section.directory(a.directory, real_maps_dir, "TOPOMAP_REAL_MAPS")
     t0 = time.perf_counter()
     maps = list(load_labelled(d))
     ipa = a.ipa or benchmark_dir()
-    if ipa is not None and Path(ipa).is_dir():
+    if ipa is not None and Path(ipa).is_dir() and not a.real_only:
         maps += [bm for v in ("unfurnished", "furnished") for bm in load_benchmark(ipa, variant=v)]
     with tempfile.TemporaryDirectory() as tmp, ProcessPoolExecutor(a.jobs) as ex:
-        rows = list(ex.map(run, [(bm, k, m, tmp) for k, m in POSES for bm in maps]))
+        rows = list(ex.map(run, [(bm, k, m, tmp, options) for k, m in POSES for bm in maps]))
     groups = [(g, sel) for g, sel in GROUPS if any(sel(r[0], r[1]) for r in rows)]
     table = "| orientation | " + " | ".join(g for g, _ in groups) + " |\n| --- |" + " --- |" * len(groups) + "\n"
     means = {}
