@@ -129,9 +129,9 @@ method is not symmetric under turning: OpenCV's probabilistic Hough
 transform (`cv2.HoughLinesP`, the wall lines) visits the wall cells in a
 random order, the thinning of the skeletons (Zhang's two sub-passes) and
 ties broken in row-major order treat the directions differently. An
-experiment that takes the wall lines from the map as stored and turns
-them leaves the spread about as large, so the lines are not the only
-cause. The mean of the eight orientations is the fairer figure for maps
+experiment that takes the wall lines and both skeletons from the map as
+stored and turns them leaves the spread about as large, so the other
+steps (the coarse grid's blocks, the order of ties) matter as much. The mean of the eight orientations is the fairer figure for maps
 of other buildings; the tables above this section give the maps as they
 are stored.
 """
