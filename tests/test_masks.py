@@ -43,6 +43,33 @@ def test_clutter_mask_is_its_definition(seed):
 
 
 @pytest.mark.parametrize("seed", range(4))
+def test_clutter_mask_keep_and_shared_parts(seed):
+    # with keep: the clutter components touching a kept cell are none; the parts made once
+    # (the furniture stage asks with and without keep) give the same masks
+    from topomap.segmentation import clutter_parts
+
+    rng = np.random.default_rng(seed)
+    free = np.ones((150, 170), bool)
+    for _ in range(60):
+        r, c = rng.integers(-5, 150), rng.integers(-5, 170)
+        free[max(r, 0):r + rng.integers(1, 30), max(c, 0):c + rng.integers(1, 30)] = False
+    keep = np.zeros(free.shape, bool)
+    keep[rng.integers(0, 150, 40), rng.integers(0, 170, 40)] = True
+    every = _reference(free, 8, 40, 9)
+    n, comp = cv2.connectedComponents((~free).astype(np.uint8), connectivity=8)
+    touched = np.zeros(n, bool)
+    touched[comp[keep]] = True
+    touched[0] = False
+    want = every & ~touched[comp]
+    assert (every & touched[comp]).any() and want.any()  # the case is not empty either way
+    parts = clutter_parts(free, 8, furniture_px=40, wall_thickness_px=9)
+    for p in (None, parts):
+        np.testing.assert_array_equal(clutter_mask(free, 8, furniture_px=40, wall_thickness_px=9, parts=p), every)
+        np.testing.assert_array_equal(clutter_mask(free, 8, furniture_px=40, wall_thickness_px=9, keep=keep,
+                                                   parts=p), want)
+
+
+@pytest.mark.parametrize("seed", range(4))
 def test_close_by_distance_is_the_closing(seed):
     from topomap.geometry import disk
     from topomap.segmentation import _close_by_distance

@@ -298,14 +298,15 @@ def preprocess_masks(grid: OccupancyGrid, opts, *, occupied=None):
     return f, d_free, occ
 
 
-def furniture_keep(grid: OccupancyGrid, looked: OccupancyGrid, clutter, opts) -> np.ndarray:
+def furniture_keep(grid: OccupancyGrid, looked: OccupancyGrid, clutter, opts, *, parts=None) -> np.ndarray:
     """Stage "furniture": the cells of bulky furniture that are not looked through.
 
     They are the cells of the long walls of ``looked`` (``grid`` with its
     small clutter, ``clutter``, looked through), chained from Hough lines
     only, except the long walls at least half of whose cells are bulky
     furniture in two or more separate pieces: a row of desks or round tables
-    (:func:`topomap.walls.furniture_rows`).
+    (:func:`topomap.walls.furniture_rows`). ``parts``: :func:`clutter_parts`
+    of ``grid.free`` with the furniture size, when already made.
 
     Returns
     -------
@@ -316,7 +317,7 @@ def furniture_keep(grid: OccupancyGrid, looked: OccupancyGrid, clutter, opts) ->
     res = grid.resolution
     wk = _Walls(looked, opts, runs=False)
     _, every = without_clutter(grid, opts.min_wall_length, furniture_size=opts.furniture_size,
-                               wall_thickness=opts.wall_thickness)
+                               wall_thickness=opts.wall_thickness, parts=parts)
     bulky = every if clutter is None else every & ~clutter
     rows = W.furniture_rows(W.scale_walls(wk.lw, wk.k), ~looked.free, bulky, band_px=opts.wall_wander / res)
     return wk.mask(looked.free.shape, keep=~rows)
@@ -373,18 +374,22 @@ def _close_by_distance(free: np.ndarray, r: int) -> np.ndarray:
     return edt(pad)[r + 1:-(r + 1), r + 1:-(r + 1)] > r
 
 
-def clutter_mask(free: np.ndarray, max_extent_px: float, *, furniture_px: float = 0.0,
-                 wall_thickness_px: float = np.inf, keep=None) -> np.ndarray:
-    """Obstacle cells of free-standing clutter (8-connected components of the
-    non-free cells): components less than ``max_extent_px`` across (bounding
-    box) — chairs, plants, small tables, pillars — and components less than
-    ``furniture_px`` across that are thicker than ``wall_thickness_px``
-    (twice their largest inscribed radius) — desks, cupboards, tables with
-    their chairs: no free-standing piece of wall is that thick — unless
-    it touches a cell of ``keep`` (a long wall runs along it)."""
+def clutter_parts(free: np.ndarray, max_extent_px: float, *, furniture_px: float = 0.0,
+                  wall_thickness_px: float = np.inf):
+    """The 8-connected components of the non-free cells and which of them are
+    free-standing clutter (:func:`clutter_mask` before ``keep``).
+
+    Returns
+    -------
+    comp : (M, N) ndarray of uint16 or int32
+        Component labels (0: the free cells).
+    clutter : (n + 1,) ndarray of bool
+        Per component: less than ``max_extent_px`` across, or less than
+        ``furniture_px`` across and thicker than ``wall_thickness_px``.
+    """
     import cv2
 
-    from ._fast import label_stats, lookup
+    from ._fast import label_stats
 
     solid = np.logical_not(free).view(np.uint8)
     n, comp, stats, _ = label_stats(solid, connectivity=8)
@@ -392,10 +397,6 @@ def clutter_mask(free: np.ndarray, max_extent_px: float, *, furniture_px: float 
     small = extent < max_extent_px
     bulky = (extent < furniture_px) & ~small
     bulky[0] = False
-    if keep is not None:
-        on_wall = np.unique(comp[keep])
-        small[on_wall] = False
-        bulky[on_wall] = False
     H, W = free.shape
     for i in np.flatnonzero(bulky):
         # the largest inscribed radius: the distance transform on the component's box grown by one cell
@@ -405,15 +406,39 @@ def clutter_mask(free: np.ndarray, max_extent_px: float, *, furniture_px: float 
         inside = cv2.distanceTransform(np.ascontiguousarray(solid[r0:r1, c0:c1]), cv2.DIST_L2, 3)
         small[i] = 2 * inside[comp[r0:r1, c0:c1] == i].max() >= wall_thickness_px
     small[0] = False  # label 0: the free cells themselves
-    return lookup(small.view(np.uint8), comp).view(bool)
+    return comp, small
+
+
+def clutter_mask(free: np.ndarray, max_extent_px: float, *, furniture_px: float = 0.0,
+                 wall_thickness_px: float = np.inf, keep=None, parts=None) -> np.ndarray:
+    """Obstacle cells of free-standing clutter (8-connected components of the
+    non-free cells): components less than ``max_extent_px`` across (bounding
+    box) — chairs, plants, small tables, pillars — and components less than
+    ``furniture_px`` across that are thicker than ``wall_thickness_px``
+    (twice their largest inscribed radius) — desks, cupboards, tables with
+    their chairs: no free-standing piece of wall is that thick — unless
+    it touches a cell of ``keep`` (a long wall runs along it).
+
+    ``parts``: :func:`clutter_parts` of the same arguments, when already
+    made (the furniture stage asks twice, with and without ``keep``)."""
+    from ._fast import lookup
+
+    comp, clutter = parts if parts is not None else clutter_parts(
+        free, max_extent_px, furniture_px=furniture_px, wall_thickness_px=wall_thickness_px)
+    if keep is not None:
+        clutter = clutter.copy()
+        clutter[np.unique(comp[keep])] = False
+    return lookup(clutter.view(np.uint8), comp).view(bool)
 
 
 def without_clutter(grid: OccupancyGrid, min_wall_length: float, *, furniture_size: float = 0.0,
-                    wall_thickness: float = np.inf, keep=None):
+                    wall_thickness: float = np.inf, keep=None, parts=None):
     """The map doors are searched in: free-standing clutter smaller than a
     wall piece (``min_wall_length`` m across, 0 = none), and bulky furniture
     (less than ``furniture_size`` m across, thicker than ``wall_thickness``
     m, touching no cell of ``keep``; see :func:`clutter_mask`), made free.
+    ``parts``: :func:`clutter_parts` of ``grid.free`` with these sizes, when
+    already made.
 
     Returns
     -------
@@ -428,7 +453,7 @@ def without_clutter(grid: OccupancyGrid, min_wall_length: float, *, furniture_si
     # is looked through while doors are searched (rooms still use the map)
     res = grid.resolution
     clutter = clutter_mask(grid.free, min_wall_length / res, furniture_px=furniture_size / res,
-                           wall_thickness_px=wall_thickness / res, keep=keep)
+                           wall_thickness_px=wall_thickness / res, keep=keep, parts=parts)
     if clutter.any():
         grid = OccupancyGrid(np.where(clutter, np.int8(FREE), grid.cells), grid.resolution,
                              grid.origin, grid.source)
@@ -837,10 +862,15 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
             # cupboards) would chain into long walls and keep it (measured:
             # precision -2.0 on the Freiburg partial maps, -4.6 on
             # bremen_cartesium_full)
+            # the clutter of this size is found once, for the furniture's long walls and with them
+            parts = (clutter_parts(rooms_grid.free, opts.min_wall_length / res, furniture_px=opts.furniture_size / res,
+                                   wall_thickness_px=opts.wall_thickness / res) if opts.min_wall_length > 0 else None)
             looked2, clutter2 = without_clutter(rooms_grid, opts.min_wall_length,
                                                 furniture_size=opts.furniture_size,
                                                 wall_thickness=opts.wall_thickness,
-                                                keep=furniture_keep(rooms_grid, looked, clutter, opts))
+                                                keep=furniture_keep(rooms_grid, looked, clutter, opts, parts=parts),
+                                                parts=parts)
+            del parts
             if clutter2 is not None and (clutter is None or not np.array_equal(clutter2, clutter)):
                 looked, clutter = looked2, clutter2
                 search, closed = close_wall_gaps(looked, opts.wall_gap)
