@@ -119,7 +119,7 @@ protocol** against the original ground truth (mean P / R in %).
 {table}
 The method is tuned and measured on 0.05 m maps, the resolution of these
 data sets. Finer maps keep most of the quality; on maps resampled to
-0.10 m/px recall falls by 12 to 17 points: more doors are found than there
+0.10 m/px recall falls by 10 to 17 points: more doors are found than there
 are. Part of it is the measure that tells a laser-scanned map from a drawn
 plan (the share of wall faces on straight lines), which on a 0.10 m grid
 takes most scanned maps for plans, so the settings for scanned maps

@@ -61,9 +61,9 @@ one cell around):
   around the two doors large enough to hold every path not much longer than
   the coarse one.
 
-On the 28 images of the ipa benchmark (7,011 door pairs) this stays within
-5.5 % (and 0.99 m) of the map-grid geodesic for every pair (mean +0.56 %,
-95 % of the pairs within 1.7 %, 0.09 % of the pairs beyond 5 %;
+On the 28 images of the ipa benchmark (7,277 door pairs) this stays within
+5.5 % (and 0.99 m) of the map-grid geodesic for every pair (mean +0.54 %,
+95 % of the pairs within 1.7 %, 0.07 % of the pairs beyond 5 %;
 ``benchmarks/travel_accuracy.py`` measures it) at a small fraction of its
 cost. ``exact=True`` gives the map-grid geodesic for every pair (one
 search per door over the whole room). The legs from a start or goal point
