@@ -294,8 +294,9 @@ def _fill_pieces(pieces: np.ndarray, seed: np.ndarray, stats: np.ndarray, free: 
             new = look[hit]
             val[new] = cur[hit]
             is_open[new] = False
-            nxt = pos[new][inside[new]]
-            look = np.flatnonzero(np.bincount(nxt, minlength=todo.size).astype(bool) & is_open) if nxt.size else nxt
+            near = np.zeros(todo.size, bool)
+            near[pos[new][inside[new]]] = True
+            look = np.flatnonzero(near & is_open)
             if not look.size:
                 break
         open_ = np.flatnonzero(is_open)

@@ -316,8 +316,8 @@ def furniture_keep(grid: OccupancyGrid, looked: OccupancyGrid, clutter, opts, *,
 
     res = grid.resolution
     wk = _Walls(looked, opts, runs=False)
-    _, every = without_clutter(grid, opts.min_wall_length, furniture_size=opts.furniture_size,
-                               wall_thickness=opts.wall_thickness, parts=parts)
+    every = clutter_mask(grid.free, opts.min_wall_length / res, furniture_px=opts.furniture_size / res,
+                         wall_thickness_px=opts.wall_thickness / res, parts=parts)
     bulky = every if clutter is None else every & ~clutter
     rows = W.furniture_rows(W.scale_walls(wk.lw, wk.k), ~looked.free, bulky, band_px=opts.wall_wander / res)
     return wk.mask(looked.free.shape, keep=~rows)
