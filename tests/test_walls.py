@@ -260,6 +260,57 @@ def test_face_runs_follow_the_main_directions():
     assert not any(25 <= min(r1, r2) and max(r1, r2) <= 45 and abs(r1 - r2) < 3 for r1, c1, r2, c2 in runs)
 
 
+def _lines_near(lines, p, q, tol=1.5):
+    """The segments of ``lines`` with both ends within ``tol`` cells of the segment ``p``-``q``'s ends."""
+    p, q = np.asarray(p, float), np.asarray(q, float)
+    out = []
+    for seg in np.asarray(lines).reshape(-1, 4):
+        a, b = seg[:2], seg[2:]
+        if (np.hypot(*(a - p)) <= tol and np.hypot(*(b - q)) <= tol) or (
+                np.hypot(*(a - q)) <= tol and np.hypot(*(b - p)) <= tol):
+            out.append(seg)
+    return out
+
+
+def test_straight_lines_bridge_scan_gaps_keep_doorways_and_angled_walls():
+    faces = np.zeros((120, 160), bool)
+    faces[20, 10:60] = True           # a wall face ...
+    faces[20, 64:100] = True          # ... on after a 4-cell scan gap: one line
+    faces[20, 112:150] = True         # after a 12-cell doorway: a line of its own
+    faces[30:110, 5] = True           # the other main direction
+    rr = np.arange(60, 100)
+    faces[rr, 40 + (rr - 60)] = True  # a wall at 45 degrees (a wing built at an angle)
+    hough = np.array([[20, 10, 20, 150], [30, 5, 109, 5], [60, 40, 99, 79]], float)
+    lines = W.straight_lines(faces, min_length_px=20, max_gap_px=5, hough=hough)
+    assert _lines_near(lines, (20, 10), (20, 99))          # across the scan gap
+    assert _lines_near(lines, (20, 112), (20, 149))        # the doorway is not bridged
+    assert not _lines_near(lines, (20, 10), (20, 149), tol=3)
+    assert _lines_near(lines, (30, 5), (109, 5))
+    assert _lines_near(lines, (60, 40), (99, 79), tol=0.1)  # the angled Hough line, as it is
+    # a narrower gap setting splits the wall at its scan gap
+    short = W.straight_lines(faces, min_length_px=20, max_gap_px=2, hough=hough)
+    assert not _lines_near(short, (20, 10), (20, 99))
+    assert _lines_near(short, (20, 10), (20, 59)) and _lines_near(short, (20, 64), (20, 99))
+
+
+def test_straight_lines_change_only_where_the_map_changes():
+    """Each face cell counts only for the lines through it: a wall added far away
+    leaves the other lines as they were (a random Hough sample need not)."""
+    faces = np.zeros((200, 200), bool)
+    faces[20, 10:90] = True
+    faces[60, 30:70] = True
+    faces[10:90, 150] = True
+    hough = np.array([[20, 10, 20, 89], [10, 150, 89, 150]], float)
+    before = W.straight_lines(faces, min_length_px=20, max_gap_px=5, hough=hough)
+    faces[180, 20:180] = True  # a new wall, far from the others
+    after = W.straight_lines(faces, min_length_px=20, max_gap_px=5, hough=hough)
+    old = {tuple(s) for s in before.tolist()}
+    new = {tuple(s) for s in after.tolist()}
+    assert old <= new
+    assert all(min(s[0], s[2]) >= 178 for s in new - old)  # only lines of the new wall
+    assert new - old
+
+
 def test_partition_face_on_a_free_standing_table_is_no_partition():
     # the partition's lower part cut off the south wall: a free-standing
     # obstacle 1.6 m long (rows 54..85), a table's side, with the same hits

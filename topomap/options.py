@@ -333,6 +333,12 @@ class TopomapOptions(_Options):
         0.2 m. A laser SLAM map draws a straight wall a few cells off its
         line over tens of metres (odometry drift, scan noise); two different
         walls are at least a wall's thickness plus a room apart.
+    face_gap : float
+        Gaps (m) along a straight wall face that still leave it one wall
+        line (:func:`topomap.walls.straight_lines`): 0.25 m. A laser scan
+        leaves such gaps where a beam missed or something stood in front of
+        the wall; the narrowest door (``min_door_width``) is twice as wide,
+        so a doorway is never bridged.
     furniture_size : float or None
         Free-standing obstacles less than this (m) across that are thicker
         than ``wall_thickness`` are furniture — desks, cupboards, a table
@@ -409,6 +415,7 @@ class TopomapOptions(_Options):
     alcove_depth: float = _opt(1.2, "length")
     long_wall: float = _opt(4.0, "length")
     wall_wander: float = _opt(0.2, "length")
+    face_gap: float = _opt(0.25, "length")
     pillar_depth: float = _opt(0.5, "length")
     frontier_post: float = _opt(0.1, "length")
     partition_wall: float = _opt(1.5, "length")

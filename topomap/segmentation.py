@@ -77,11 +77,11 @@ class Intermediates:
         that were closed before doors were searched and rooms cut.
     wall_lines : (K, 4) ndarray of float or None
         ``"topomap"``: the straight wall faces ``(r1, c1, r2, c2)`` (pixels)
-        found on the map (:func:`topomap.walls.wall_lines`).
+        found on the map (:func:`topomap.walls.straight_lines`).
     straight_share : float or None
-        ``"topomap"``: the share of wall-face cells on those lines
-        (:func:`topomap.walls.straight_share`), which decides the ``rise``
-        the method ran with.
+        ``"topomap"``: the share of wall-face cells on the map's Hough lines
+        (:func:`topomap.walls.wall_lines`, :func:`topomap.walls.straight_share`),
+        which decides the ``rise`` the method ran with.
 
     Notes
     -----
@@ -697,11 +697,13 @@ class _Walls:
     smaller (``k`` map cells per side), so that a wall's straightness, its
     gaps and its lines are judged in metres whatever the resolution.
 
-    ``faces``, ``lines`` and ``lw`` (:func:`topomap.walls.long_walls`) are in
-    the cells of that grid; :meth:`fine` turns its points into map cells and
-    :attr:`index` holds the long walls in map cells. Long walls are chained
-    from the Hough lines and, with ``runs``, from the straight runs of faces
-    on the main directions (:func:`topomap.walls.face_runs`)."""
+    ``faces``, ``hough`` (:func:`topomap.walls.wall_lines`), ``lines`` and
+    ``lw`` (:func:`topomap.walls.long_walls`) are in the cells of that grid;
+    :meth:`fine` turns its points into map cells and :attr:`index` holds the
+    long walls in map cells. With ``runs``, ``lines`` are the straight runs of
+    faces on the main directions and the Hough lines off them
+    (:func:`topomap.walls.straight_lines`), and the long walls are chained
+    from them; without, both are from the Hough lines only."""
 
     def __init__(self, search: OccupancyGrid, opts, *, runs: bool = True):
         from . import skeleton as S
@@ -712,14 +714,10 @@ class _Walls:
         self.free = S.downsample(search.free, k, keep="all") if k > 1 else search.free
         self.obstacle = ~self.free
         self.faces = W.wall_faces(self.obstacle, self.free)
-        self.lines = W.wall_lines(self.faces, min_length_px=opts.min_wall_length / res)
-        pieces = self.lines
-        if runs and opts.long_wall > 0:
-            # every straight run of faces on the main directions, which the
-            # Hough transform of a large map may miss, is a piece of wall too
-            fr = W.face_runs(self.faces, min_length_px=opts.min_wall_length / res, lines=self.lines)
-            pieces = np.concatenate([self.lines, fr]) if len(fr) else self.lines
-        self.lw = (W.long_walls(pieces, max_gap_px=opts.max_door_width / res,
+        self.hough = W.wall_lines(self.faces, min_length_px=opts.min_wall_length / res)
+        self.lines = (W.straight_lines(self.faces, min_length_px=opts.min_wall_length / res,
+                                       max_gap_px=opts.face_gap / res, hough=self.hough) if runs else self.hough)
+        self.lw = (W.long_walls(self.lines, max_gap_px=opts.max_door_width / res,
                                 offset_px=opts.wall_wander / res, min_span_px=opts.long_wall / res)
                    if opts.long_wall > 0 else [])
         self.index = W.WallIndex(W.scale_walls(self.lw, k))
@@ -728,7 +726,7 @@ class _Walls:
         """The share of wall faces on straight lines (:func:`topomap.walls.straight_share`)."""
         from . import walls as W
 
-        return W.straight_share(self.faces, self.lines)
+        return W.straight_share(self.faces, self.hough)
 
     def fine(self, pts):
         """Points ``(..., 2)`` of the wall grid in the map's cells."""

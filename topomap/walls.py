@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["wall_faces", "wall_lines", "straight_share", "wall_openings", "wall_directions", "long_walls",
-           "across_walls", "across_walls_many", "WallIndex", "long_wall_gaps", "partition_gaps", "face_runs", "furniture_rows", "wall_mask", "scale_walls"]
+           "across_walls", "across_walls_many", "WallIndex", "long_wall_gaps", "partition_gaps", "face_runs", "straight_lines", "furniture_rows", "wall_mask", "scale_walls"]
 
 
 #: The 4-neighbours of a cell (not the cell itself), as a morphology kernel.
@@ -412,6 +412,38 @@ def face_runs(faces: np.ndarray, *, min_length_px: float, band_px: int = 1, max_
         t0, t1 = t0[keep], t1[keep]
         out.append(np.concatenate([kb * n + t0[:, None] * u, kb * n + t1[:, None] * u], axis=1))
     return np.concatenate(out).astype(float).reshape(-1, 4)
+
+
+def straight_lines(faces: np.ndarray, *, min_length_px: float, max_gap_px: float,
+                   hough: np.ndarray | None = None, angle_tol: float = np.deg2rad(12.0)) -> np.ndarray:
+    """The straight wall faces of a map: its runs of faces along the building's
+    two main directions, and its Hough lines off them.
+
+    Along the main directions (:func:`wall_directions` of ``hough``, the
+    Hough lines of :func:`wall_lines`) the lines are the runs of
+    :func:`face_runs` (faces within one cell of a line, gaps of at most
+    ``max_gap_px``, at least ``min_length_px`` long). Every face cell counts
+    only for the lines through it, so the lines do not depend on the order
+    in which a random sample visits the cells, and a change to one part of
+    the map changes only the lines there. The Hough lines more than
+    ``angle_tol`` off both main directions (the walls of a wing built at an
+    angle) are added as they are.
+
+    Returns
+    -------
+    (K, 4) ndarray
+        Segments ``(r1, c1, r2, c2)`` in pixels.
+    """
+    if hough is None:
+        hough = wall_lines(faces, min_length_px=min_length_px)
+    hough = np.asarray(hough, float).reshape(-1, 4)
+    runs = face_runs(faces, min_length_px=min_length_px, max_gap_px=int(round(max_gap_px)), lines=hough)
+    if not len(hough):
+        return runs
+    on = np.zeros(len(hough), bool)
+    for _, sel in _main_classes(hough, angle_tol):
+        on[sel] = True
+    return np.concatenate([runs, hough[~on]])
 
 
 def long_walls(lines: np.ndarray, *, max_gap_px: float, offset_px: float, min_span_px: float,
