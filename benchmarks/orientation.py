@@ -123,17 +123,19 @@ the original ground truth (mean P / R in %).
 
 {table}
 The scores depend on the orientation: on the real maps the group means
-move by up to about 3 points of precision or recall between orientations
+move by up to a few points of precision or recall between orientations
 (one map can move by more), on the floor plans by less than one. The
-method is not symmetric under turning: OpenCV's probabilistic Hough
-transform (`cv2.HoughLinesP`, the wall lines) visits the wall cells in a
-random order, the thinning of the skeletons (Zhang's two sub-passes) and
-ties broken in row-major order treat the directions differently. An
-experiment that takes the wall lines and both skeletons from the map as
-stored and turns them leaves the spread about as large, so the other
-steps (the coarse grid's blocks, the order of ties) matter as much. The mean of the eight orientations is the fairer figure for maps
-of other buildings; the tables above this section give the maps as they
-are stored.
+method is not exactly symmetric under turning: the building's main
+directions and the furniture stage's long walls come from OpenCV's
+probabilistic Hough transform (`cv2.HoughLinesP`), which visits the wall
+cells in a random order; the thinning of the skeletons (Zhang's two
+sub-passes), the coarse grid's 2 x 2 blocks (a side with an odd number of
+cells cannot be split the same way after a half turn) and ties broken in
+row-major order treat the directions differently (the wall lines on the
+main directions are the runs of wall faces along them, which do not
+depend on a random order). The mean of the eight orientations is the fairer
+figure for maps of other buildings; the tables above this section give
+the maps as they are stored.
 """
     _section.write(a.out, text, table, time.perf_counter() - t0)
     return 0
