@@ -1093,6 +1093,8 @@ def suppress_duplicates(accepted, resolution: float, *, kept=()) -> list:
     list of ((r1, c1), (r2, c2))
         The door segments kept, pixels, narrowest first.
     """
+    from scipy.spatial import cKDTree
+
     accepted = sorted(accepted, key=lambda t: t[0])
     n0, n = len(kept), len(accepted)
     if not n:
@@ -1101,20 +1103,28 @@ def suppress_duplicates(accepted, resolution: float, *, kept=()) -> list:
     B = np.array([q for _, q in kept] + [c.ip2 for _, c in accepted], float).reshape(-1, 2)
     mids = (A[n0:] + B[n0:]) / 2
     reach = 0.5 * np.array([w for w, _ in accepted], float) / resolution
+    # the segments each door's midpoint may lie within reach of: a segment is no nearer
+    # than its midpoint less half its length, so a search around the segments' midpoints
+    # (a k-d tree: time and memory linear in the doors, not quadratic) finds every one
+    half = np.hypot(*(B - A).T) / 2
+    near_of = cKDTree((A + B) / 2).query_ball_point(mids, reach + float(half.max()) + 1e-6)
+    door = np.repeat(np.arange(n), [len(js) for js in near_of])
+    seg = np.fromiter((j for js in near_of for j in js), np.intp, count=door.size)
+    before = seg < n0 + door  # only the segments given and the doors taken before each door
+    door, seg = door[before], seg[before]
+    near = point_segment_distances(mids[door], A[seg], B[seg]) < reach[door]
+    door, seg = door[near], seg[near]
+    order = np.lexsort((seg, door))
+    door, seg = door[order], seg[order]
+    bounds = np.searchsorted(door, np.arange(n + 1))
     on = np.zeros(n0 + n, bool)  # the segments kept so far: those given, then the doors kept
     on[:n0] = True
     segs = []
-    step = max(1, (1 << 20) // (n0 + n))  # rows of the distance table at a time: memory linear in n
-    for i0 in range(0, n, step):
-        # distances from these doors' midpoints to every segment (the greedy pass below reads
-        # only the columns of segments kept before each door)
-        near = point_segment_distances(mids[i0:i0 + step, None, :], A[None, :n0 + i0 + step],
-                                       B[None, :n0 + i0 + step]) < reach[i0:i0 + step, None]
-        for i in range(i0, min(i0 + step, n)):
-            c = accepted[i][1]
-            if near[i - i0, :n0 + i][on[:n0 + i]].any():
-                c.status = DUPLICATE
-                continue
-            on[n0 + i] = True
-            segs.append((c.ip1, c.ip2))
+    for i in range(n):
+        c = accepted[i][1]
+        if on[seg[bounds[i]:bounds[i + 1]]].any():
+            c.status = DUPLICATE
+            continue
+        on[n0 + i] = True
+        segs.append((c.ip1, c.ip2))
     return segs
