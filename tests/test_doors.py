@@ -61,6 +61,18 @@ def test_passage_minima_finds_the_door_and_its_posts():
     assert (c.ip1[1] + c.ip2[1]) / 2 == pytest.approx(66.5, abs=1.0)
 
 
+def test_accumulate_runs_is_each_run_on_its_own():
+    """Running sums and maxima of runs laid end to end equal, bit for bit, those of each run alone."""
+    rng = np.random.default_rng(3)
+    n = np.array([0, 1, 2, 3, 7, 0, 64, 65, 5, 300, 1])
+    x = rng.random(int(n.sum())) * 10.0 ** rng.integers(-3, 4, int(n.sum()))
+    start = np.cumsum(n) - n
+    for ufunc in (np.add, np.maximum):
+        got = D._accumulate_runs(ufunc, x, n)
+        for s, m in zip(start, n):
+            assert np.array_equal(got[s:s + m], ufunc.accumulate(x[s:s + m]))
+
+
 def test_uniform_corridor_has_no_bottleneck():
     free = np.zeros((30, 200), bool)
     free[5:25, 5:195] = True

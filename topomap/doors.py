@@ -320,80 +320,194 @@ def passage_minima(G, *, window_px: float, rise_px: float, reach_px: float, min_
     apart around such a point are more than ``max_radius_px * sqrt(2)``
     apart.
 
+    All branches are searched at once (:class:`_Branches`): one minimum
+    filter over their clearances laid end to end, each padded with its end
+    values, and the clearance on either side of every minimum as a range
+    maximum.
+
     Returns
     -------
     list of Candidate
         With ``centroid`` at the bottleneck pixel and ``direction`` along the
-        branch there.
+        branch there, branch by branch (in the order of their ``(u, v, key)``)
+        and along each branch.
     """
     from scipy.ndimage import minimum_filter1d
 
-    res = G.graph.get("resolution", 1.0)
     out = []
+    B = _Branches(G)
+    if not B.keys:
+        return out
+    R, n, start = B.rad, B.n, B.start
+    use = np.flatnonzero((n >= min_branch_px) & (B.low <= max_radius_px))
+    if use.size == 0:
+        return out
+    # the minimum filter of every used branch with its end values repeated ("nearest"):
+    # the branches end to end, each padded with w copies of its end values
     w = max(int(round(window_px)), 1)
-    # per edge: radius (px), arc length from its first pixel (px), and the
-    # running maximum of the radius from either end (for look-ahead queries)
-    info = {}
-    for u, v, k, d in G.edges(keys=True, data=True):
-        p = d["path"].astype(float)
-        rad = d["radius"] / res
-        arc = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(p, axis=0).T))])
-        info[(u, v, k)] = (rad, arc, d["start"], np.maximum.accumulate(rad),
-                           arc[-1] - arc[::-1], np.maximum.accumulate(rad[::-1]))
+    cells = _ranges(start[use], start[use] + n[use])
+    at = np.cumsum(n[use] + 2 * w) - n[use] - w  # each branch's first cell in the padded array
+    P = np.empty(cells.size + 2 * w * use.size)
+    body = _ranges(at, at + n[use])
+    P[body] = R[cells]
+    P[_ranges(at - w, at)] = np.repeat(R[start[use]], w)
+    P[_ranges(at + n[use], at + n[use] + w)] = np.repeat(R[start[use] + n[use] - 1], w)
+    is_min = np.zeros(R.size, bool)
+    is_min[cells] = R[cells] <= minimum_filter1d(P, 2 * w + 1, mode="nearest")[body] + 1e-6
+    idx = np.flatnonzero(is_min)
+    if idx.size == 0:
+        return out
+    br = B.branch
+    brk = np.flatnonzero((np.diff(idx) > 1) | (np.diff(br[idx]) != 0)) + 1
+    r_lo = idx[np.concatenate([[0], brk])]  # each run of minima: its first and last cell
+    r_hi = idx[np.concatenate([brk - 1, [idx.size - 1]])]
+    mid = r_lo + (r_hi - r_lo + 1) // 2
+    ok = R[mid] <= max_radius_px
+    r_lo, r_hi, mid = r_lo[ok], r_hi[ok], mid[ok]
+    if mid.size == 0:
+        return out
+    e = br[mid]
+    am, end = B.arc[mid], B.arc[start[e] + n[e] - 1]
+    r = R[mid]
+    left = np.maximum(B.range_max(B.cell_at(e, am - reach_px, "left"), mid),
+                      B.beyond(B.u[e], e, reach_px - am))
+    right = np.maximum(B.range_max(mid + 1, B.cell_at(e, am + reach_px, "right")),
+                       B.beyond(B.v[e], e, reach_px - (end - am)))
+    door = (left >= r + rise_px) & (right >= r + rise_px)
+    for q in np.flatnonzero(door | mouths):
+        k = int(e[q])
+        s, i = int(start[k]), int(mid[q] - start[k])
+        path = B.data[k]["path"]
+        if door[q]:
+            out.append(Candidate(edge=B.keys[k], centroid=path[i].astype(float), direction=_direction(path, i),
+                                 radius=float(r[q])))
+        else:
+            out.extend(_mouths(B, k, np.arange(r_lo[q] - s, r_hi[q] - s + 1), reach_px, rise_px,
+                               min_run_px=min_run_px))
+    return out
 
-    def beyond(node, edge, rem):
-        """Largest clearance within ``rem`` px past ``node`` on its other branches."""
+
+class _Branches:
+    """The branches of a skeleton graph ``G`` laid end to end, in the order of
+    their ``(u, v, key)``: clearance (px), arc length from the branch's start
+    pixel and from its end pixel (px), the running maximum of the clearance
+    from either end; per branch its first cell ``start``, length ``n``,
+    smallest clearance ``low`` and end nodes ``u``, ``v`` (as in its key).
+
+    Running sums and maxima are taken branch by branch in order (the
+    branches grouped by length into padded rows), so every value is the one
+    :func:`numpy.cumsum` / :func:`numpy.maximum.accumulate` of the branch
+    alone gives.
+    """
+
+    def __init__(self, G):
+        res = G.graph.get("resolution", 1.0)
+        self.G = G
+        self.keys = sorted(G.edges(keys=True))
+        self.data = [G.edges[k] for k in self.keys]
+        E = len(self.keys)
+        self.n = n = np.array([d["radius"].size for d in self.data], np.intp)
+        self.start = start = np.cumsum(n) - n
+        if E == 0:
+            return
+        self.branch = np.repeat(np.arange(E), n)
+        self.rad = R = np.concatenate([d["radius"] for d in self.data]) / res
+        self.low = np.full(E, np.inf)
+        has = n > 0
+        self.low[has] = np.minimum.reduceat(R, start[has]) if R.size else np.inf
+        P = np.concatenate([d["path"] for d in self.data]).astype(float)
+        step = np.zeros(R.size)
+        step[1:] = np.hypot(*np.diff(P, axis=0).T)
+        step[start[has]] = 0.0
+        self.arc = A = _accumulate_runs(np.add, step, n)
+        last = np.repeat(start + n - 1, n)
+        back = start[self.branch] + last - np.arange(R.size)  # the same cell counted from the branch's end
+        self.arc_back = A[last] - A[back]
+        self.pm = _accumulate_runs(np.maximum, R, n)
+        self.pm_back = _accumulate_runs(np.maximum, R[back], n)
+        self.u = np.array([k[0] for k in self.keys], object)
+        self.v = np.array([k[1] for k in self.keys], object)
+        self.fwd_at = np.array([d["start"] for d in self.data], object)
+        self.incident = {x: [] for x in G.nodes}  # node -> [(branch, from its start?, a loop?)]
+        for i, (a, b, _) in enumerate(self.keys):
+            if n[i]:
+                at = self.data[i]["start"]
+                self.incident[a].append((i, at == a, a == b))
+                if b != a:
+                    self.incident[b].append((i, at == b, False))
+        self._key_f = self.branch + 1j * A
+        self._key_b = self.branch + 1j * self.arc_back
+
+    def cell_at(self, e, x, side):
+        """First cell of each branch ``e`` whose arc length is >= ``x`` (``side="left"``) or > ``x``."""
+        return np.searchsorted(self._key_f, e + 1j * np.asarray(x, float), side=side)
+
+    def range_max(self, lo, hi):
+        """Largest clearance over the cells ``lo..hi-1`` of each range; 0 for an empty one."""
+        lo, hi = np.asarray(lo), np.asarray(hi)
+        out = np.zeros(lo.shape)
+        ok = hi > lo
+        if ok.any():
+            Rs = np.append(self.rad, 0.0)  # every range's end an index of the array
+            out[ok] = np.maximum.reduceat(Rs, np.stack([lo[ok], hi[ok]], 1).ravel())[::2]
+        return out
+
+    def beyond(self, nodes, edges, rem):
+        """Largest clearance within ``rem`` px past each node, along its other branches
+        (0 where ``rem <= 0`` or there is none)."""
+        nodes, edges, rem = np.asarray(nodes, object), np.asarray(edges), np.asarray(rem, float)
+        out = np.zeros(rem.shape)
+        qs, bs, fw = [], [], []
+        for q in np.flatnonzero(rem > 0):
+            for b, forward, loop in self.incident[nodes[q]]:
+                if b == edges[q] and not loop:
+                    continue
+                qs.append(q), bs.append(b), fw.append(forward)
+        if not qs:
+            return out
+        qs, bs, fw = np.array(qs), np.array(bs), np.array(fw, bool)
+        x = bs + 1j * rem[qs]
+        j = np.where(fw, np.searchsorted(self._key_f, x, side="right"),
+                     np.searchsorted(self._key_b, x, side="right")) - 1
+        val = np.where(fw, self.pm[j], self.pm_back[j])
+        np.maximum.at(out, qs, val)
+        return out
+
+
+    def beyond_one(self, node, edge, rem):
+        """:meth:`beyond` of one node, branch and distance, as a float."""
         best = 0.0
         if rem <= 0:
             return best
-        for a, b, kk in G.edges(node, keys=True):
-            key = (a, b, kk) if (a, b, kk) in info else (b, a, kk)
-            if key == edge and a != b:
+        for b, forward, loop in self.incident[node]:
+            if b == edge and not loop:
                 continue
-            rad, arc, start, pm, arc_back, pm_back = info[key]
-            if start == node:
-                j = np.searchsorted(arc, rem, side="right") - 1
-                if j >= 0:
-                    best = max(best, float(pm[j]))
-            else:
-                j = np.searchsorted(arc_back, rem, side="right") - 1
-                if j >= 0:
-                    best = max(best, float(pm_back[j]))
+            s, n = self.start[b], self.n[b]
+            arc, pm = (self.arc, self.pm) if forward else (self.arc_back, self.pm_back)
+            j = int(np.searchsorted(arc[s:s + n], rem, side="right")) - 1
+            best = max(best, float(pm[s + j]))
         return best
 
-    for u, v, k in sorted(info):
-        rad, arc = info[(u, v, k)][:2]
-        n = rad.size
-        if n < min_branch_px or rad.min() > max_radius_px:
-            continue  # too short, or too wide everywhere for a door
-        mn = minimum_filter1d(rad, 2 * w + 1, mode="nearest")
-        is_min = rad <= mn + 1e-6
-        if not is_min.any():
-            continue
-        idx = np.flatnonzero(is_min)
-        runs = np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1)
-        path = G.edges[u, v, k]["path"]
-        for run in runs:
-            i = int(run[len(run) // 2])
-            r = rad[i]
-            if r > max_radius_px:
-                continue
-            # side towards u: pixels before i within reach along the path
-            j0 = int(np.searchsorted(arc, arc[i] - reach_px, side="left"))
-            left = float(rad[j0:i].max()) if i > j0 else 0.0
-            if arc[i] < reach_px:
-                left = max(left, beyond(u, (u, v, k), reach_px - arc[i]))
-            j1 = int(np.searchsorted(arc, arc[i] + reach_px, side="right"))
-            right = float(rad[i + 1:j1].max()) if j1 > i + 1 else 0.0
-            if arc[-1] - arc[i] < reach_px:
-                right = max(right, beyond(v, (u, v, k), reach_px - (arc[-1] - arc[i])))
-            if left < r + rise_px or right < r + rise_px:
-                if mouths:
-                    out.extend(_mouths(G, run, rad, arc, path, (u, v, k), reach_px, rise_px, beyond,
-                                       min_run_px=min_run_px))
-                continue
-            out.append(Candidate(edge=(u, v, k), centroid=path[i].astype(float), direction=_direction(path, i),
-                                 radius=float(r)))
+
+def _accumulate_runs(ufunc, x, n):
+    """``ufunc.accumulate`` of each run of ``x`` (consecutive, lengths ``n``) on its own, as one array.
+
+    The runs are grouped by length (up to twice the shortest in a group) into
+    rows padded at their ends, accumulated along the rows: the same values,
+    in the same order of operations, as one ``accumulate`` per run.
+    """
+    out = np.empty_like(x)
+    start = np.cumsum(n) - n
+    size = np.ceil(np.log2(np.maximum(n, 1))).astype(int)
+    for s in np.unique(size[n > 0]):
+        g = np.flatnonzero((size == s) & (n > 0))
+        L = int(n[g].max())
+        cols = _ranges(np.zeros(g.size, np.intp), n[g])
+        rows = np.repeat(np.arange(g.size), n[g])
+        src = cols + np.repeat(start[g], n[g])
+        M = np.zeros((g.size, L), x.dtype)
+        M[rows, cols] = x[src]
+        out[src] = ufunc.accumulate(M, axis=1)[rows, cols]
     return out
 
 
@@ -471,15 +585,17 @@ def _direction(path, i, half: int = 3) -> np.ndarray:
     return d / n if n else np.array([1.0, 0.0])
 
 
-def _mouths(G, run, rad, arc, path, edge, reach_px, rise_px, beyond, tol_px: float = 1.0,
-            min_run_px: float = 0.0):
-    """One-sided bottlenecks at the ends of a run of minima: where a passage of
-    even width (a corridor, at least ``min_run_px`` long within ``tol_px``)
-    opens into a wider space. The clearance rises by ``2 * rise_px`` on one
-    side within ``reach_px`` and does not fall below the run's value minus
+def _mouths(B, k, run, reach_px, rise_px, tol_px: float = 1.0, min_run_px: float = 0.0):
+    """One-sided bottlenecks at the ends of a run of minima (local cells ``run``)
+    of branch ``k`` of ``B`` (:class:`_Branches`): where a passage of even
+    width (a corridor, at least ``min_run_px`` long within ``tol_px``) opens
+    into a wider space. The clearance rises by ``2 * rise_px`` on one side
+    within ``reach_px`` and does not fall below the run's value minus
     ``tol_px`` on the other."""
+    edge, path = B.keys[k], B.data[k]["path"]
     u, v, _ = edge
-    n = rad.size
+    s, n = int(B.start[k]), int(B.n[k])
+    rad, arc = B.rad[s:s + n], B.arc[s:s + n]
     out = []
     # the plateau around the run: neighbours within ``tol_px`` of its minimum
     base = rad[run].min()
@@ -501,7 +617,7 @@ def _mouths(G, run, rad, arc, path, edge, reach_px, rise_px, beyond, tol_px: flo
             far_node, far_rem = u, reach_px - arc[i]
         up = rad[ahead].max() if ahead.any() else 0.0
         if far_rem > 0:
-            up = max(up, beyond(far_node, edge, far_rem))
+            up = max(up, B.beyond_one(far_node, k, far_rem))
         if up < r + 2 * rise_px or not back.any() or rad[back].min() < r - tol_px \
                 or rad[back].max() >= r + rise_px:
             continue
