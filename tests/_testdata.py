@@ -153,6 +153,24 @@ def room_with_furniture() -> TestMap:
     return _build("room_with_furniture", (90, 110), rooms, [], 1, furniture)
 
 
+def partition_of_blocks() -> TestMap:
+    """Two rooms 9.2 m x 2.25 m apart by a partition drawn as a row of solid blocks.
+
+    The 0.6 m thick partition runs from the west to the east wall: a 1.0 m
+    stub on each outer wall and three free-standing blocks of 1.2 m x 0.6 m
+    (each as bulky as a desk; more than half of the partition) between
+    them, with four 0.9 m openings. On a drawn plan that is a wall with four
+    doors, not a row of furniture. 112 x 194 px.
+    """
+    rooms = [(5, 107, 5, 189)]
+    pieces = [(5, 25), (43, 67), (85, 109), (127, 151), (169, 189)]
+    m = _build("partition_of_blocks", (112, 194), rooms, [], 2, [(50, 62, c0, c1) for c0, c1 in pieces])
+    gaps = [(a[1], b[0]) for a, b in zip(pieces[:-1], pieces[1:])]
+    m.doors = [_centre_m(m.array.shape, 50, 62, c0, c1) for c0, c1 in gaps]
+    m.door_widths = [(c1 - c0) * RES for c0, c1 in gaps]
+    return m
+
+
 def l_shaped_room() -> TestMap:
     """One L-shaped room (legs 2.5 m wide, 5 m long), no door. 110 x 110 px."""
     rooms = [(5, 105, 5, 55), (55, 105, 5, 105)]

@@ -17,14 +17,9 @@ import pytest
 import _testdata as T
 import topomap
 
-FURNITURE_REASON = (
-    "default method gives 2 rooms / 2 doors (the drawn map measures as a plan, so bulky furniture is "
-    "not looked through): it cuts the room between the table and the "
-    "north cabinet (0.92 m) and between the table and the south cabinet (1.42 m), "
-    "furniture taken for door posts")
 CASES = [
-    pytest.param(T.room_with_furniture, 1, 0, id="room_with_furniture",
-                 marks=pytest.mark.xfail(strict=True, reason=FURNITURE_REASON)),
+    pytest.param(T.room_with_furniture, 1, 0, id="room_with_furniture"),
+    pytest.param(T.partition_of_blocks, 2, 4, id="partition_of_blocks"),
     pytest.param(T.door_beside_wall, 2, 1, id="door_beside_wall"),
     pytest.param(T.corridor_with_pillars, 2, 1, id="corridor_with_pillars"),
     pytest.param(T.corridor_with_niches, 3, 2, id="corridor_with_niches"),
@@ -36,13 +31,13 @@ CASES = [
     pytest.param(T.partition_end_in_a_room, 1, 0, id="partition_end_in_a_room"),
 ]
 
-ALL_MAPS = [T.room_with_furniture, T.door_beside_wall] + T.REAL_WORLD
+ALL_MAPS = [T.room_with_furniture, T.door_beside_wall, T.partition_of_blocks] + T.REAL_WORLD
 
 
 def test_room_with_furniture_is_one_room_with_furniture_looked_through():
-    # the hand-drawn map measures as a drawn plan, where bulky furniture is
-    # not looked through by default (the strict xfail above); asked to look
-    # through furniture up to 3 m across, as on a scanned map, it is 1 room
+    # the hand-drawn map measures as a drawn plan, where bulky furniture up to
+    # plan_furniture_size (2 m) across is looked through; asked to look through
+    # furniture up to 3 m across, as on a scanned map, it is 1 room as well
     m = T.room_with_furniture()
     seg = topomap.segment(topomap.from_array(m.array, resolution=m.resolution), furniture_size=3.0)
     G = seg.room_graph

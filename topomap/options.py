@@ -347,15 +347,22 @@ class TopomapOptions(_Options):
         them (a piece of a structural wall a scan saw thick). None
         (default): measured on the map, like ``rise``: on a map a laser
         scanner drew (fewer than ``straight_walls`` of its wall faces on
-        straight lines) ``scan_furniture_size``; on a drawn plan 0 (off),
-        where a solid block of that size is drawn as a wall (a shaft, a
-        stair core) and furniture stands against the walls. Filled in by
-        :meth:`resolved`.
+        straight lines) ``scan_furniture_size``, on a drawn plan
+        ``plan_furniture_size``. Filled in by :meth:`resolved`.
     scan_furniture_size : float
         ``furniture_size`` (m) on a map a laser scanner drew: 3.0 m, longer
         than a desk or a cupboard (1.6-2.4 m) and shorter than a room; on
         the benchmark's real maps it keeps rooms whole where furniture
-        stands free.
+        stands free. A row of such pieces along one line (desks side by
+        side) is looked through too: a scan does not draw a wall that way.
+    plan_furniture_size : float
+        ``furniture_size`` (m) on a drawn plan: 2.0 m, longer than a table
+        or a desk (1.2-1.8 m) and shorter than the solid blocks a plan
+        draws as structure (a lift shaft, a stair core, a chimney: 2 m and
+        more across). On a plan, bulky pieces in a row along a long wall
+        stay walls (a partition drawn as a row of solid blocks, or broken
+        by openings), and the long walls keep only bulky pieces: the small
+        clutter stays looked through as without furniture.
     wall_thickness : float
         Thickest free-standing piece of wall (m): 0.5 m. Inner walls are
         0.1-0.3 m thick and drawn thinner still by a laser scan; a
@@ -423,6 +430,7 @@ class TopomapOptions(_Options):
     partition_structure: float = _opt(2.0, "length")
     furniture_size: Optional[float] = _opt(None, "optional length")
     scan_furniture_size: float = _opt(3.0, "length")
+    plan_furniture_size: float = _opt(2.0, "length")
     wall_thickness: float = _opt(0.5, "length")
     prior_post_shift: float = _opt(0.15, "length")
     prior_changed_area: float = _opt(1.0, "area")
@@ -438,7 +446,7 @@ class TopomapOptions(_Options):
             fill["rise"] = (self.scan_rise if scanned
                             else max(self.skeleton_cell, resolution) * (np.sqrt(2) / 2 + 0.5))
         if self.furniture_size is None:
-            fill["furniture_size"] = self.scan_furniture_size if scanned else 0.0
+            fill["furniture_size"] = self.scan_furniture_size if scanned else self.plan_furniture_size
         return dataclasses.replace(self, **fill) if fill else self
 
 

@@ -298,15 +298,18 @@ def preprocess_masks(grid: OccupancyGrid, opts, *, occupied=None):
     return f, d_free, occ
 
 
-def furniture_keep(grid: OccupancyGrid, looked: OccupancyGrid, clutter, opts, *, parts=None) -> np.ndarray:
+def furniture_keep(grid: OccupancyGrid, looked: OccupancyGrid, clutter, opts, *, parts=None,
+                   rows: bool = True) -> np.ndarray:
     """Stage "furniture": the cells of bulky furniture that are not looked through.
 
     They are the cells of the long walls of ``looked`` (``grid`` with its
     small clutter, ``clutter``, looked through), chained from Hough lines
-    only, except the long walls at least half of whose cells are bulky
-    furniture in two or more separate pieces: a row of desks or round tables
-    (:func:`topomap.walls.furniture_rows`). ``parts``: :func:`clutter_parts`
-    of ``grid.free`` with the furniture size, when already made.
+    only, except, with ``rows`` (a scanned map), the long walls at least
+    half of whose cells are bulky furniture in two or more separate pieces:
+    a row of desks or round tables (:func:`topomap.walls.furniture_rows`).
+    On a drawn plan (``rows=False``) such a row stays a wall: a plan draws
+    partitions that way. ``parts``: :func:`clutter_parts` of ``grid.free``
+    with the furniture size, when already made.
 
     Returns
     -------
@@ -316,6 +319,8 @@ def furniture_keep(grid: OccupancyGrid, looked: OccupancyGrid, clutter, opts, *,
 
     res = grid.resolution
     wk = _Walls(looked, opts, runs=False)
+    if not rows:
+        return wk.mask(looked.free.shape)
     every = clutter_mask(grid.free, opts.min_wall_length / res, furniture_px=opts.furniture_size / res,
                          wall_thickness_px=opts.wall_thickness / res, parts=parts)
     bulky = every if clutter is None else every & ~clutter
@@ -432,13 +437,14 @@ def clutter_mask(free: np.ndarray, max_extent_px: float, *, furniture_px: float 
 
 
 def without_clutter(grid: OccupancyGrid, min_wall_length: float, *, furniture_size: float = 0.0,
-                    wall_thickness: float = np.inf, keep=None, parts=None):
+                    wall_thickness: float = np.inf, keep=None, parts=None, also=None):
     """The map doors are searched in: free-standing clutter smaller than a
     wall piece (``min_wall_length`` m across, 0 = none), and bulky furniture
     (less than ``furniture_size`` m across, thicker than ``wall_thickness``
     m, touching no cell of ``keep``; see :func:`clutter_mask`), made free.
     ``parts``: :func:`clutter_parts` of ``grid.free`` with these sizes, when
-    already made.
+    already made. ``also``: cells looked through in any case (bool, the
+    map's shape), whatever ``keep`` says.
 
     Returns
     -------
@@ -454,6 +460,8 @@ def without_clutter(grid: OccupancyGrid, min_wall_length: float, *, furniture_si
     res = grid.resolution
     clutter = clutter_mask(grid.free, min_wall_length / res, furniture_px=furniture_size / res,
                            wall_thickness_px=wall_thickness / res, keep=keep, parts=parts)
+    if also is not None:
+        clutter |= also
     if clutter.any():
         grid = OccupancyGrid(np.where(clutter, np.int8(FREE), grid.cells), grid.resolution,
                              grid.origin, grid.source)
@@ -863,11 +871,15 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
             # the clutter of this size is found once, for the furniture's long walls and with them
             parts = (clutter_parts(rooms_grid.free, opts.min_wall_length / res, furniture_px=opts.furniture_size / res,
                                    wall_thickness_px=opts.wall_thickness / res) if opts.min_wall_length > 0 else None)
+            # on a drawn plan a row of solid blocks along a long wall is a partition, and the long walls
+            # keep only the bulky pieces along them: the small clutter is looked through as before
+            scanned = straight < opts.straight_walls
             looked2, clutter2 = without_clutter(rooms_grid, opts.min_wall_length,
                                                 furniture_size=opts.furniture_size,
                                                 wall_thickness=opts.wall_thickness,
-                                                keep=furniture_keep(rooms_grid, looked, clutter, opts, parts=parts),
-                                                parts=parts)
+                                                keep=furniture_keep(rooms_grid, looked, clutter, opts, parts=parts,
+                                                                    rows=scanned),
+                                                parts=parts, also=None if scanned else clutter)
             del parts
             if clutter2 is not None and (clutter is None or not np.array_equal(clutter2, clutter)):
                 looked, clutter = looked2, clutter2
