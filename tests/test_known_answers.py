@@ -59,6 +59,23 @@ def test_known_room_and_door_counts(make, n_rooms, n_doors):
     assert got == (n_rooms, n_doors), f"{m.name}: {got[0]} rooms / {got[1]} doors"
 
 
+@pytest.mark.parametrize("make, n_rooms, n_doors", CASES)
+def test_known_answers_hold_in_every_orientation(make, n_rooms, n_doors):
+    # a map has no preferred orientation: the same counts turned by 90, 180
+    # and 270 degrees, with and without a mirror image
+    import numpy as np
+
+    m = make()
+    got = {}
+    for k in range(4):
+        for mirror in (False, True):
+            a = np.rot90(m.array, k)
+            a = np.ascontiguousarray(a[:, ::-1] if mirror else a)
+            G = topomap.segment(topomap.from_array(a, resolution=m.resolution)).room_graph
+            got[(90 * k, mirror)] = (G.number_of_nodes(), G.number_of_edges())
+    assert {v for v in got.values()} == {(n_rooms, n_doors)}, f"{m.name}: {got}"
+
+
 @pytest.mark.parametrize("make", ALL_MAPS, ids=lambda f: f.__name__)
 def test_every_free_cell_is_labelled(make):
     m = make()

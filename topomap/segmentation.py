@@ -303,13 +303,16 @@ def furniture_keep(grid: OccupancyGrid, looked: OccupancyGrid, clutter, opts, *,
     """Stage "furniture": the cells of bulky furniture that are not looked through.
 
     They are the cells of the long walls of ``looked`` (``grid`` with its
-    small clutter, ``clutter``, looked through), chained from Hough lines
-    only, except, with ``rows`` (a scanned map), the long walls at least
-    half of whose cells are bulky furniture in two or more separate pieces:
-    a row of desks or round tables (:func:`topomap.walls.furniture_rows`).
-    On a drawn plan (``rows=False``) such a row stays a wall: a plan draws
-    partitions that way. ``parts``: :func:`clutter_parts` of ``grid.free``
-    with the furniture size, when already made.
+    small clutter, ``clutter``, looked through). With ``rows`` (a scanned
+    map) the long walls are chained from Hough lines only, and those at
+    least half of whose cells are bulky furniture in two or more separate
+    pieces — a row of desks or round tables
+    (:func:`topomap.walls.furniture_rows`) — keep none of it. On a drawn
+    plan (``rows=False``) such a row stays a wall, as a plan draws a
+    partition of solid blocks, and the long walls are chained from the runs
+    of wall faces (:func:`topomap.walls.straight_lines`), which find the
+    row in every orientation of the map. ``parts``: :func:`clutter_parts`
+    of ``grid.free`` with the furniture size, when already made.
 
     Returns
     -------
@@ -318,7 +321,7 @@ def furniture_keep(grid: OccupancyGrid, looked: OccupancyGrid, clutter, opts, *,
     from . import walls as W
 
     res = grid.resolution
-    wk = _Walls(looked, opts, runs=False)
+    wk = _Walls(looked, opts, runs=not rows)
     if not rows:
         return wk.mask(looked.free.shape)
     every = clutter_mask(grid.free, opts.min_wall_length / res, furniture_px=opts.furniture_size / res,
@@ -862,8 +865,8 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
     if opts.furniture_size > furniture:
         with T("furniture"):
             # bulky free-standing furniture is looked through too, except
-            # where a long wall runs along it; those long walls are chained
-            # from Hough lines only: on this map the furniture is still there,
+            # where a long wall runs along it; on a scanned map those long walls
+            # are chained from Hough lines only: on this map the furniture is still there,
             # and runs of its faces along a main direction (a row of desks or
             # cupboards) would chain into long walls and keep it (measured:
             # precision -2.0 on the Freiburg partial maps, -4.6 on
