@@ -382,10 +382,21 @@ def _close_by_distance(free: np.ndarray, r: int) -> np.ndarray:
     return edt(pad)[r + 1:-(r + 1), r + 1:-(r + 1)] > r
 
 
+def solid_components(free: np.ndarray):
+    """The 8-connected components of the non-free cells: ``(solid, comp, stats)``, the non-free
+    cells (uint8 0/1), their labels (0: the free cells) and OpenCV's statistics per label."""
+    from ._fast import label_stats
+
+    solid = np.logical_not(free).view(np.uint8)
+    _, comp, stats, _ = label_stats(solid, connectivity=8)
+    return solid, comp, stats
+
+
 def clutter_parts(free: np.ndarray, max_extent_px: float, *, furniture_px: float = 0.0,
-                  wall_thickness_px: float = np.inf):
+                  wall_thickness_px: float = np.inf, components=None):
     """The 8-connected components of the non-free cells and which of them are
     free-standing clutter (:func:`clutter_mask` before ``keep``).
+    ``components``: :func:`solid_components` of ``free``, when already made.
 
     Returns
     -------
@@ -397,10 +408,7 @@ def clutter_parts(free: np.ndarray, max_extent_px: float, *, furniture_px: float
     """
     import cv2
 
-    from ._fast import label_stats
-
-    solid = np.logical_not(free).view(np.uint8)
-    n, comp, stats, _ = label_stats(solid, connectivity=8)
+    solid, comp, stats = components if components is not None else solid_components(free)
     extent = np.maximum(stats[:, cv2.CC_STAT_WIDTH], stats[:, cv2.CC_STAT_HEIGHT])
     small = extent < max_extent_px
     bulky = (extent < furniture_px) & ~small
@@ -855,8 +863,14 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
     rooms_grid = crop_grid(grid, box) if box is not None else grid
     furniture = opts.furniture_size or 0.0  # None: measured on the map below
     with T("preprocess"):
+        # the obstacles' components, labelled once for the clutter of every size asked below
+        solid = solid_components(rooms_grid.free) if opts.min_wall_length > 0 else None
+        parts0 = None if solid is None else clutter_parts(rooms_grid.free, opts.min_wall_length / res,
+                                                          furniture_px=furniture / res,
+                                                          wall_thickness_px=opts.wall_thickness / res,
+                                                          components=solid)
         looked, clutter = without_clutter(rooms_grid, opts.min_wall_length, furniture_size=furniture,
-                                          wall_thickness=opts.wall_thickness)
+                                          wall_thickness=opts.wall_thickness, parts=parts0)
         search, closed = close_wall_gaps(looked, opts.wall_gap)
     with T("walls"):
         wl = _Walls(search, opts)
@@ -873,21 +887,27 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
             # bremen_cartesium_full)
             # the clutter of this size is found once, for the furniture's long walls and with them
             parts = (clutter_parts(rooms_grid.free, opts.min_wall_length / res, furniture_px=opts.furniture_size / res,
-                                   wall_thickness_px=opts.wall_thickness / res) if opts.min_wall_length > 0 else None)
+                                   wall_thickness_px=opts.wall_thickness / res, components=solid)
+                     if solid is not None else None)
             # on a drawn plan a row of solid blocks along a long wall is a partition, and the long walls
-            # keep only the bulky pieces along them: the small clutter is looked through as before
+            # keep only the bulky pieces along them: the small clutter is looked through as before,
+            # so a plan with no bulky piece at all is left as it is
             scanned = straight < opts.straight_walls
-            looked2, clutter2 = without_clutter(rooms_grid, opts.min_wall_length,
-                                                furniture_size=opts.furniture_size,
-                                                wall_thickness=opts.wall_thickness,
-                                                keep=furniture_keep(rooms_grid, looked, clutter, opts, parts=parts,
-                                                                    rows=scanned),
-                                                parts=parts, also=None if scanned else clutter)
+            if parts is None or (not scanned and not (parts[1] & ~parts0[1]).any()):
+                looked2, clutter2 = looked, clutter
+            else:
+                looked2, clutter2 = without_clutter(rooms_grid, opts.min_wall_length,
+                                                    furniture_size=opts.furniture_size,
+                                                    wall_thickness=opts.wall_thickness,
+                                                    keep=furniture_keep(rooms_grid, looked, clutter, opts,
+                                                                        parts=parts, rows=scanned),
+                                                    parts=parts, also=None if scanned else clutter)
             del parts
             if clutter2 is not None and (clutter is None or not np.array_equal(clutter2, clutter)):
                 looked, clutter = looked2, clutter2
                 search, closed = close_wall_gaps(looked, opts.wall_gap)
                 wl = _Walls(search, opts)
+    del solid, parts0
     with T("preprocess"):
         space = search.free if clutter is None else search.free & ~clutter
         f, d_free, occ = preprocess_masks(search, opts)
