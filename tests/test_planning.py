@@ -433,6 +433,37 @@ def test_doors_in_sight_get_the_exact_distance():
     assert fast == pytest.approx(exact, rel=1e-9)
 
 
+def test_small_rooms_get_the_exact_distance():
+    """A room whose window holds at most EXACT_CELLS cells gets the map-grid geodesic for every pair:
+    searched, or the octile distance where two doors see each other (the same number)."""
+    cells = np.full((80, 120), OCCUPIED, np.int8)
+    cells[30:50, 40:80] = FREE                           # a 1 m x 2 m hall
+    cells[37:43, 58:62] = OCCUPIED                       # a pillar in it, between the west and east doors
+    cells[5:26, 5:115] = FREE                            # rooms north, south, west and east of it
+    cells[54:75, 5:115] = FREE
+    cells[30:50, 5:36] = FREE
+    cells[30:50, 84:115] = FREE
+    cells[26:30, 50:60] = FREE                           # the doors
+    cells[50:54, 62:72] = FREE
+    cells[35:45, 36:40] = FREE
+    cells[35:45, 80:84] = FREE
+    segs = [((28.0, 50.0), (28.0, 59.0)), ((52.0, 62.0), (52.0, 71.0)),
+            ((35.0, 38.0), (44.0, 38.0)), ((35.0, 82.0), (44.0, 82.0))]
+    labels, doors, _ = cut_rooms(OccupancyGrid(cells, RES, (0.0, 0.0, 0.0)), segs)
+    seg = Segmentation(grid=OccupancyGrid(cells, RES, (0.0, 0.0, 0.0)), labels=labels, doors=doors,
+                       method="manual")
+    hall = int(labels[32, 45])
+    sp = P._RoomSpace(P._Ctx(seg), hall)
+    assert len(sp.door_px) == 4 and sp.mask.size <= P.EXACT_CELLS
+    ids = sorted(sp.door_px)
+    sight = P._in_sight(sp.mask, np.array([sp.door_px[d] for d in ids], float))
+    assert 0 < np.triu(sight, 1).sum() < 6  # some pairs in sight, the pillar hides others
+    fast, exact = P.room_distances(seg, hall), P.room_distances(seg, hall, exact=True)
+    assert len(exact) == 6 and set(fast) == set(exact)
+    for k, L in exact.items():
+        assert fast[k] == pytest.approx(L, rel=1e-9), k
+
+
 def test_coarse_distances_of_a_real_map_within_tolerance(example):
     exact_pairs = 0
     for r in example.room_graph.nodes:

@@ -36,7 +36,8 @@ computed per room, in a window (the room's bounding box with its doors,
 one cell around):
 
 * a window of at most :data:`EXACT_CELLS` cells gets the map-grid geodesic
-  itself (one search per door, as ``exact=True``);
+  itself: the octile distance for two doors in sight of each other (see
+  below), one search per door for the others;
 * a larger one is cut into blocks of ``f`` x ``f`` cells, ``f`` =
   :data:`TRAVEL_CELL` / resolution (4 at 0.05 m/px); a node is one
   connected piece of the room's cells inside one block (so a wall or a
@@ -308,17 +309,26 @@ class _RoomSpace:
     def door_distances(self, *, exact=False):
         """``{(door_i, door_j): metres}`` between this room's doors (``i < j``, reachable pairs only).
 
-        Exact 8-connected geodesics on the map's grid for small rooms (or
-        ``exact=True``); on a coarse grid with short pairs refined on the
-        map's grid otherwise (see the module notes).
+        Exact 8-connected geodesics on the map's grid for small rooms (doors
+        in sight of each other: their octile distance, the same number) or
+        with ``exact=True`` (one search per door); on a coarse grid with
+        short pairs refined on the map's grid otherwise (see the module
+        notes).
         """
         ids = sorted(self.door_px)
         if len(ids) < 2:
             return {}
         if exact or self.mask.size <= EXACT_CELLS:  # the reference: one search per door on the map's grid
             out = {}
+            if exact:
+                seen = np.zeros((len(ids), len(ids)), bool)
+            else:  # a small room: doors in sight of each other get their octile distance, the geodesic itself
+                pts = np.array([self.door_px[d] for d in ids], float)
+                seen = _in_sight(self.mask, pts)
             for i, di in enumerate(ids[:-1]):
-                rest = ids[i + 1:]
+                rest = [ids[j] for j in range(i + 1, len(ids)) if not seen[i, j]]
+                for j in np.flatnonzero(seen[i, i + 1:]) + i + 1:
+                    out[(di, ids[j])] = float(_octile(*(pts[i] - pts[j]))) * self.ctx.res
                 for dj, L in zip(rest, self.distances(self.door_px[di], [self.door_px[d] for d in rest])):
                     if np.isfinite(L):
                         out[(di, dj)] = L

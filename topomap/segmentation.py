@@ -420,7 +420,7 @@ def clutter_parts(free: np.ndarray, max_extent_px: float, *, furniture_px: float
         c0, r0, w, h = (int(v) for v in stats[i, :4])
         r0, c0, r1, c1 = max(r0 - 1, 0), max(c0 - 1, 0), min(r0 + h + 1, H), min(c0 + w + 1, W)
         inside = cv2.distanceTransform(np.ascontiguousarray(solid[r0:r1, c0:c1]), cv2.DIST_L2, 3)
-        small[i] = 2 * inside[comp[r0:r1, c0:c1] == i].max() >= wall_thickness_px
+        small[i] = 2 * float(inside[comp[r0:r1, c0:c1] == i].max()) >= wall_thickness_px
     small[0] = False  # label 0: the free cells themselves
     return comp, small
 
