@@ -376,9 +376,12 @@ def skeleton_topology(skel: np.ndarray) -> SkeletonTopology:
     edges = []
     if blab.max():
         br_r, br_c, segs, touch_px = _ordered_branches(px, node_of, is_br, blab)
-        for seg in segs:
-            path = np.stack([br_r[seg], br_c[seg]], 1)
-            edges.append(_branch_edge(seg, path, touch_px.get(int(seg[0]), []),
+        rc = np.stack([br_r, br_c], 1)
+        if segs:  # every branch's pixels in order, end to end: each path a slice
+            along = rc[np.concatenate(segs)]
+            cut = np.cumsum([0] + [s.size for s in segs])
+        for k, seg in enumerate(segs):
+            edges.append(_branch_edge(seg, along[cut[k]:cut[k + 1]], touch_px.get(int(seg[0]), []),
                                       touch_px.get(int(seg[-1]), []), nodes))
         nodes.commit()
     edges += _direct_edges(px, node_of, nodes.rep)

@@ -167,14 +167,21 @@ def _spans_passage(obstacle, p, q, depth_px, slack: float = 1.25):
     n = _perp(d)
     mid = (p + q) / 2
     cap = np.ceil(slack * L).astype(int) + 2
-    top = int(cap.max()) if cap.size else 1
-    # both ways along the segment from 4 points on each side, in one call
-    cs = [mid + t * side for side in (n, -n) for t in (0.25 * depth_px, 0.5 * depth_px, 0.75 * depth_px, depth_px)]
-    starts = np.concatenate([c - d for c in cs] + cs)
-    dirs = np.concatenate([-d] * len(cs) + [d] * len(cs))
-    runs = np.minimum(_free_runs(obstacle, starts, dirs, top).reshape(2, len(cs), len(p)), cap)
-    narrow = (runs[0] + runs[1] + 1 <= slack * L).reshape(2, len(cs) // 2, len(p))
-    return narrow.any(axis=1).all(axis=0)
+    out = np.zeros(len(p), bool)
+    # both ways along the segment from 4 points on each side, in one call per group of segments
+    # of similar length (each group sampled as far as its longest needs)
+    group = np.ceil(np.log2(np.maximum(cap, 1))).astype(int)
+    for g in np.unique(group):
+        k = np.flatnonzero(group == g)
+        top = int(cap[k].max())
+        cs = [mid[k] + t * side[k] for side in (n, -n)
+              for t in (0.25 * depth_px, 0.5 * depth_px, 0.75 * depth_px, depth_px)]
+        starts = np.concatenate([c - d[k] for c in cs] + cs)
+        dirs = np.concatenate([-d[k]] * len(cs) + [d[k]] * len(cs))
+        runs = np.minimum(_free_runs(obstacle, starts, dirs, top).reshape(2, len(cs), k.size), cap[k])
+        narrow = (runs[0] + runs[1] + 1 <= slack * L[k]).reshape(2, len(cs) // 2, k.size)
+        out[k] = narrow.any(axis=1).all(axis=0)
+    return out
 
 
 def _gaps(obstacle, free, segs, back, n_gap, offsets, min_gap_px, max_gap_px, chunk: int = 1024):
