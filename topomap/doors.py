@@ -550,12 +550,15 @@ def protrusion_at(free: np.ndarray, points, radius_px: float, look_px: int) -> n
         return out
     kernels = {}
     seen = {}  # posts on the same cell share a window, hence a value
+    inner = []  # posts whose window lies wholly inside the map: filtered together below
     for n, p in enumerate(points):
         pr, pc = int(round(float(p[0]))), int(round(float(p[1])))
         if (pr, pc) in seen:
-            out[n] = out[seen[pr, pc]]
             continue
         seen[pr, pc] = n
+        if pad <= pr < H - pad and pad <= pc < W - pad and r < H and r < W:
+            inner.append((n, pr, pc))
+            continue
         ra, rb = max(pr - pad, 0), min(pr + pad + 1, H)
         ca, cb = max(pc - pad, 0), min(pc + pad + 1, W)
         win = free[ra:rb, ca:cb].astype(np.float32)
@@ -573,6 +576,27 @@ def protrusion_at(free: np.ndarray, points, radius_px: float, look_px: int) -> n
         lc, ld = max(pc - look_px, 0) - ca, min(pc + look_px + 1, W) - ca
         sub = np.where(win[la:lb, lc:ld] > 0, 0.0, fr[la:lb, lc:ld])
         out[n] = float(sub.max()) if sub.size else 0.0
+    if inner:
+        # the windows side by side, each with its own zero margin of r cells, in one filter
+        side = 2 * pad + 1
+        idx = np.array(inner)
+        rr = idx[:, 1, None] + np.arange(-pad, pad + 1)  # (m, side) rows and columns of every window
+        cc = idx[:, 2, None] + np.arange(-pad, pad + 1)
+        wins = free[rr[:, :, None], cc[:, None, :]].astype(np.float32)  # (m, side, side)
+        strip = np.zeros((side + 2 * r, len(inner), side + 2 * r), np.float32)
+        strip[r:r + side, :, r:r + side] = wins.transpose(1, 0, 2)
+        k = kernels.get((r, r))
+        if k is None:
+            k = kernels[r, r] = kernel(r, r)
+        fr = cv2.filter2D(strip.reshape(side + 2 * r, -1), -1, k, borderType=cv2.BORDER_CONSTANT)
+        fr = fr.reshape(side + 2 * r, len(inner), side + 2 * r)[r:r + side, :, r:r + side].transpose(1, 0, 2)
+        look = slice(pad - look_px, pad + look_px + 1)  # the cells within look_px of the post
+        sub = np.where(wins[:, look, look] > 0, 0.0, fr[:, look, look])
+        out[idx[:, 0]] = sub.reshape(len(inner), -1).max(axis=1)
+    for n, p in enumerate(points):  # posts on a cell seen before take its value
+        first = seen[int(round(float(p[0]))), int(round(float(p[1])))]
+        if first != n:
+            out[n] = out[first]
     return out
 
 
