@@ -350,6 +350,13 @@ def wall_directions(lines: np.ndarray) -> float:
     return float(np.radians(bins[int(np.argmax(hs))] + 0.5))
 
 
+#: Wall segments within this angle (radians) of one of the building's two main directions lie on
+#: it (:func:`straight_lines`, :func:`long_walls`, :func:`partition_gaps`): 12 degrees, wider than
+#: the 2-degree bins of the Hough lines and a scanned wall's wander over a metre or two, and well
+#: short of a wing built at an angle (typically 30-45 degrees), whose walls keep their own lines.
+MAIN_DIRECTION_TOL = float(np.deg2rad(12.0))
+
+
 def _main_classes(segs: np.ndarray, angle_tol: float):
     """The segments ``(K, 4)`` within ``angle_tol`` of each of the
     building's two main directions (:func:`wall_directions`): for each, its
@@ -422,7 +429,7 @@ def face_runs(faces: np.ndarray, *, min_length_px: float, band_px: int = 1, max_
 
 
 def straight_lines(faces: np.ndarray, *, min_length_px: float, max_gap_px: float,
-                   hough: np.ndarray | None = None, angle_tol: float = np.deg2rad(12.0)) -> np.ndarray:
+                   hough: np.ndarray | None = None, angle_tol: float = MAIN_DIRECTION_TOL) -> np.ndarray:
     """The straight wall faces of a map: its runs of faces along the building's
     two main directions, and its Hough lines off them.
 
@@ -454,7 +461,7 @@ def straight_lines(faces: np.ndarray, *, min_length_px: float, max_gap_px: float
 
 
 def long_walls(lines: np.ndarray, *, max_gap_px: float, offset_px: float, min_span_px: float,
-               angle_tol: float = np.deg2rad(12.0), support: float = 0.5) -> list:
+               angle_tol: float = MAIN_DIRECTION_TOL, support: float = 0.5) -> list:
     """Long straight walls along the building's main directions.
 
     Wall segments within ``angle_tol`` of the main direction
@@ -531,7 +538,7 @@ def long_walls(lines: np.ndarray, *, max_gap_px: float, offset_px: float, min_sp
 def partition_gaps(obstacle: np.ndarray, free: np.ndarray, lines: np.ndarray, *, min_wall_px: float,
                    min_gap_px: float, max_gap_px: float, min_hits_px: float, depth_px: float,
                    hits: np.ndarray | None = None, hits_band_px: float = 1.0,
-                   min_structure_px: float = 0.0, angle_tol: float = np.deg2rad(12.0),
+                   min_structure_px: float = 0.0, angle_tol: float = MAIN_DIRECTION_TOL,
                    band_px: int = 1) -> list:
     """Openings between the free end of a partition and the wall it points at.
 
