@@ -402,7 +402,6 @@ class _Branches:
 
     def __init__(self, G):
         res = G.graph.get("resolution", 1.0)
-        self.G = G
         self.keys = sorted(G.edges(keys=True))
         self.data = [G.edges[k] for k in self.keys]
         E = len(self.keys)
@@ -427,7 +426,6 @@ class _Branches:
         self.pm_back = _accumulate_runs(np.maximum, R[back], n)
         self.u = np.array([k[0] for k in self.keys], object)
         self.v = np.array([k[1] for k in self.keys], object)
-        self.fwd_at = np.array([d["start"] for d in self.data], object)
         self.incident = {x: [] for x in G.nodes}  # node -> [(branch, from its start?, a loop?)]
         for i, (a, b, _) in enumerate(self.keys):
             if n[i]:
@@ -436,7 +434,7 @@ class _Branches:
                 if b != a:
                     self.incident[b].append((i, at == b, False))
         self._key_f = self.branch + 1j * A
-        self._key_b = self.branch + 1j * self.arc_back
+        self._rad_end = np.append(R, 0.0)  # for range_max: every range's end an index of the array
 
     def cell_at(self, e, x, side):
         """First cell of each branch ``e`` whose arc length is >= ``x`` (``side="left"``) or > ``x``."""
@@ -448,34 +446,19 @@ class _Branches:
         out = np.zeros(lo.shape)
         ok = hi > lo
         if ok.any():
-            Rs = np.append(self.rad, 0.0)  # every range's end an index of the array
-            out[ok] = np.maximum.reduceat(Rs, np.stack([lo[ok], hi[ok]], 1).ravel())[::2]
+            out[ok] = np.maximum.reduceat(self._rad_end, np.stack([lo[ok], hi[ok]], 1).ravel())[::2]
         return out
 
     def beyond(self, nodes, edges, rem):
-        """Largest clearance within ``rem`` px past each node, along its other branches
-        (0 where ``rem <= 0`` or there is none)."""
-        nodes, edges, rem = np.asarray(nodes, object), np.asarray(edges), np.asarray(rem, float)
-        out = np.zeros(rem.shape)
-        qs, bs, fw = [], [], []
-        for q in np.flatnonzero(rem > 0):
-            for b, forward, loop in self.incident[nodes[q]]:
-                if b == edges[q] and not loop:
-                    continue
-                qs.append(q), bs.append(b), fw.append(forward)
-        if not qs:
-            return out
-        qs, bs, fw = np.array(qs), np.array(bs), np.array(fw, bool)
-        x = bs + 1j * rem[qs]
-        j = np.where(fw, np.searchsorted(self._key_f, x, side="right"),
-                     np.searchsorted(self._key_b, x, side="right")) - 1
-        val = np.where(fw, self.pm[j], self.pm_back[j])
-        np.maximum.at(out, qs, val)
+        """:meth:`beyond_one` of each node, branch and distance: ``(m,)`` floats."""
+        out = np.zeros(len(rem))
+        for q in np.flatnonzero(np.asarray(rem) > 0):
+            out[q] = self.beyond_one(nodes[q], int(edges[q]), float(rem[q]))
         return out
 
-
     def beyond_one(self, node, edge, rem):
-        """:meth:`beyond` of one node, branch and distance, as a float."""
+        """Largest clearance within ``rem`` px past ``node``, along its branches other than
+        ``edge`` (0 where ``rem <= 0`` or there is none)."""
         best = 0.0
         if rem <= 0:
             return best
@@ -551,12 +534,14 @@ def protrusion_at(free: np.ndarray, points, radius_px: float, look_px: int) -> n
     kernels = {}
     seen = {}  # posts on the same cell share a window, hence a value
     inner = []  # posts whose window lies wholly inside the map: filtered together below
+    same = []  # (post, the first post on its cell)
     for n, p in enumerate(points):
         pr, pc = int(round(float(p[0]))), int(round(float(p[1])))
         if (pr, pc) in seen:
+            same.append((n, seen[pr, pc]))
             continue
         seen[pr, pc] = n
-        if pad <= pr < H - pad and pad <= pc < W - pad and r < H and r < W:
+        if pad <= pr < H - pad and pad <= pc < W - pad:
             inner.append((n, pr, pc))
             continue
         ra, rb = max(pr - pad, 0), min(pr + pad + 1, H)
@@ -593,10 +578,8 @@ def protrusion_at(free: np.ndarray, points, radius_px: float, look_px: int) -> n
         look = slice(pad - look_px, pad + look_px + 1)  # the cells within look_px of the post
         sub = np.where(wins[:, look, look] > 0, 0.0, fr[:, look, look])
         out[idx[:, 0]] = sub.reshape(len(inner), -1).max(axis=1)
-    for n, p in enumerate(points):  # posts on a cell seen before take its value
-        first = seen[int(round(float(p[0]))), int(round(float(p[1])))]
-        if first != n:
-            out[n] = out[first]
+    for n, first in same:  # posts on a cell seen before take its value
+        out[n] = out[first]
     return out
 
 
