@@ -435,12 +435,18 @@ class TopomapOptions(_Options):
     prior_post_shift: float = _opt(0.15, "length")
     prior_changed_area: float = _opt(1.0, "area")
 
+    def scanned(self, straight: float) -> bool:
+        """Whether a map whose wall faces lie on straight lines at a share of
+        ``straight`` was drawn by a laser scanner (less than ``straight_walls``)
+        rather than drawn as a plan."""
+        return straight < self.straight_walls
+
     def resolved(self, resolution: float, straight: float = 1.0) -> "TopomapOptions":
         """These options with the map-dependent defaults ``rise`` and
         ``furniture_size`` filled in for a map of ``resolution`` m/px whose
         wall faces lie on straight lines at a share of ``straight`` (what
         actually runs)."""
-        scanned = straight < self.straight_walls
+        scanned = self.scanned(straight)
         fill = {}
         if self.rise is None:
             fill["rise"] = (self.scan_rise if scanned

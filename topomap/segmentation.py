@@ -892,7 +892,7 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
             # on a drawn plan a row of solid blocks along a long wall is a partition, and the long walls
             # keep only the bulky pieces along them: the small clutter is looked through as before,
             # so a plan with no bulky piece at all is left as it is
-            scanned = straight < opts.straight_walls
+            scanned = opts.scanned(straight)
             if parts is None or (not scanned and not (parts[1] & ~parts0[1]).any()):
                 looked2, clutter2 = looked, clutter
             else:
