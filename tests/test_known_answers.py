@@ -12,6 +12,7 @@ what it gives now, so a method change that fixes one turns it into a
 failure: then remove the marker.
 """
 
+import numpy as np
 import pytest
 
 import _testdata as T
@@ -63,8 +64,6 @@ def test_known_room_and_door_counts(make, n_rooms, n_doors):
 def test_known_answers_hold_in_every_orientation(make, n_rooms, n_doors):
     # a map has no preferred orientation: the same counts turned by 90, 180
     # and 270 degrees, with and without a mirror image
-    import numpy as np
-
     m = make()
     got = {}
     for k in range(4):
