@@ -102,3 +102,47 @@ def test_free_mask_median_is_medianblur(resolution):
         ref = cv2.erode(ref, disk(er), borderType=cv2.BORDER_CONSTANT, borderValue=0)
     k = med if med % 2 else med + 1
     np.testing.assert_array_equal(f, cv2.medianBlur(ref * 255, k) > 127)
+
+
+def test_masks_without_clearance_are_the_same_masks():
+    # segment_topomap computes the clearance itself (on a second thread): the masks must not change
+    from topomap.io import from_array
+    from topomap.options import TopomapOptions
+    from topomap.segmentation import preprocess_masks
+
+    rng = np.random.default_rng(7)
+    grid = from_array(ndi.binary_opening(rng.random((120, 150)) < 0.8), resolution=0.05)
+    f, d, occ = preprocess_masks(grid, TopomapOptions())
+    f2, d2, occ2 = preprocess_masks(grid, TopomapOptions(), clearance=False)
+    assert d2 is None and d is not None
+    np.testing.assert_array_equal(f, f2)
+    np.testing.assert_array_equal(occ, occ2)
+
+
+def test_segmentation_clearance_is_the_distance_transform_of_its_free_space():
+    # the clearance made beside the masks is the exact distance transform of the searched free space
+    from topomap import load_map, segment
+    from topomap._example import example_map_path
+    from topomap._fast import edt
+
+    grid = load_map(example_map_path())
+    seg = segment(grid)
+    d = seg.intermediates.clearance
+    assert d.shape == seg.intermediates.free_mask.shape
+    free = d > 0
+    np.testing.assert_array_equal(d, edt(free))
+    assert free.sum() >= 0.9 * grid.free.sum()
+
+
+def test_beside_returns_the_value_and_raises_the_error_of_its_call():
+    import threading
+
+    from topomap._fast import Beside
+
+    seen = []
+    job = Beside(lambda a, b=0: (seen.append(threading.current_thread().name), a + b)[1], 2, b=3)
+    assert job.result() == 5 and job.result() == 5
+    assert seen == ["topomap-beside"]
+    bad = Beside(lambda: 1 / 0)
+    with pytest.raises(ZeroDivisionError):
+        bad.result()

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["edt", "label", "label_stats", "lookup", "ranges"]
+__all__ = ["Beside", "edt", "label", "label_stats", "lookup", "ranges"]
 
 
 def _bytes(mask: np.ndarray) -> np.ndarray:
@@ -112,6 +112,42 @@ def ranges(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     lo, hi = np.asarray(lo), np.asarray(hi)
     n = hi - lo
     return np.arange(int(n.sum())) + np.repeat(lo - (np.cumsum(n) - n), n)
+
+
+class Beside:
+    """``fn(*args, **kwargs)`` run on a thread of its own while the caller goes on; :meth:`result` waits.
+
+    For work done in compiled code that lets go of Python's lock (OpenCV's
+    distance transform and drawing, scikit-image's thinning, zlib): it then
+    runs on a second core beside the caller's own work, and the result is the
+    same as a plain call. An exception raised by ``fn`` is raised again by
+    :meth:`result`. The thread is a daemon and holds no state of its own, so
+    a caller that never asks for the result (it failed first) leaves nothing
+    behind but the finished thread.
+    """
+
+    __slots__ = ("_thread", "_value", "_error")
+
+    def __init__(self, fn, *args, **kwargs):
+        import threading
+
+        self._value = self._error = None
+
+        def run():
+            try:
+                self._value = fn(*args, **kwargs)
+            except BaseException as exc:  # noqa: BLE001 - handed to result()
+                self._error = exc
+
+        self._thread = threading.Thread(target=run, name="topomap-beside", daemon=True)
+        self._thread.start()
+
+    def result(self):
+        """``fn``'s return value, once it has finished (its exception raised here)."""
+        self._thread.join()
+        if self._error is not None:
+            raise self._error
+        return self._value
 
 
 #: glibc's ``mallopt`` parameters (``malloc.h``) set by :func:`keep_freed_memory`.

@@ -244,7 +244,7 @@ class _Timer:
 # Stage "masks": preprocessed free and occupied space
 # --------------------------------------------------------------------------
 
-def preprocess_masks(grid: OccupancyGrid, opts, *, occupied=None):
+def preprocess_masks(grid: OccupancyGrid, opts, *, occupied=None, clearance: bool = True):
     """Stage "masks": the free mask, clearance and occupied mask the skeletons are taken from.
 
     Free space is eroded with a disk of ``opts.erosion_radius`` and
@@ -259,11 +259,14 @@ def preprocess_masks(grid: OccupancyGrid, opts, *, occupied=None):
     opts : TopomapOptions or PaperOptions
     occupied : (M, N) ndarray of bool, optional
         The cells occupied space is made of (the paper: ``grid.occupied``).
+    clearance : bool
+        Whether to compute the clearance (False: None is returned in its
+        place, for a caller that computes ``edt(grid.free)`` itself).
 
     Returns
     -------
     free_mask : (M, N) ndarray of bool
-    clearance : (M, N) ndarray of float
+    clearance : (M, N) ndarray of float32 or None
         Distance (px) of every free cell to the nearest non-free cell (of
         the map before preprocessing).
     occupied_mask : (M, N) ndarray of bool
@@ -289,7 +292,7 @@ def preprocess_masks(grid: OccupancyGrid, opts, *, occupied=None):
             f = cv2.boxFilter(f, cv2.CV_16U, (k, k), normalize=False, borderType=cv2.BORDER_REPLICATE) > k * k // 2
     else:
         f = f.astype(bool)
-    d_free = edt(free)
+    d_free = edt(free) if clearance else None
     solid = ~free
     dist_out = edt(solid, exact=False)  # only compared with the band width
     occ = (solid if occupied is None else occupied & solid) & (dist_out <= band)
@@ -497,9 +500,12 @@ def coarse_skeletons(free_mask: np.ndarray, occupied_mask: np.ndarray, factor: i
     """
     from . import skeleton as S
 
-    fs = S.skeletonize(S.downsample(free_mask, factor, keep="all"))
+    from ._fast import Beside
+
+    # the two thinnings run in compiled code without Python's lock: free space's on a second core
+    fs = Beside(lambda: S.skeletonize(S.downsample(free_mask, factor, keep="all")))
     os_ = S.skeletonize(S.downsample(occupied_mask, factor, keep="any"))
-    return fs, os_
+    return fs.result(), os_
 
 
 def coarse_skeleton_graph(skel: np.ndarray, factor: int, radius: np.ndarray, grid: OccupancyGrid):
@@ -852,6 +858,7 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
     from . import doors as D
     from . import skeleton as S
     from . import walls as W
+    from ._fast import Beside, edt
 
     opts = options_from_kwargs(TopomapOptions, "topomap", options, kwargs)
     res = grid.resolution
@@ -910,12 +917,16 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
     del solid, parts0
     with T("preprocess"):
         space = search.free if clutter is None else search.free & ~clutter
-        f, d_free, occ = preprocess_masks(search, opts)
+        # the clearance (an exact distance transform, in OpenCV without Python's lock) on a second
+        # core while the masks and the skeletons are made: the same array, needed from the graphs on
+        clearance = Beside(edt, search.free)
+        f, _, occ = preprocess_masks(search, opts, clearance=False)
     walls = ~search.free  # what bounds free space: door posts and wall faces lie on these cells
     factor = skeleton_factor(opts.skeleton_cell, res)
     with T("skeletons"):
         fs, os_ = coarse_skeletons(f, occ, factor)
     with T("graphs"):
+        d_free = clearance.result()
         Gf, Go, d_occ = topomap_graphs(fs, os_, factor, d_free, occ, search, opts.min_occupied_branch)
     with T("doors"):
         thr_px = D.wall_threshold(d_occ, S.graph_pixels(Go))
