@@ -73,7 +73,10 @@ def write_segmentation(seg, outdir, *, overlay: bool = True, skeletons: bool = F
     or none; ``rooms.geojson`` only when ``geojson``).
 
     ``timings``, when given, receives the seconds of each step: ``travel``,
-    ``overlay`` and ``write_<file>`` per file.
+    ``overlay`` and ``write_<file>`` per file. The overlay and the
+    ``labels.png`` image are made on a second thread while the travel
+    distances are measured: ``overlay`` is the time still waited for them
+    after the travel distances, ``write_labels`` the writing of the file.
 
     Returns
     -------
@@ -85,18 +88,37 @@ def write_segmentation(seg, outdir, *, overlay: bool = True, skeletons: bool = F
     from .export import write_outputs
     from .planning import travel_graph
 
+    from ._fast import Beside
+
     t = {} if timings is None else timings
+    seg.room_graph  # made here, before the thread below reads it
+    # the pictures (OpenCV's drawing, zlib: mostly without Python's lock) on a second core while the
+    # travel distances are measured; ``overlay`` is the time the job then still waits for them
+    pictures = Beside(_pictures, seg, overlay, skeletons)
     t0 = time.perf_counter()
     G = travel_graph(seg)
     t["travel"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    png, labels_png = pictures.result()
+    if overlay:
+        t["overlay"] = time.perf_counter() - t0
+    return write_outputs(seg, outdir, G, overlay_png=png, geojson=geojson, timings=t, labels_png=labels_png)
+
+
+def _pictures(seg, overlay, skeletons):
+    """``(overlay.png bytes or None, labels.png bytes)`` of ``seg``."""
+    import io as _io
+
+    from .export import save_labels
+
     png = None
     if overlay:
         from .plot import overlay_png
 
-        t0 = time.perf_counter()
         png = overlay_png(seg, skeletons=skeletons)
-        t["overlay"] = time.perf_counter() - t0
-    return write_outputs(seg, outdir, G, overlay_png=png, geojson=geojson, timings=t)
+    buf = _io.BytesIO()
+    save_labels(seg.labels, buf)
+    return png, buf.getvalue()
 
 
 #: Modules the segment command uses, imported up front (their import time is the

@@ -1150,7 +1150,7 @@ OUTPUT_FILES = {"labels": "labels.png", "label_map_pgm": "labels.pgm", "label_ma
 
 
 def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None, geojson: bool = True,
-                  timings: dict | None = None) -> dict:
+                  timings: dict | None = None, labels_png: bytes | None = None) -> dict:
     """Write ``labels.png``, ``labels.pgm`` + ``labels.yaml``, ``rooms.graphml``, ``rooms.json``,
     ``rooms.geojson`` and ``overlay.png``.
 
@@ -1176,6 +1176,9 @@ def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None, geojs
     timings : dict, optional
         When given, the seconds each file took are stored in it as
         ``write_<name>`` (``write_labels``, ``write_graphml``, ...).
+    labels_png : bytes, optional
+        The content of ``labels.png`` when already made (:func:`save_labels`
+        into a buffer); None makes it from ``seg.labels``.
 
     Returns
     -------
@@ -1204,7 +1207,7 @@ def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None, geojs
                                                                   name=str(outdir / names["label_map"]))
         return label_map
 
-    writers = {"labels": lambda p: save_labels(seg.labels, p),
+    writers = {"labels": lambda p: save_labels(seg.labels, p) if labels_png is None else _write(labels_png, p),
                "label_map_pgm": lambda p: save_bytes(map_pair()["pgm"], p),
                "label_map": lambda p: save_bytes(map_pair()["yaml"], p),
                "graphml": lambda p: save_graphml(graph, p),
