@@ -304,7 +304,9 @@ def main(argv=None):
                   "last topomap round (`start`: process start to the command; `import`: every module the "
                   "command uses, loaded once before the first map; `warmup`: the job once on a tiny map, so "
                   "one-off first-call costs are not in the first map; all three paid once per command, so "
-                  "shared by all maps of a batch):", "",
+                  "shared by all maps of a batch; the clearance is computed on a second thread during "
+                  "`preprocess` and `skeletons`, and the overlay and the labels.png image during `travel`: "
+                  "`overlay` is what the job still waits for them after it):", "",
                   "| stage | ms | share of the map's job |", "| --- | ---: | ---: |"]
         for k in TOPO_STAGES:
             if k in st:
