@@ -213,3 +213,30 @@ def test_window_faces_are_the_faces_of_each_window(n):
         win = obstacle[ra[k]:rb[k], ca[k]:cb[k]]
         r, c = np.nonzero(wall_faces(win, ~win))
         assert np.array_equal(rows[seg == k], r + ra[k]) and np.array_equal(cols[seg == k], c + ca[k])
+
+
+def test_prune_spurs_in_place_prunes_as_a_copy_does():
+    # the methods prune the graphs they have just made in place (copy=False): the same graph as a copy
+    import networkx as nx
+
+    from topomap.skeleton import prune_spurs, skeleton_graph, skeletonize
+
+    free = np.zeros((60, 90), bool)
+    free[5:55, 5:85] = True
+    free[25:35, 40:50] = False  # a pillar: the skeleton is a loop around it
+    free[2:5, 60:75] = True  # a shallow niche: a spur shorter than 1 m off the loop
+    skel = skeletonize(free)
+    G = skeleton_graph(skel, radius=edt(free), resolution=0.05)
+    before = nx.node_link_data(G, edges="links")
+    H = prune_spurs(G, 1.0)
+    assert nx.node_link_data(G, edges="links") == before  # the input is left as it was
+    assert H.number_of_edges() < G.number_of_edges()
+    same = prune_spurs(G, 1.0, copy=False)
+    assert same is G
+    a, b = nx.node_link_data(H, edges="links"), nx.node_link_data(same, edges="links")
+    assert {k: v for k, v in a.items() if k != "links"} == {k: v for k, v in b.items() if k != "links"}
+    key = lambda e: (e["source"], e["target"], e["key"])  # noqa: E731
+    for e, f in zip(sorted(a["links"], key=key), sorted(b["links"], key=key)):
+        assert e.keys() == f.keys()
+        for k in e:
+            np.testing.assert_array_equal(np.asarray(e[k]), np.asarray(f[k]))

@@ -542,7 +542,7 @@ def topomap_graphs(fs, os_, factor, d_free, occupied_mask, grid, min_occupied_br
     d_occ = edt(occupied_mask, exact=False)  # only averaged into the wall threshold
     Gf = coarse_skeleton_graph(fs, factor, d_free, grid)
     Go = coarse_skeleton_graph(os_, factor, d_occ, grid)
-    Go = S.prune_spurs(Go, min_occupied_branch)
+    Go = S.prune_spurs(Go, min_occupied_branch, copy=False)
     return Gf, Go, d_occ
 
 
@@ -676,10 +676,10 @@ def segment_paper(grid: OccupancyGrid, options: PaperOptions | None = None, **kw
         os_ = S.skeletonize(occ)
     with T("graphs"):
         Gf = S.prune_spurs(S.skeleton_graph(fs, radius=d_free, resolution=res, to_world=grid.pixel_to_world),
-                           opts.min_free_branch)
+                           opts.min_free_branch, copy=False)
         d_occ = edt(occ)
         Go = S.prune_spurs(S.skeleton_graph(os_, radius=d_occ, resolution=res, to_world=grid.pixel_to_world),
-                           opts.min_occupied_branch)
+                           opts.min_occupied_branch, copy=False)
     with T("doors"):
         thr_px = D.wall_threshold(d_occ, S.graph_pixels(Go))
         cands = D.passage_candidates(Gf, min_branch_px=opts.min_free_branch / res)

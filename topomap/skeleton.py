@@ -482,15 +482,16 @@ def _set_kinds(G):
         G.nodes[n]["kind"] = names.get(G.degree(n), "junction")
 
 
-def prune_spurs(G: nx.MultiGraph, min_length: float) -> nx.MultiGraph:
+def prune_spurs(G: nx.MultiGraph, min_length: float, *, copy: bool = True) -> nx.MultiGraph:
     """Remove end branches shorter than ``min_length`` metres, then merge
     the branches meeting at nodes left with two branches.
 
     One pass, as MATLAB's ``bwskel(..., 'MinBranchLength', L)`` which the
     paper uses: a spur is a branch with an endpoint (degree-1 node). Returns a
-    new graph; node keys are kept.
+    new graph (``copy=False``: ``G`` itself, pruned in place, for a graph
+    just made that nobody else holds); node keys are kept.
     """
-    H = G.copy()
+    H = G.copy() if copy else G
     spurs = [(u, v, k) for u, v, k, d in H.edges(keys=True, data=True)
              if d["length"] < min_length and u != v and (H.degree(u) == 1 or H.degree(v) == 1)
              and not (H.degree(u) == 1 and H.degree(v) == 1)]
