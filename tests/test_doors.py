@@ -216,7 +216,8 @@ def test_window_faces_are_the_faces_of_each_window(n):
 
 
 def test_prune_spurs_in_place_prunes_as_a_copy_does():
-    # the methods prune the graphs they have just made in place (copy=False): the same graph as a copy
+    # the default method prunes the occupied skeleton graph it has just made in place (copy=False):
+    # the same nodes and branches as a pruned copy (merged paths may run the other way)
     import networkx as nx
 
     from topomap.skeleton import prune_spurs, skeleton_graph, skeletonize
@@ -225,6 +226,7 @@ def test_prune_spurs_in_place_prunes_as_a_copy_does():
     free[5:55, 5:85] = True
     free[25:35, 40:50] = False  # a pillar: the skeleton is a loop around it
     free[2:5, 60:75] = True  # a shallow niche: a spur shorter than 1 m off the loop
+    free[30:55, 60:64] = False  # a wall stub: the loop gets junctions and short spurs
     skel = skeletonize(free)
     G = skeleton_graph(skel, radius=edt(free), resolution=0.05)
     before = nx.node_link_data(G, edges="links")
@@ -233,10 +235,11 @@ def test_prune_spurs_in_place_prunes_as_a_copy_does():
     assert H.number_of_edges() < G.number_of_edges()
     same = prune_spurs(G, 1.0, copy=False)
     assert same is G
-    a, b = nx.node_link_data(H, edges="links"), nx.node_link_data(same, edges="links")
-    assert {k: v for k, v in a.items() if k != "links"} == {k: v for k, v in b.items() if k != "links"}
-    key = lambda e: (e["source"], e["target"], e["key"])  # noqa: E731
-    for e, f in zip(sorted(a["links"], key=key), sorted(b["links"], key=key)):
-        assert e.keys() == f.keys()
-        for k in e:
-            np.testing.assert_array_equal(np.asarray(e[k]), np.asarray(f[k]))
+
+    def branches(K):
+        return sorted((tuple(sorted((u, v))), round(d["length"], 9), round(d["radius_min"], 9),
+                       tuple(sorted(map(tuple, np.asarray(d["path"]).tolist()))))
+                      for u, v, d in K.edges(data=True))
+
+    assert dict(H.nodes(data="kind")) == dict(same.nodes(data="kind"))
+    assert branches(H) == branches(same)

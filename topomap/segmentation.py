@@ -676,10 +676,10 @@ def segment_paper(grid: OccupancyGrid, options: PaperOptions | None = None, **kw
         os_ = S.skeletonize(occ)
     with T("graphs"):
         Gf = S.prune_spurs(S.skeleton_graph(fs, radius=d_free, resolution=res, to_world=grid.pixel_to_world),
-                           opts.min_free_branch, copy=False)
+                           opts.min_free_branch)
         d_occ = edt(occ)
         Go = S.prune_spurs(S.skeleton_graph(os_, radius=d_occ, resolution=res, to_world=grid.pixel_to_world),
-                           opts.min_occupied_branch, copy=False)
+                           opts.min_occupied_branch)
     with T("doors"):
         thr_px = D.wall_threshold(d_occ, S.graph_pixels(Go))
         cands = D.passage_candidates(Gf, min_branch_px=opts.min_free_branch / res)

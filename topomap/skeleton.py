@@ -489,7 +489,10 @@ def prune_spurs(G: nx.MultiGraph, min_length: float, *, copy: bool = True) -> nx
     One pass, as MATLAB's ``bwskel(..., 'MinBranchLength', L)`` which the
     paper uses: a spur is a branch with an endpoint (degree-1 node). Returns a
     new graph (``copy=False``: ``G`` itself, pruned in place, for a graph
-    just made that nobody else holds); node keys are kept.
+    just made that nobody else holds); node keys are kept. A copy lists
+    each node's branches in another order than ``G`` does, so where two
+    branches are merged into one, which of them comes first (the direction
+    of the merged path) can differ between the two.
     """
     H = G.copy() if copy else G
     spurs = [(u, v, k) for u, v, k, d in H.edges(keys=True, data=True)
