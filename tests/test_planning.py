@@ -474,3 +474,20 @@ def test_coarse_distances_of_a_real_map_within_tolerance(example):
             assert fast[k] == pytest.approx(L, rel=TRAVEL_TOLERANCE), (r, k)
             exact_pairs += 1
     assert exact_pairs > 0
+
+
+def test_window_room_test_of_door_cells_is_membership_in_the_rooms():
+    # _Ctx.window_room's test "on one of these rooms" (a table over the labels) against np.isin,
+    # with labels below, between and above the rooms asked for
+    seg = hall_with_partition()
+    labels = seg.labels.copy()
+    labels[0, :5] = [-1, -7, seg.n_rooms + 5, 0, 1]
+    seg.labels = labels
+    ctx = P._Ctx(seg)
+    H, W = labels.shape
+    rr, cc = np.divmod(np.arange(H * W), W)
+    for r in range(1, seg.n_rooms + 1):
+        for rooms in ({r}, {r} | {x for d in seg.doors for x in d.rooms if r in d.rooms}):
+            mask, on = ctx.window_room(r, rooms, (0, H, 0, W))
+            np.testing.assert_array_equal(mask, labels == r)
+            np.testing.assert_array_equal(on(rr, cc), np.isin(labels[rr, cc], sorted(rooms)))

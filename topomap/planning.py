@@ -222,7 +222,12 @@ class _Ctx:
             return L == r, lambda rr, cc: L[rr, cc] > 0
         r0, r1, c0, c1 = win
         L = self.seg.labels[r0:r1, c0:c1]  # a view: one pass for the room's cells, none for the others
-        ids = np.array(sorted(rooms))
+        ids = np.array(sorted(rooms), np.intp)
+        if ids.size and ids[0] >= 1:  # a table over the labels (np.isin costs more on a door's few cells)
+            on = np.zeros(int(ids[-1]) + 2, bool)
+            on[ids] = True
+            top = len(on) - 1  # labels 0, below 0 (clipped to 0) and above the rooms (clipped to top): False
+            return L == r, lambda rr, cc: on[np.clip(L[rr, cc], 0, top)]
         return L == r, lambda rr, cc: np.isin(L[rr, cc], ids)
 
     def label_at_pixel(self, row, col):
