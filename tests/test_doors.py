@@ -243,3 +243,29 @@ def test_prune_spurs_in_place_prunes_as_a_copy_does():
 
     assert dict(H.nodes(data="kind")) == dict(same.nodes(data="kind"))
     assert branches(H) == branches(same)
+
+
+def test_pixel_graph_components_are_those_of_its_adjacency():
+    # _PixelGraph.components labels the pixels' image with OpenCV: the same components as the
+    # pixel graph's own 8-neighbour adjacency (scipy), numbered by their first pixel in row-major order
+    from scipy import sparse
+    from scipy.sparse import csgraph
+
+    from topomap.skeleton import _PixelGraph
+
+    rng = np.random.default_rng(3)
+    for _ in range(30):
+        img = rng.random((int(rng.integers(2, 60)), int(rng.integers(2, 60)))) < rng.uniform(0.05, 0.7)
+        px = _PixelGraph(img)
+        mask = rng.random(px.npx) < rng.uniform(0.3, 1.0)
+        m = mask[px.src] & mask[px.dst]
+        A = sparse.csr_matrix((np.ones(int(m.sum())), (px.src[m], px.dst[m])), shape=(px.npx, px.npx))
+        _, comp = csgraph.connected_components(A, directed=False)
+        lab = px.components(mask)
+        assert (lab[~mask] == 0).all() and (lab[mask] > 0).all()
+        got = lab[mask]
+        for a in np.unique(comp[mask]):  # one label per component, one component per label
+            assert np.unique(got[comp[mask] == a]).size == 1
+        assert np.unique(got).size == np.unique(comp[mask]).size
+        firsts = [np.flatnonzero(lab == k)[0] for k in range(1, got.max() + 1)]  # pixels are row-major
+        assert firsts == sorted(firsts)

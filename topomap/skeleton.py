@@ -137,7 +137,7 @@ class _PixelGraph:
     """
 
     def __init__(self, skel: np.ndarray):
-        H, W = skel.shape
+        H, W = self.shape = skel.shape
         lin = np.flatnonzero(skel)
         self.pr, self.pc = np.divmod(lin, W)  # np.nonzero's order (row-major), faster
         self.npx = npx = self.pr.size
@@ -153,15 +153,20 @@ class _PixelGraph:
 
     def components(self, mask_px: np.ndarray) -> np.ndarray:
         """Connected components of the pixels in ``mask_px`` (labels 1.., 0 =
-        outside), numbered in row-major order of their first pixel."""
-        npx, src, dst = self.npx, self.src, self.dst
-        m = mask_px[src] & mask_px[dst]
-        A = sparse.csr_matrix((np.ones(int(m.sum()), np.int8), (src[m], dst[m])), shape=(npx, npx))
-        _, comp = csgraph.connected_components(A, directed=False)
-        lab = np.zeros(npx, np.int64)
+        outside), numbered in row-major order of their first pixel.
+
+        The pixels' 8-neighbour adjacency is the 8-connectivity of their image:
+        OpenCV labels that image, then the labels are renumbered."""
+        import cv2
+
+        lab = np.zeros(self.npx, np.int64)
         idx = np.flatnonzero(mask_px)
         if idx.size:
-            _, first, inv = np.unique(comp[idx], return_index=True, return_inverse=True)
+            img = np.zeros(self.shape, np.uint8)
+            rr, cc = self.pr[idx], self.pc[idx]
+            img[rr, cc] = 1
+            comp = cv2.connectedComponents(img, connectivity=8, ltype=cv2.CV_32S)[1][rr, cc]
+            _, first, inv = np.unique(comp, return_index=True, return_inverse=True)
             rank = np.empty(first.size, np.int64)
             rank[np.argsort(first, kind="stable")] = np.arange(1, first.size + 1)
             lab[idx] = rank[inv]
