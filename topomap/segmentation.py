@@ -609,8 +609,9 @@ def uncrop(seg: Segmentation, full: OccupancyGrid, box) -> Segmentation:
             nd["pixel"] = (nd["pixel"][0] + r0, nd["pixel"][1] + c0)
             nd["row"] += r0
             nd["col"] += c0
+        shift = np.array([r0, c0])
         for _, _, ed in G.edges(data=True):
-            ed["path"] = ed["path"] + np.array([r0, c0])
+            ed["path"] = ed["path"] + shift
     for c in seg.candidates:
         for name in ("centroid", "ip1", "ip2", "ep1", "ep2"):
             val = getattr(c, name)
