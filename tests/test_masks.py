@@ -146,3 +146,36 @@ def test_beside_returns_the_value_and_raises_the_error_of_its_call():
     bad = Beside(lambda: 1 / 0)
     with pytest.raises(ZeroDivisionError):
         bad.result()
+
+
+def test_beside_runs_inline_in_a_batch_worker(monkeypatch):
+    # segment_many's worker processes (one per core) call one_thread(): no second thread per map
+    import threading
+
+    from topomap import _fast
+    from topomap._fast import Beside, one_thread
+
+    monkeypatch.setattr(_fast, "_BESIDE", [True])
+    one_thread()
+    seen = []
+    job = Beside(lambda: seen.append(threading.current_thread().name) or 7)
+    assert seen == [threading.current_thread().name]  # already done, here
+    assert job.result() == 7
+    with pytest.raises(ZeroDivisionError):
+        Beside(lambda: 1 / 0).result()
+
+
+def test_batch_workers_run_maps_on_one_thread():
+    # the pool initializer of segment_many(jobs > 1) switches the second thread off in the worker
+    from concurrent.futures import ProcessPoolExecutor
+
+    from topomap import batch
+
+    with ProcessPoolExecutor(1, initializer=batch._pool_init) as ex:
+        assert ex.submit(_beside_flag).result() is False
+
+
+def _beside_flag():
+    from topomap import _fast
+
+    return _fast._BESIDE[0]

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["Beside", "edt", "label", "label_stats", "lookup", "ranges"]
+__all__ = ["Beside", "edt", "label", "label_stats", "lookup", "one_thread", "ranges"]
 
 
 def _bytes(mask: np.ndarray) -> np.ndarray:
@@ -114,6 +114,20 @@ def ranges(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     return np.arange(int(n.sum())) + np.repeat(lo - (np.cumsum(n) - n), n)
 
 
+#: Whether :class:`Beside` starts a thread (``[True]``); see :func:`one_thread`.
+_BESIDE = [True]
+
+
+def one_thread() -> None:
+    """Make :class:`Beside` run its call at once, on the caller's thread, in this process.
+
+    For the worker processes of a batch that already runs one map per core
+    (``segment_many(jobs=...)``): a second thread per map would only compete
+    with the other workers for the same cores.
+    """
+    _BESIDE[0] = False
+
+
 class Beside:
     """``fn(*args, **kwargs)`` run on a thread of its own while the caller goes on; :meth:`result` waits.
 
@@ -131,7 +145,7 @@ class Beside:
     def __init__(self, fn, *args, **kwargs):
         import threading
 
-        self._value = self._error = None
+        self._value = self._error = self._thread = None
 
         def run():
             try:
@@ -139,12 +153,16 @@ class Beside:
             except BaseException as exc:  # noqa: BLE001 - handed to result()
                 self._error = exc
 
+        if not _BESIDE[0]:  # the cores are busy with other maps: the call runs here and now
+            run()
+            return
         self._thread = threading.Thread(target=run, name="topomap-beside", daemon=True)
         self._thread.start()
 
     def result(self):
         """``fn``'s return value, once it has finished (its exception raised here)."""
-        self._thread.join()
+        if self._thread is not None:
+            self._thread.join()
         if self._error is not None:
             raise self._error
         return self._value

@@ -305,10 +305,11 @@ def _pool_init():
     # local workers ignore Ctrl-C; the parent stops them
     import signal
 
-    from ._fast import keep_freed_memory
+    from ._fast import keep_freed_memory, one_thread
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     keep_freed_memory()  # each worker runs many maps
+    one_thread()  # one worker per core: a map's work on a second thread would compete with the others
 
 
 def _crashed(task, exc) -> dict:
