@@ -85,10 +85,9 @@ def write_segmentation(seg, outdir, *, overlay: bool = True, skeletons: bool = F
     """
     import time
 
+    from ._fast import Beside
     from .export import write_outputs
     from .planning import travel_graph
-
-    from ._fast import Beside
 
     t = {} if timings is None else timings
     seg.room_graph  # made here, before the thread below reads it

@@ -499,7 +499,6 @@ def coarse_skeletons(free_mask: np.ndarray, occupied_mask: np.ndarray, factor: i
     wall survives), a coarse occupied cell is occupied if any is.
     """
     from . import skeleton as S
-
     from ._fast import Beside
 
     # the two thinnings run in compiled code without Python's lock: free space's on a second core
