@@ -916,12 +916,13 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
                 wl = _Walls(search, opts)
     del solid, parts0
     with T("preprocess"):
-        space = search.free if clutter is None else search.free & ~clutter
+        free = search.free  # read, never written, from here on
+        space = free if clutter is None else free & ~clutter
         # the clearance (an exact distance transform, in OpenCV without Python's lock) on a second
         # core while the masks and the skeletons are made: the same array, needed from the graphs on
-        clearance = Beside(edt, search.free)
+        clearance = Beside(edt, free)
         f, _, occ = preprocess_masks(search, opts, clearance=False)
-    walls = ~search.free  # what bounds free space: door posts and wall faces lie on these cells
+    walls = ~free  # what bounds free space: door posts and wall faces lie on these cells
     factor = skeleton_factor(opts.skeleton_cell, res)
     with T("skeletons"):
         fs, os_ = coarse_skeletons(f, occ, factor)
@@ -932,7 +933,7 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
         thr_px = D.wall_threshold(d_occ, S.graph_pixels(Go))
         faces = wl.faces if wl.k == 1 else None  # the faces of ``walls``, when walls were found on the map's cells
         cands = D.find_bottlenecks(Gf, walls, opts, res, thr_px, faces=faces)
-        accepted = D.judge_doors(cands, search.free, S.graph_endpoints(Go), thr_px, opts, res)
+        accepted = D.judge_doors(cands, free, S.graph_endpoints(Go), thr_px, opts, res)
         if wl.lw and opts.pillar_depth > 0:
             accepted = D.across_corridor(accepted, wl.index, opts.pillar_depth / res)
         if opts.frontier_post > 0:
