@@ -155,7 +155,7 @@ def test_beside_runs_inline_in_a_batch_worker(monkeypatch):
     from topomap import _fast
     from topomap._fast import Beside, one_thread
 
-    monkeypatch.setattr(_fast, "_BESIDE", [True])
+    monkeypatch.setattr(_fast, "_BESIDE", True)
     one_thread()
     seen = []
     job = Beside(lambda: seen.append(threading.current_thread().name) or 7)
@@ -178,4 +178,4 @@ def test_batch_workers_run_maps_on_one_thread():
 def _beside_flag():
     from topomap import _fast
 
-    return _fast._BESIDE[0]
+    return _fast._BESIDE

@@ -114,8 +114,8 @@ def ranges(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     return np.arange(int(n.sum())) + np.repeat(lo - (np.cumsum(n) - n), n)
 
 
-#: Whether :class:`Beside` starts a thread (``[True]``); see :func:`one_thread`.
-_BESIDE = [True]
+#: Whether :class:`Beside` starts a thread; see :func:`one_thread`.
+_BESIDE = True
 
 
 def one_thread() -> None:
@@ -125,7 +125,8 @@ def one_thread() -> None:
     (``segment_many(jobs=...)``): a second thread per map would only compete
     with the other workers for the same cores.
     """
-    _BESIDE[0] = False
+    global _BESIDE
+    _BESIDE = False
 
 
 class Beside:
@@ -153,7 +154,7 @@ class Beside:
             except BaseException as exc:  # noqa: BLE001 - handed to result()
                 self._error = exc
 
-        if not _BESIDE[0]:  # the cores are busy with other maps: the call runs here and now
+        if not _BESIDE:  # the cores are busy with other maps: the call runs here and now
             run()
             return
         self._thread = threading.Thread(target=run, name="topomap-beside", daemon=True)

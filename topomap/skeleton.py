@@ -133,7 +133,8 @@ class _PixelGraph:
 
     ``pr``, ``pc``: pixel rows / columns (row-major order); ``nb`` (npx, 8):
     index of each neighbour or -1; ``has``: ``nb >= 0``; ``deg``: neighbour
-    count; ``src``, ``dst``: every (pixel, neighbour) pair.
+    count; ``src``, ``dst``: every (pixel, neighbour) pair; ``shape``: the
+    skeleton image's.
     """
 
     def __init__(self, skel: np.ndarray):
