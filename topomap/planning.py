@@ -270,32 +270,42 @@ class _RoomSpace:
         doors = ctx.doors_of(r) if doors is None else doors
         H, W = ctx.shape
         box = ctx.room_bbox(r)
-        lines = {d: ctx.door_cells(d) for d in doors}
-        rows = [box[0], box[1] - 1] if box else []
-        cols = [box[2], box[3] - 1] if box else []
-        for rr, cc in lines.values():
-            rows += [rr.min(), rr.max()]
-            cols += [cc.min(), cc.max()]
-        if not rows:
+        lines = [ctx.door_cells(d) for d in doors]
+        if not box and not lines:
             self.win, self.mask, self.door_px = (0, 0, 0, 0), np.zeros((0, 0), bool), {}
             return
+        # all the doors' cells at once (one test against the rooms instead of one per door)
+        n = np.array([len(rr) for rr, _ in lines], np.intp)
+        RR = np.concatenate([rr for rr, _ in lines]) if lines else np.zeros(0, np.intp)
+        CC = np.concatenate([cc for _, cc in lines]) if lines else np.zeros(0, np.intp)
+        rows = ([box[0], box[1] - 1] if box else []) + ([int(RR.min()), int(RR.max())] if RR.size else [])
+        cols = ([box[2], box[3] - 1] if box else []) + ([int(CC.min()), int(CC.max())] if CC.size else [])
         r0, r1 = max(min(rows) - 1, 0), min(max(rows) + 2, H)
         c0, c1 = max(min(cols) - 1, 0), min(max(cols) + 2, W)
         self.win = (r0, r1, c0, c1)
         rooms = {r} | {x for d in doors for x in ctx.doors[d][:2]}
         mask, on_rooms = ctx.window_room(r, rooms, self.win)
+        RR, CC = RR - r0, CC - c0
+        ok = on_rooms(RR, CC)
+        mask[RR[ok], CC[ok]] = True
+        # each door's cell closest to its midpoint (the first of equals along its line), among its cells
+        # on the rooms: the squared distances of all cells, inf off the rooms, the first minimum per door
+        mid = np.array([[(p1[0] + p2[0]) / 2 - r0, (p1[1] + p2[1]) / 2 - c0]
+                        for p1, p2 in (ctx.doors[d][2:4] for d in doors)], float).reshape(-1, 2)
+        owner = np.repeat(np.arange(len(doors)), n)
+        d2 = np.where(ok, (RR - mid[owner, 0]) ** 2 + (CC - mid[owner, 1]) ** 2, np.inf)
+        first = np.cumsum(n) - n
         self.door_px = {}
-        for d, (rr, cc) in lines.items():
-            rr, cc = rr - r0, cc - c0
-            ok = on_rooms(rr, cc)
-            if not ok.any():
-                continue
-            rr, cc = rr[ok], cc[ok]
-            mask[rr, cc] = True
-            _, _, p1, p2, _, _ = ctx.doors[d]
-            mr, mc = (p1[0] + p2[0]) / 2 - r0, (p1[1] + p2[1]) / 2 - c0
-            i = int(np.argmin((rr - mr) ** 2 + (cc - mc) ** 2))
-            self.door_px[d] = (int(rr[i]), int(cc[i]))
+        if d2.size:
+            has = np.add.reduceat(ok, first[n > 0]) > 0
+            low = np.minimum.reduceat(d2, first[n > 0])
+            at = np.flatnonzero(d2 == np.repeat(low, n[n > 0]))
+            best = at[np.r_[True, owner[at][1:] != owner[at][:-1]]]  # the first minimum of each door
+            pick = dict(zip(owner[best].tolist(), best.tolist()))
+            for k, h in zip(np.flatnonzero(n > 0).tolist(), has.tolist()):
+                if h:
+                    i = pick[k]
+                    self.door_px[doors[k]] = (int(RR[i]), int(CC[i]))
         self.mask = mask
 
     def local(self, row, col):
