@@ -464,6 +464,52 @@ def test_small_rooms_get_the_exact_distance():
         assert fast[k] == pytest.approx(L, rel=1e-9), k
 
 
+def _door_cells_one_by_one(ctx, r):
+    """The reference of ``_RoomSpace``'s door cells: door by door, the cells of its segment on the
+    room or the rooms it joins, and of those the one nearest its midpoint (the first of equals)."""
+    sp = P._RoomSpace(ctx, r)
+    r0, _, c0, _ = sp.win
+    L = ctx.window_labels({r} | {x for d in ctx.doors_of(r) for x in ctx.doors[d][:2]}, sp.win)
+    out = {}
+    for d in ctx.doors_of(r):
+        rr, cc = ctx.door_cells(d)
+        rr, cc = rr - r0, cc - c0
+        ok = L[rr, cc] > 0
+        if ok.any():
+            p1, p2 = ctx.doors[d][2:4]
+            mr, mc = (p1[0] + p2[0]) / 2 - r0, (p1[1] + p2[1]) / 2 - c0
+            i = int(np.argmin((rr[ok] - mr) ** 2 + (cc[ok] - mc) ** 2))
+            out[d] = (int(rr[ok][i]), int(cc[ok][i]))
+            assert sp.mask[rr[ok], cc[ok]].all()  # the door's cells are traversable
+    return sp.door_px, out
+
+
+def test_door_cells_are_the_cells_nearest_the_midpoints(example):
+    """Every room's door cells, all doors at once, as found door by door; from the segmentation and
+    from its graph alone (the room polygons rasterised)."""
+    checked = 0
+    for ctx in (P._Ctx(example), P._Ctx(example.room_graph)):
+        for r in example.room_graph.nodes:
+            got, want = _door_cells_one_by_one(ctx, r)
+            assert got == want and list(got) == list(want), r
+            checked += len(want)
+    assert checked >= 2 * example.room_graph.number_of_edges()
+
+
+def test_door_cells_first_of_equally_near_cells():
+    """A door whose midpoint lies between two cells takes the first of them along its segment."""
+    seg = corridor_of_rooms(widths_px=(15,), offsets=[0])
+    ctx = P._Ctx(seg)
+    (d,) = ctx.doors
+    got, want = _door_cells_one_by_one(ctx, 1)
+    assert got == want and d in got
+    rr, cc = ctx.door_cells(d)
+    p1, p2 = ctx.doors[d][2:4]
+    mid = ((p1[0] + p2[0]) / 2, (p1[1] + p2[1]) / 2)
+    d2 = (rr - mid[0]) ** 2 + (cc - mid[1]) ** 2
+    assert np.count_nonzero(d2 == d2.min()) == 2  # a tie, broken by the order along the segment
+
+
 def test_coarse_distances_of_a_real_map_within_tolerance(example):
     exact_pairs = 0
     for r in example.room_graph.nodes:
