@@ -14,6 +14,7 @@ grid's resolution.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from itertools import chain
 
 import numpy as np
 
@@ -1224,13 +1225,15 @@ def seen_posts(accepted, seen: np.ndarray) -> list:
     edges of what the laser has seen (unknown cells on both sides, as where
     a room was glimpsed through its door); a door stands in a wall, which
     the laser hits."""
+    if not accepted:
+        return []
     H, W = seen.shape
+    # every post at once (np.clip on each post alone before: 1.3 -> 0.2 ms a map on the ipa maps)
+    posts = np.array([(c.ip1, c.ip2) for _, c in accepted], float).reshape(-1, 2)
+    rc = np.clip(np.rint(posts).astype(int), 0, [H - 1, W - 1])
+    hits = seen[rc[:, 0], rc[:, 1]].reshape(-1, 2).any(axis=1)
     kept = []
-    for width, c in accepted:
-        hit = False
-        for p in (c.ip1, c.ip2):
-            rr, cc = np.clip(np.rint(np.asarray(p, float)).astype(int), 0, [H - 1, W - 1])
-            hit |= bool(seen[rr, cc])
+    for (width, c), hit in zip(accepted, hits.tolist()):
         if hit:
             kept.append((width, c))
         else:
@@ -1241,13 +1244,18 @@ def seen_posts(accepted, seen: np.ndarray) -> list:
 def opening_candidates(openings, resolution: float) -> list:
     """``(width m, Candidate)`` of wall openings (:func:`topomap.walls.wall_openings`),
     status :data:`WALL_OPENING`, for :func:`suppress_duplicates`."""
-    out = []
-    for p, q in openings:
-        v = q - p
-        n = float(np.hypot(*v))
-        out.append((n * resolution, Candidate(edge=None, centroid=(p + q) / 2, direction=v / max(n, 1e-9),
-                                              radius=n / 2, ip1=p, ip2=q, status=WALL_OPENING)))
-    return out
+    openings = list(openings)
+    if not openings:
+        return []
+    # all openings at once, the same element-wise arithmetic (2.1 -> 0.7 ms a map on the ipa maps)
+    P = np.array([p for p, _ in openings], float).reshape(-1, 2)
+    Q = np.array([q for _, q in openings], float).reshape(-1, 2)
+    V = Q - P
+    n = np.hypot(V[:, 0], V[:, 1])
+    centre = (P + Q) / 2
+    direction = V / np.maximum(n, 1e-9)[:, None]
+    return [(w, Candidate(edge=None, centroid=c, direction=d, radius=h, ip1=p, ip2=q, status=WALL_OPENING))
+            for (p, q), w, c, d, h in zip(openings, (n * resolution).tolist(), centre, direction, (n / 2).tolist())]
 
 
 def suppress_duplicates(accepted, resolution: float, *, kept=()) -> list:
@@ -1289,20 +1297,29 @@ def suppress_duplicates(accepted, resolution: float, *, kept=()) -> list:
     half = np.hypot(*(B - A).T) / 2
     near_of = cKDTree((A + B) / 2).query_ball_point(mids, reach + float(half.max()) + 1e-6)
     door = np.repeat(np.arange(n), [len(js) for js in near_of])
-    seg = np.fromiter((j for js in near_of for j in js), np.intp, count=door.size)
+    seg = np.fromiter(chain.from_iterable(near_of), np.intp, count=door.size)
     before = seg < n0 + door  # only the segments given and the doors taken before each door
     door, seg = door[before], seg[before]
     near = point_segment_distances(mids[door], A[seg], B[seg]) < reach[door]
-    door, seg = door[near], seg[near]  # still in door order (np.repeat of 0..n-1, filtered)
-    bounds = np.searchsorted(door, np.arange(n + 1))
-    on = np.zeros(n0 + n, bool)  # the segments kept so far: those given, then the doors kept
-    on[:n0] = True
+    door, seg = door[near], seg[near]  # still in door order
+    # a door near a segment given is a duplicate whatever the doors before it; the others
+    # in turn, on Python lists (a numpy look-up a door before): 2.8 -> 2.0 ms a map on the
+    # ipa maps, both calls
+    dup = np.zeros(n, bool)
+    dup[door[seg < n0]] = True
+    other = (seg >= n0) & ~dup[door]
+    door, seg = door[other], seg[other] - n0
+    keep = (~dup).tolist()  # the doors kept, final for every door before the one in turn
+    if door.size:
+        first = np.flatnonzero(np.r_[True, door[1:] != door[:-1]])
+        seg = seg.tolist()
+        for i, lo, hi in zip(door[first].tolist(), first.tolist(), np.r_[first[1:], door.size].tolist()):
+            if any(keep[j] for j in seg[lo:hi]):
+                keep[i] = False
     segs = []
-    for i in range(n):
-        c = accepted[i][1]
-        if on[seg[bounds[i]:bounds[i + 1]]].any():
+    for (_, c), k in zip(accepted, keep):
+        if k:
+            segs.append((c.ip1, c.ip2))
+        else:
             c.status = DUPLICATE
-            continue
-        on[n0 + i] = True
-        segs.append((c.ip1, c.ip2))
     return segs
