@@ -73,6 +73,30 @@ def test_accumulate_runs_is_each_run_on_its_own():
             assert np.array_equal(got[s:s + m], ufunc.accumulate(x[s:s + m]))
 
 
+def test_accumulate_runs_in_groups_is_each_run_on_its_own():
+    """Runs too unequal to pad to the longest are grouped by length: the same values."""
+    rng = np.random.default_rng(4)
+    n = np.r_[rng.integers(0, 9, 400), 6000, 3, 1500]
+    x = rng.random(int(n.sum())) * 10.0 ** rng.integers(-3, 4, int(n.sum()))
+    got = D._accumulate_runs(np.add, x, n)
+    for s, m in zip(np.cumsum(n) - n, n):
+        assert np.array_equal(got[s:s + m], np.add.accumulate(x[s:s + m]))
+
+
+def test_running_max_is_each_run_on_its_own():
+    """Running maxima on ranks, forwards and backwards, equal those of each run alone (ties included)."""
+    rng = np.random.default_rng(5)
+    n = np.array([1, 2, 0, 5, 40, 1, 300, 7])
+    x = rng.integers(0, 20, int(n.sum())) / 7.0
+    start = np.cumsum(n) - n
+    run = np.repeat(np.arange(n.size), n)
+    back = start[run] + np.repeat(start + n - 1, n) - np.arange(x.size)
+    fwd, bwd = D._running_max(x, run, back)
+    for s, m in zip(start, n):
+        assert np.array_equal(fwd[s:s + m], np.maximum.accumulate(x[s:s + m]))
+        assert np.array_equal(bwd[s:s + m], np.maximum.accumulate(x[s:s + m][::-1]))
+
+
 def test_uniform_corridor_has_no_bottleneck():
     free = np.zeros((30, 200), bool)
     free[5:25, 5:195] = True
