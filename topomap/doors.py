@@ -415,13 +415,14 @@ class _Branches:
     """The branches of a skeleton graph ``G`` laid end to end, in the order of
     their ``(u, v, key)``: clearance (px), arc length from the branch's start
     pixel and from its end pixel (px), the running maximum of the clearance
-    from either end; per branch its first cell ``start``, length ``n``,
-    smallest clearance ``low`` and end nodes ``u``, ``v`` (as in its key).
+    from either end, the pixels ``path`` (floats); per branch its first cell
+    ``start``, length ``n``, smallest clearance ``low`` and end nodes ``u``,
+    ``v`` (as in its key, as indices into ``G.nodes``).
 
-    Running sums and maxima are taken branch by branch in order (the
-    branches grouped by length into padded rows), so every value is the one
-    :func:`numpy.cumsum` / :func:`numpy.maximum.accumulate` of the branch
-    alone gives.
+    Running sums are taken branch by branch in order (the branches padded
+    into rows, :func:`_accumulate_runs`), and running maxima on ranks
+    (:func:`_running_max`), so every value is the one :func:`numpy.cumsum` /
+    :func:`numpy.maximum.accumulate` of the branch alone gives.
     """
 
     def __init__(self, G):
