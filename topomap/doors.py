@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from itertools import chain
+from operator import itemgetter
 
 import numpy as np
 
@@ -392,7 +393,9 @@ def passage_minima(G, *, window_px: float, rise_px: float, reach_px: float, min_
 
 def _candidates(B, cells, status):
     """The :class:`Candidate` at each cell of ``B`` (:class:`_Branches`), with
-    its status, the direction of :func:`_direction` at each found at once."""
+    its status: centred on the cell's pixel, directed along its branch (the
+    unit vector from the pixel 3 before it to the one 3 after, within the
+    branch; ``(1, 0)`` where they coincide), all directions at once."""
     k = B.branch[cells]
     s, n = B.start[k], B.n[k]
     i = cells - s
@@ -426,8 +429,6 @@ class _Branches:
     """
 
     def __init__(self, G):
-        from operator import itemgetter
-
         res = G.graph.get("resolution", 1.0)
         # keys and data in one pass (not a G.edges[k] look-up per branch)
         edges = sorted(G.edges(keys=True, data=True), key=itemgetter(0, 1, 2))
@@ -646,15 +647,6 @@ def protrusion_at(free: np.ndarray, points, radius_px: float, look_px: int) -> n
     for n, first in same:  # posts on a cell seen before take its value
         out[n] = out[first]
     return out
-
-
-def _direction(path, i, half: int = 3) -> np.ndarray:
-    """Unit vector (rows, cols) along a skeleton path at index ``i``."""
-    a = path[max(i - half, 0)].astype(float)
-    b = path[min(i + half, path.shape[0] - 1)].astype(float)
-    d = b - a
-    n = np.linalg.norm(d)
-    return d / n if n else np.array([1.0, 0.0])
 
 
 def _mouths(B, k, r_lo, r_hi, reach_px, rise_px, tol_px: float = 1.0, min_run_px: float = 0.0):
