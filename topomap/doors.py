@@ -1264,8 +1264,9 @@ def opening_candidates(openings, resolution: float) -> list:
     n = np.hypot(V[:, 0], V[:, 1])
     centre = (P + Q) / 2
     direction = V / np.maximum(n, 1e-9)[:, None]
+    width, half = (n * resolution).tolist(), (n / 2).tolist()
     return [(w, Candidate(edge=None, centroid=c, direction=d, radius=h, ip1=p, ip2=q, status=WALL_OPENING))
-            for (p, q), w, c, d, h in zip(openings, (n * resolution).tolist(), centre, direction, (n / 2).tolist())]
+            for (p, q), w, c, d, h in zip(openings, width, centre, direction, half)]
 
 
 def suppress_duplicates(accepted, resolution: float, *, kept=()) -> list:
