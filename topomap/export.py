@@ -389,6 +389,11 @@ def _is_geom(v) -> bool:
 
 def _plain(v):
     """Plain JSON value of ``v``: tuples/arrays as lists, numpy scalars as Python, geometry as WKT."""
+    t = type(v)
+    if t is float:  # most attributes: Python floats, no numpy call (np.isfinite: 1 µs each)
+        return v if math.isfinite(v) else None
+    if t is int or t is str or t is bool:
+        return v
     if v is None or isinstance(v, (bool, str)):
         return v
     if isinstance(v, (int, np.integer)):
