@@ -408,6 +408,22 @@ def test_write_outputs_files_as_the_single_writers(hand, tmp_path):
         assert files[kind].read_bytes() == alone.read_bytes(), kind
 
 
+@pytest.mark.parametrize("n_labels", [3, 600])
+def test_write_outputs_label_map_as_save_label_map(n_labels, tmp_path):
+    """write_outputs writes labels.pgm (its header and pixels apart, 8 or 16 bits) and labels.yaml
+    as save_label_map does."""
+    labels = (np.arange(20 * 30, dtype=np.int32).reshape(20, 30) % n_labels).astype(np.int32)
+    grid = OccupancyGrid(np.full((20, 30), FREE, np.int8), 0.1, (1.0, 2.0, 0.5))
+    seg = Segmentation(grid=grid, labels=labels, doors=[], method="manual")
+    files = E.write_outputs(seg, tmp_path / "all", nx.MultiGraph())
+    E.save_label_map(seg, tmp_path / "alone" / "labels")
+    for kind, name in (("label_map_pgm", "labels.pgm"), ("label_map", "labels.yaml")):
+        assert files[kind].read_bytes() == (tmp_path / "alone" / name).read_bytes(), kind
+    assert files["label_map_pgm"].read_bytes() == E.label_map_bytes(seg, "labels.pgm")[0]
+    back, _, _ = E.load_label_map(files["label_map"])
+    np.testing.assert_array_equal(back, labels)
+
+
 def test_wkt_of_odd_coordinates_reads_back_exactly():
     from shapely import wkt
 
