@@ -424,6 +424,19 @@ def test_write_outputs_label_map_as_save_label_map(n_labels, tmp_path):
     np.testing.assert_array_equal(back, labels)
 
 
+def test_json_text_is_json_dumps_of_node_link(hand, tmp_path):
+    """rooms.json is json.dumps of the node-link data (the outlines' WKT copied in whole), also when
+    an attribute holds the mark that stands for a WKT text there."""
+    G = P.travel_graph(hand)
+    n = next(iter(G.nodes))
+    for mark in (None, E._MARK, E._MARK * 2):
+        if mark is not None:
+            G.nodes[n]["note"] = mark
+        path = E.save_json(G, tmp_path / "g.json")
+        assert path.read_text() == json.dumps(E.node_link(G), allow_nan=False)
+        assert E.load_json(path).nodes[n].get("note") == mark
+
+
 def test_wkt_of_odd_coordinates_reads_back_exactly():
     from shapely import wkt
 

@@ -782,10 +782,44 @@ def save_json(G: nx.Graph, path) -> Path:
     """Write the room graph as node-link JSON (atomically; or into a binary file object); see :func:`node_link`."""
     data = node_link(G)
     try:  # compact: json's C encoder (indent or json.dump would use the Python one)
-        text = json.dumps(data, allow_nan=False)
+        text = _node_link_text(data, G)
     except ValueError:  # a NaN or infinity: written as null (valid JSON), read back as NaN
         text = json.dumps(_plain(data), allow_nan=False)
     return _write(text.encode("utf-8"), path)
+
+
+#: Stands for an outline's WKT in :func:`_node_link_text`'s ``json.dumps`` (written ``"\u0000topomap WKT\u0000"``).
+_MARK = "\0topomap WKT\0"
+
+
+def _node_link_text(data: dict, G: nx.Graph) -> str:
+    """``json.dumps(data, allow_nan=False)`` of the node-link data of ``G``'s scalars, the WKT of its
+    rooms' geometry copied in whole: WKT is printable ASCII without quote or backslash, which JSON
+    writes as it is, and json's escaping scan of it was 1.7 of 2.7 ms on office_e_furnitures (0.35 MB).
+
+    Each such text is replaced by :data:`_MARK` for the encoder and put back in its place; when the
+    text does not hold exactly one mark per WKT (an attribute holds the mark itself), it is written
+    the plain way.
+    """
+    nodes = G.nodes
+    wkts = [(nd, k, v) for nd in data["nodes"] for k, v in nd.items()
+            if type(v) is str and k != "id" and _is_geom(nodes[nd["id"]].get(k))]
+    if not wkts:
+        return json.dumps(data, allow_nan=False)
+    for nd, k, _ in wkts:
+        nd[k] = _MARK
+    try:
+        text = json.dumps(data, allow_nan=False)
+    finally:
+        for nd, k, v in wkts:
+            nd[k] = v
+    parts = text.split(json.dumps(_MARK))
+    if len(parts) != len(wkts) + 1:
+        return json.dumps(data, allow_nan=False)
+    pieces = [parts[0]]
+    for (_, _, v), p in zip(wkts, parts[1:]):
+        pieces += ['"', v, '"', p]
+    return "".join(pieces)
 
 
 def load_json(path) -> nx.MultiGraph:
