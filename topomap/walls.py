@@ -99,21 +99,32 @@ def _line_mask(lines, shape, width: int) -> np.ndarray:
 def _sample_cells(shape, starts, dirs, n, offsets):
     """Cells ``start + t d + o n_perp`` for ``t = 1..n`` and each offset ``o``,
     for every row of ``starts`` / ``dirs`` (``(E, 2)``): ``(E, len(offsets), n)``
-    flat indices into a C-ordered array of ``shape`` (of the cells clipped
-    to the map), and a mask of the samples inside it."""
+    flat indices into a C-ordered array of ``shape`` (0 for a sample outside
+    the map: every caller masks those), and a mask of the samples inside it."""
     H, W = shape
     starts, dirs = np.asarray(starts, float), np.asarray(dirs, float)
     t = np.arange(1, n + 1, dtype=float)[None, None, :]
     o = np.asarray(offsets, float)[None, :, None]
-    # rows and cols apart (the same sums as one (..., 2) array, without it)
-    r = np.rint(starts[:, 0, None, None] + t * dirs[:, 0, None, None] + o * -dirs[:, 1, None, None]).astype(np.intp)
-    c = np.rint(starts[:, 1, None, None] + t * dirs[:, 1, None, None] + o * dirs[:, 0, None, None]).astype(np.intp)
+    # rows and cols apart (the same sums as one (..., 2) array, without it);
+    # the one offset 0 adds nothing (x + 0.0 rounds as x), so is not added
+    if o.size == 1 and o.flat[0] == 0:
+        r = starts[:, 0, None, None] + t * dirs[:, 0, None, None]
+        c = starts[:, 1, None, None] + t * dirs[:, 1, None, None]
+    else:
+        r = starts[:, 0, None, None] + t * dirs[:, 0, None, None] + o * -dirs[:, 1, None, None]
+        c = starts[:, 1, None, None] + t * dirs[:, 1, None, None] + o * dirs[:, 0, None, None]
+    # rounded in place, the flat index made from the whole floats (exact) with
+    # the samples outside set to 0 instead of clipped, and 32-bit indices when
+    # they fit (a faster cast); the callers gather with np.take (faster than
+    # indexing): _free_runs 3.1 -> 2.1 ms a map, _gaps 3.6 -> 2.7,
+    # wall_openings 9.1 -> 7.0 (min of 11, the 14 ipa mid maps)
+    np.rint(r, out=r)
+    np.rint(c, out=c)
     inside = (r >= 0) & (r < H) & (c >= 0) & (c < W)
-    np.minimum(np.maximum(r, 0, out=r), H - 1, out=r)
-    np.minimum(np.maximum(c, 0, out=c), W - 1, out=c)
     r *= W
     r += c
-    return r, inside
+    np.copyto(r, 0.0, where=~inside)
+    return r.astype(np.int32 if H * W < 2 ** 31 else np.intp), inside
 
 
 def _perp(d):
@@ -125,7 +136,7 @@ def _free_runs(obstacle, starts, dirs, n):
     """Samples from each row of ``starts`` along the row of ``dirs`` (at most
     ``n``) before the first obstacle cell or the map's edge: ``(E,)``."""
     at, inside = _sample_cells(obstacle.shape, starts, dirs, n, [0])
-    stop = np.ravel(obstacle)[at[:, 0]] | ~inside[:, 0]
+    stop = np.take(obstacle, at[:, 0]) | ~inside[:, 0]
     return np.where(stop.any(axis=1), np.argmax(stop, axis=1), n)
 
 
@@ -134,7 +145,7 @@ def _face_runs(faces, starts, dirs, n, offsets):
     of ``dirs`` for ``n`` samples (within the band of ``offsets``), at 70 %
     of them at least: ``(E,)`` bool."""
     at, inside = _sample_cells(faces.shape, starts, dirs, n, offsets)
-    return (np.ravel(faces)[at] & inside).any(axis=1).mean(axis=1) >= 0.7
+    return (np.take(faces, at) & inside).any(axis=1).mean(axis=1) >= 0.7
 
 
 def _depth_ok(obstacle, p, q, depth_px):
@@ -205,7 +216,7 @@ def _gaps(obstacle, free, segs, back, n_gap, offsets, min_gap_px, max_gap_px, ch
     m = min(back + 3, n_gap)
     ob, fr = np.ravel(obstacle), np.ravel(free)
     at, inside = _sample_cells(obstacle.shape, ends - (back + 1) * dirs, dirs, m, offsets)
-    hit = (ob[at] & inside).any(axis=1)
+    hit = (np.take(ob, at) & inside).any(axis=1)
     todo = np.flatnonzero(hit[:, 0] & ~hit[:, 1:].all(axis=1))
     ends, dirs = ends[todo], dirs[todo]
     centre = len(offsets) // 2
@@ -214,7 +225,7 @@ def _gaps(obstacle, free, segs, back, n_gap, offsets, min_gap_px, max_gap_px, ch
     for k in range(0, ends.shape[0], chunk):
         E, D = ends[k:k + chunk], dirs[k:k + chunk]
         at, inside = _sample_cells(obstacle.shape, E - (back + 1) * D, D, n_gap, offsets)
-        hit = (ob[at] & inside).any(axis=1)
+        hit = (np.take(ob, at) & inside).any(axis=1)
         clear = ~hit
         s0 = np.argmax(clear, axis=1)
         ok = clear.any(axis=1) & (s0 != 0) & (s0 <= back + 2)
@@ -223,7 +234,7 @@ def _gaps(obstacle, free, segs, back, n_gap, offsets, min_gap_px, max_gap_px, ch
         ok &= after.any(axis=1)
         gap = e0 - s0 + 1
         ok &= (gap >= min_gap_px) & (gap <= max_gap_px)
-        lf = fr[at[:, centre]] & inside[:, centre]
+        lf = np.take(fr, at[:, centre]) & inside[:, centre]
         cs = np.concatenate([np.zeros((lf.shape[0], 1), int), np.cumsum(lf, axis=1)], axis=1)
         rows = np.arange(lf.shape[0])
         n_free = cs[rows, e0] - cs[rows, s0]
@@ -610,7 +621,7 @@ def partition_gaps(obstacle: np.ndarray, free: np.ndarray, lines: np.ndarray, *,
         # samples tell) are followed further
         m = min(back + 3, n_gap)
         at, inside = _sample_cells(obstacle.shape, start, dirs, m, offsets)
-        hit = (ob[at] & inside).any(axis=1)
+        hit = (np.take(ob, at) & inside).any(axis=1)
         todo = np.flatnonzero(hit[:, 0] & ~hit[:, 1:].all(axis=1))
         if not todo.size:
             continue
@@ -619,24 +630,24 @@ def partition_gaps(obstacle: np.ndarray, free: np.ndarray, lines: np.ndarray, *,
         if 1 - k not in crossing:
             crossing[1 - k] = np.ravel(_line_mask(segs[classes[1 - k][1]], obstacle.shape, 3))
         at, inside = _sample_cells(obstacle.shape, start, dirs, n_gap, offsets)
-        met = (crossing[1 - k][at] & inside).any(axis=1) & (j >= s0[:, None])
+        met = (np.take(crossing[1 - k], at) & inside).any(axis=1) & (j >= s0[:, None])
         e0 = np.argmax(met, axis=1)
         ok = met.any(axis=1)
         # the gap ends at the crossing wall's first cell on the line
-        wall = ob[at[:, band_px]] & inside[:, band_px] & (j >= e0[:, None])
+        wall = np.take(ob, at[:, band_px]) & inside[:, band_px] & (j >= e0[:, None])
         e1 = np.argmax(wall, axis=1)
         ok &= wall.any(axis=1) & (e1 - e0 <= 2 * band_px + 1)
         gap = e1 - s0
         ok &= (gap >= min_gap_px) & (gap <= max_gap_px)
         within = (j >= s0[:, None]) & (j < e1[:, None])
-        line_free = fr[at[:, band_px]] & inside[:, band_px]
+        line_free = np.take(fr, at[:, band_px]) & inside[:, band_px]
         ok &= (line_free & within).sum(axis=1) >= 0.5 * np.maximum(gap, 1)
         i = np.flatnonzero(ok)
         if not i.size:
             continue
         hb = max(int(round(hits_band_px)), band_px)
         ah, inh = _sample_cells(obstacle.shape, start[i], dirs[i], n_gap, np.arange(-hb, hb + 1))
-        seen = (np.ravel(hits)[ah] & inh).any(axis=1)
+        seen = (np.take(hits, ah) & inh).any(axis=1)
         i = i[(seen & within[i]).sum(axis=1) >= min_hits_px]
         if not i.size:
             continue
