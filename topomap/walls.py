@@ -16,6 +16,8 @@ converted with the map's resolution by the caller's options.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 __all__ = ["wall_faces", "wall_lines", "straight_share", "wall_openings", "wall_directions", "long_walls",
@@ -671,13 +673,16 @@ def _on_structure(obstacle: np.ndarray, seg, min_px: float) -> bool:
     import cv2
 
     H, W = obstacle.shape
-    m = int(np.ceil(min_px)) + 3
-    r0 = max(int(min(seg[0], seg[2])) - m, 0)
-    r1 = min(int(max(seg[0], seg[2])) + m + 1, H)
-    c0 = max(int(min(seg[1], seg[3])) - m, 0)
-    c1 = min(int(max(seg[1], seg[3])) + m + 1, W)
-    win = np.array(obstacle[r0:r1, c0:c1], np.uint8)  # a copy: the fill marks it
-    mr, mc = np.rint((np.asarray(seg[:2], float) + np.asarray(seg[2:], float)) / 2).astype(int)
+    # on Python floats and ints (the same values; round() rounds half to even as
+    # np.rint does): 0.64 -> 0.49 ms a map
+    a0, a1, b0, b1 = (float(x) for x in seg)
+    m = math.ceil(min_px) + 3
+    r0 = max(int(min(a0, b0)) - m, 0)
+    r1 = min(int(max(a0, b0)) + m + 1, H)
+    c0 = max(int(min(a1, b1)) - m, 0)
+    c1 = min(int(max(a1, b1)) + m + 1, W)
+    win = obstacle[r0:r1, c0:c1].astype(np.uint8)  # a copy: the fill marks it
+    mr, mc = round((a0 + b0) / 2), round((a1 + b1) / 2)
     for dr in (-1, 0, 1):
         for dc in (-1, 0, 1):
             rr, cc = min(max(mr + dr, 0), H - 1), min(max(mc + dc, 0), W - 1)
