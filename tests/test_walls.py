@@ -436,3 +436,48 @@ def test_long_walls_chain_the_pieces_of_each_line_in_order():
         for origin, u_, n, runs in walls:                       # on its row
             if abs(u_[1]) > 0.9:
                 assert min(abs(float(origin @ n) - (-u_[1] * r)) for r in (10, 40, 70, 100)) < 4
+
+
+def _spans_passage_by_definition(obstacle, p, q, depth_px, slack=1.25):
+    """:func:`topomap.walls._spans_passage` segment by segment, every run sampled to its cap."""
+    H, W = obstacle.shape
+    out = []
+    for a, b in zip(p, q):
+        v = b - a
+        L = np.hypot(*v)
+        d = v / max(L, 1e-9)
+        n = np.array([-d[1], d[0]])
+        cap = int(np.ceil(slack * L)) + 2
+
+        def run(start, step):
+            for i in range(1, cap + 1):
+                r, c = np.rint(start + i * step).astype(int)
+                if not (0 <= r < H and 0 <= c < W) or obstacle[r, c]:
+                    return i - 1
+            return cap
+
+        sides = []
+        for side in (n, -n):
+            sides.append(any(run(c - d, -d) + run(c, d) + 1 <= slack * L
+                             for c in ((a + b) / 2 + t * side for t in np.array([0.25, 0.5, 0.75, 1.0]) * depth_px)))
+        out.append(all(sides))
+    return np.array(out, bool)
+
+
+def test_spans_passage_follows_the_definition():
+    """The batched runs of _spans_passage (sampled only as far as a narrow passage
+    needs, the runs back only where the run on leaves room) answer as each segment's
+    own runs do, near the map's edges too."""
+    rng = np.random.default_rng(3)
+    obstacle = rng.random((60, 80)) < 0.04
+    obstacle[20:40, 10:70] = False
+    obstacle[19, 10:70] = obstacle[40, 10:70] = True  # a corridor
+    p = rng.uniform([-5, -5], [65, 85], (300, 2))
+    ang = rng.uniform(0, 2 * np.pi, 300)
+    q = p + rng.uniform(0, 30, 300)[:, None] * np.stack([np.sin(ang), np.cos(ang)], 1)
+    p[:40] = np.stack([np.full(40, 30.0), rng.uniform(10, 60, 40)], 1)  # across the corridor
+    q[:40] = p[:40] + [[rng.uniform(8, 14), 0.3]]
+    got = W._spans_passage(obstacle, p, q, 6.0)
+    want = _spans_passage_by_definition(obstacle, p, q, 6.0)
+    assert got.any() and not got.all()
+    np.testing.assert_array_equal(got, want)

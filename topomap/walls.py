@@ -181,19 +181,27 @@ def _spans_passage(obstacle, p, q, depth_px, slack: float = 1.25):
     mid = (p + q) / 2
     cap = np.ceil(slack * L).astype(int) + 2
     out = np.zeros(len(p), bool)
-    # both ways along the segment from 4 points on each side, in one call per group of segments
-    # of similar length (each group sampled as far as its longest needs)
-    group = np.ceil(np.log2(np.maximum(cap, 1))).astype(int)
+    # both ways along the segment from 4 points on each side, in two calls per group of segments
+    # of similar length (caps within a factor of 4; each ray sampled as far as the group's
+    # longest needs)
+    group = np.ceil(np.log2(np.maximum(cap, 1))).astype(int) // 2
     for g in np.unique(group):
         k = np.flatnonzero(group == g)
-        top = int(cap[k].max())
-        cs = [mid[k] + t * side[k] for side in (n, -n)
-              for t in (0.25 * depth_px, 0.5 * depth_px, 0.75 * depth_px, depth_px)]
-        starts = np.concatenate([c - d[k] for c in cs] + cs)
-        dirs = np.concatenate([-d[k]] * len(cs) + [d[k]] * len(cs))
-        runs = np.minimum(_free_runs(obstacle, starts, dirs, top).reshape(2, len(cs), k.size), cap[k])
-        narrow = (runs[0] + runs[1] + 1 <= slack * L[k]).reshape(2, len(cs) // 2, k.size)
-        out[k] = narrow.any(axis=1).all(axis=0)
+        cs = np.concatenate([mid[k] + t * side[k] for side in (n, -n)
+                             for t in (0.25 * depth_px, 0.5 * depth_px, 0.75 * depth_px, depth_px)])
+        kk = np.tile(k, 8)  # the segment of each point
+        dk, most = d[kk], slack * L[kk]
+        # a run (both ways) of a narrow passage is shorter than floor(most): each run
+        # is sampled only that far (one sample more tells a longer one), the run on
+        # first, the run back (from a step back) only from the points whose run on
+        # leaves room for it (a quarter of them): 2.6 -> 1.8 ms a map on the ipa maps
+        on = _free_runs(obstacle, cs, dk, int(np.floor(most.max())) + 1)
+        j = np.flatnonzero(on + 1 <= most)
+        narrow = np.zeros(kk.size, bool)
+        if j.size:
+            back = _free_runs(obstacle, cs[j] - dk[j], -dk[j], int(np.floor((most[j] - on[j]).max())) + 1)
+            narrow[j] = back + on[j] + 1 <= most[j]
+        out[k] = narrow.reshape(2, 4, k.size).any(axis=1).all(axis=0)
     return out
 
 
