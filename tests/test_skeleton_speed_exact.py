@@ -26,3 +26,74 @@ def test_unique_pixels_far_apart():
     for P in (np.array([[2 ** 40, 5], [-2 ** 40, 3], [2 ** 40, -2 ** 30], [0, 2 ** 30], [0, 2 ** 30]]),
               np.array([[2 ** 62, 5], [-2 ** 62, 3]])):
         assert np.array_equal(_unique_pixels(P), np.unique(P, axis=0))
+
+
+def _branch_edges_one_by_one(rc, porder, bounds, en_p, en_n, rep, mr, mc, n_nodes):
+    """The branch-by-branch tracing :func:`topomap.skeleton._branch_edges` replaced."""
+    touch = {}
+    for p, n in zip(en_p.tolist(), en_n.tolist()):
+        touch.setdefault(p, []).append(n)
+    extra = []
+
+    def new(r, c):
+        extra.append((int(r), int(c)))
+        return n_nodes + len(extra)
+
+    edges = []
+    for k in range(bounds.size - 1):
+        seg = porder[bounds[k]:bounds[k + 1]]
+        path, a_nodes, b_nodes = rc[seg], touch.get(int(seg[0]), []), touch.get(int(seg[-1]), [])
+        if seg.size == 1 and len(set(a_nodes)) >= 2:
+            u, v = sorted(set(a_nodes))[:2]
+            edges.append((u, v, np.vstack([rep[u][None], path, rep[v][None]])))
+            continue
+        if a_nodes:
+            u, head = a_nodes[0], [rep[a_nodes[0]][None]]
+        else:
+            u, head = new(*path[0]), []
+        tail = []
+        if b_nodes and seg.size > 1:
+            v = b_nodes[0]
+            if v == u and len(b_nodes) > 1:
+                v = b_nodes[1]
+            tail = [rep[v][None]]
+        elif seg.size > 1 or a_nodes:
+            v = new(*path[-1])
+        else:
+            v = u
+        edges.append((u, v, np.vstack(head + [path] + tail)))
+    if extra:
+        ex = np.array(extra, int)
+        rep = np.vstack([rep, ex])
+        mr = np.concatenate([mr, ex[:, 0].astype(float)])
+        mc = np.concatenate([mc, ex[:, 1].astype(float)])
+        n_nodes += len(extra)
+    return edges, rep, mr, mc, n_nodes
+
+
+def test_branch_edges_are_those_traced_one_by_one():
+    # random branches whose ends touch no node, one, two or three nodes (the first and the
+    # last pixel, one-pixel branches), the same node at both ends
+    from topomap.skeleton import _branch_edges
+
+    rng = np.random.default_rng(5)
+    for _ in range(300):
+        n_nodes = int(rng.integers(1, 8))
+        sizes = rng.integers(1, 6, int(rng.integers(1, 12)))
+        nbr = int(sizes.sum())
+        rc = rng.integers(0, 50, (nbr, 2))
+        porder = rng.permutation(nbr)
+        bounds = np.r_[0, np.cumsum(sizes)]
+        pairs = {(int(p), int(n)) for p in range(nbr) for n in range(1, n_nodes + 1) if rng.random() < 0.3}
+        en = np.array(sorted(pairs), np.int64).reshape(-1, 2)
+        rep = rng.integers(0, 50, (n_nodes + 1, 2))
+        mr, mc = rng.random(n_nodes + 1), rng.random(n_nodes + 1)
+        args = (rc, porder, bounds, en[:, 0], en[:, 1], rep, mr, mc, n_nodes)
+        want, got = _branch_edges_one_by_one(*args), _branch_edges(*args)
+        assert got[4] == want[4]
+        for a, b in zip(got[1:4], want[1:4]):
+            assert a.dtype == b.dtype and np.array_equal(a, b)
+        assert len(got[0]) == len(want[0])
+        for (u, v, p), (wu, wv, wp) in zip(got[0], want[0]):
+            assert (u, v) == (wu, wv) and type(u) is type(wu) is int and type(v) is type(wv) is int
+            assert p.dtype == wp.dtype and np.array_equal(p, wp)

@@ -148,9 +148,12 @@ class _PixelGraph:
         pid[at] = np.arange(npx, dtype=np.int32)
         self.nb = pid[at[:, None] + (_OFFSETS[:, 0] * (W + 2) + _OFFSETS[:, 1])]
         self.has = self.nb >= 0
-        self.deg = self.has.sum(1)
-        self.src = np.repeat(np.arange(npx), 8)[self.has.ravel()]
-        self.dst = self.nb.ravel()[self.has.ravel()]
+        # the (pixel, neighbour) pairs from one scan of ``has`` (0.05 ms instead of 0.25 on the ipa
+        # mid-size maps' skeletons), the degrees counted from them
+        pair = np.flatnonzero(self.has)
+        self.src = pair >> 3
+        self.dst = self.nb.ravel()[pair]
+        self.deg = np.bincount(self.src, minlength=npx)
 
     def components(self, mask_px: np.ndarray) -> np.ndarray:
         """Connected components of the pixels in ``mask_px`` (labels 1.., 0 =
@@ -190,7 +193,8 @@ def _find_nodes(px: _PixelGraph):
     is_br = node_of == 0
     blab = px.components(is_br)
     if blab.max():
-        touches = ((node_of[np.where(px.has, px.nb, 0)] > 0) & px.has).any(1)
+        touches = np.zeros(px.npx, bool)
+        touches[px.src[node_of[px.dst] > 0]] = True
         has_node = np.zeros(int(blab.max()) + 1, bool)
         has_node[blab[is_br & touches]] = True
         loops = np.flatnonzero(~has_node[1:]) + 1
@@ -221,36 +225,14 @@ def _node_positions(px: _PixelGraph, node_of: np.ndarray, n_nodes: int):
     return rep, mr, mc
 
 
-class _Nodes:
-    """Node table while branches are traced: nodes ``1..n`` found so far plus
-    the endpoints added for branch ends that touch no node."""
-
-    def __init__(self, rep, mr, mc, n_nodes):
-        self.rep, self.mr, self.mc, self.n = rep, mr, mc, n_nodes
-        self.extra = []
-
-    def new(self, r, c) -> int:
-        self.extra.append((int(r), int(c)))
-        return self.n + len(self.extra)
-
-    def pixel(self, n) -> np.ndarray:
-        return self.rep[n] if n <= self.n else np.array(self.extra[n - self.n - 1])
-
-    def commit(self):
-        """Append the added endpoints to ``rep``, ``mr``, ``mc``."""
-        if self.extra:
-            ex = np.array(self.extra, int)
-            self.rep = np.vstack([self.rep, ex])
-            self.mr = np.concatenate([self.mr, ex[:, 0].astype(float)])
-            self.mc = np.concatenate([self.mc, ex[:, 1].astype(float)])
-            self.n += len(self.extra)
-            self.extra = []
-
-
 def _ordered_branches(px: _PixelGraph, node_of, is_br, blab):
     """The pixels of every branch in order along it, and the nodes each
-    branch pixel touches: ``(branch rows, cols, [pixel indices per branch],
-    {local pixel: [node, ...]})``."""
+    branch pixel touches: ``(branch rows, cols, porder, bounds, en_p, en_n)``.
+
+    Branch ``k`` (label ``k + 1``) is the branch pixels (local indices)
+    ``porder[bounds[k]:bounds[k + 1]]`` in order; ``(en_p, en_n)`` are the
+    (branch pixel, node) pairs of touching pixels, sorted.
+    """
     bidx = np.flatnonzero(is_br)
     nbr = bidx.size
     local = np.full(px.npx, -1, np.int64)
@@ -262,7 +244,8 @@ def _ordered_branches(px: _PixelGraph, node_of, is_br, blab):
     # (branch pixel, node) pairs of touching pixels, sorted
     m2 = is_br[src] & (node_of[dst] > 0)
     nn = int(node_of.max()) + 1
-    en_p, en_n = np.divmod(np.unique(local[src[m2]] * nn + node_of[dst[m2]]), nn)
+    en = np.sort(local[src[m2]] * nn + node_of[dst[m2]])
+    en_p, en_n = np.divmod(en[np.r_[True, en[1:] != en[:-1]]] if en.size else en, nn)
     # order along each branch (a path: at most two branch neighbours), from its first end
     bdeg = np.bincount(s_l, minlength=nbr)
     ends = np.flatnonzero(bdeg <= 1)
@@ -280,11 +263,7 @@ def _ordered_branches(px: _PixelGraph, node_of, is_br, blab):
         porder = np.empty(nbr, np.int64)
         porder[first[br_l] + pos] = np.arange(nbr)
     bounds = np.flatnonzero(np.r_[True, br_l[porder][1:] != br_l[porder][:-1], True])
-    touch_px = {}
-    for p, nlab in zip(en_p.tolist(), en_n.tolist()):
-        touch_px.setdefault(p, []).append(nlab)
-    segs = [porder[bounds[k]:bounds[k + 1]] for k in range(bounds.size - 1)]
-    return br_r, br_c, segs, touch_px
+    return br_r, br_c, porder, bounds, en_p, en_n
 
 
 def _path_positions(s_l, d_l, bdeg, starts, br_l, n):
@@ -316,30 +295,61 @@ def _path_positions(s_l, d_l, bdeg, starts, br_l, n):
     return pos
 
 
-def _branch_edge(seg, path, a_nodes, b_nodes, nodes: _Nodes):
-    """``(u, v, path)`` of one ordered branch: its end nodes (a new endpoint
-    where an end touches no node) and its path with the node pixels added."""
-    if seg.size == 1 and len(set(a_nodes)) >= 2:
-        u, v = sorted(set(a_nodes))[:2]
-        return u, v, np.vstack([nodes.pixel(u)[None], path, nodes.pixel(v)[None]])
-    # a branch end that touches no node is an endpoint of its own
-    if a_nodes:
-        u = a_nodes[0]
-        head = [nodes.pixel(u)[None]]
-    else:
-        u = nodes.new(*path[0])
-        head = []
-    tail = []
-    if b_nodes and seg.size > 1:
-        v = b_nodes[0]
-        if v == u and len(b_nodes) > 1:
-            v = b_nodes[1]
-        tail = [nodes.pixel(v)[None]]
-    elif seg.size > 1 or a_nodes:
-        v = nodes.new(*path[-1])
-    else:
-        v = u
-    return u, v, np.vstack(head + [path] + tail)
+def _branch_edges(rc, porder, bounds, en_p, en_n, rep, mr, mc, n_nodes):
+    """``(u, v, path)`` of every ordered branch (:func:`_ordered_branches`) and the node table
+    with the endpoints added where a branch end touches no node: ``(edges, rep, mr, mc, n)``.
+
+    A branch's end nodes are the first node its first pixel touches and the first its last
+    pixel touches (the second, if that is the first end's); a one-pixel branch touching two
+    nodes joins the two lowest. An end that touches no node becomes an endpoint of its own,
+    numbered on from ``n_nodes`` branch by branch, its first end before its last. The path
+    is the branch's pixels with the end nodes' pixels added; the paths are consecutive slices
+    of one array. All branches at once: on the ipa mid-size maps' skeletons (121 branches a
+    graph) 0.33 ms a graph instead of 0.82 ms branch by branch.
+    """
+    nbr = rc.shape[0]
+    size = np.diff(bounds)
+    first_px, last_px = porder[bounds[:-1]], porder[bounds[1:] - 1]
+    # the nodes an end pixel touches: how many, the first, the second (0: none)
+    cnt = np.bincount(en_p, minlength=nbr)
+    off = np.cumsum(cnt) - cnt
+    nodes = np.r_[en_n, 0, 0]
+
+    def touched(p):
+        k, o = cnt[p], off[p]
+        return k, np.where(k >= 1, nodes[o], 0), np.where(k >= 2, nodes[o + 1], 0)
+
+    ka, a1, a2 = touched(first_px)
+    kb, b1, b2 = touched(last_px)
+    one = (size == 1) & (ka >= 2)  # one pixel between two nodes
+    head = ka >= 1
+    tail = one | ((kb >= 1) & (size > 1))
+    u = a1
+    v = np.where(one, a2, np.where(~one & (b1 == a1) & (kb > 1), b2, b1))
+    new_u = ~head
+    new_v = ~tail & ((size > 1) | head)
+    new = np.stack([new_u, new_v], 1).ravel()  # in the order the ends are met
+    if new.any():
+        label = (n_nodes + np.cumsum(new)).reshape(-1, 2)
+        u = np.where(new_u, label[:, 0], u)
+        v = np.where(new_v, label[:, 1], v)
+        ex = np.stack([rc[first_px], rc[last_px]], 1).reshape(-1, 2)[new].astype(int)
+    v = np.where(~tail & ~new_v, u, v)  # a lone pixel touching nothing: from and to itself
+    # every path in one array: [end node pixel] + branch pixels + [end node pixel]
+    n_out = size + head + tail
+    out = np.cumsum(n_out) - n_out
+    P = np.empty((int(n_out.sum()), 2), np.result_type(rc, rep))
+    P[np.repeat(out - bounds[:-1] + head, size) + np.arange(nbr)] = rc[porder]
+    P[out[head]] = rep[u[head]]
+    P[(out + n_out - 1)[tail]] = rep[v[tail]]
+    paths = [P[a:b] for a, b in zip(out.tolist(), (out + n_out).tolist())]
+    edges = list(zip(u.tolist(), v.tolist(), paths))
+    if new.any():
+        rep = np.vstack([rep, ex])
+        mr = np.concatenate([mr, ex[:, 0].astype(float)])
+        mc = np.concatenate([mc, ex[:, 1].astype(float)])
+        n_nodes += ex.shape[0]
+    return edges, rep, mr, mc, n_nodes
 
 
 def _direct_edges(px: _PixelGraph, node_of, rep) -> list:
@@ -378,20 +388,13 @@ def skeleton_topology(skel: np.ndarray) -> SkeletonTopology:
         return SkeletonTopology(np.zeros((1, 2), int), np.zeros(1), np.zeros(1), 0, [])
     node_of, n_nodes, is_br, blab = _find_nodes(px)
     rep, mr, mc = _node_positions(px, node_of, n_nodes)
-    nodes = _Nodes(rep, mr, mc, n_nodes)
     edges = []
     if blab.max():
-        br_r, br_c, segs, touch_px = _ordered_branches(px, node_of, is_br, blab)
-        rc = np.stack([br_r, br_c], 1)
-        if segs:  # every branch's pixels in order, end to end: each path a slice
-            along = rc[np.concatenate(segs)]
-            cut = np.cumsum([0] + [s.size for s in segs])
-        for k, seg in enumerate(segs):
-            edges.append(_branch_edge(seg, along[cut[k]:cut[k + 1]], touch_px.get(int(seg[0]), []),
-                                      touch_px.get(int(seg[-1]), []), nodes))
-        nodes.commit()
-    edges += _direct_edges(px, node_of, nodes.rep)
-    return SkeletonTopology(nodes.rep, nodes.mr, nodes.mc, nodes.n, edges)
+        br_r, br_c, porder, bounds, en_p, en_n = _ordered_branches(px, node_of, is_br, blab)
+        edges, rep, mr, mc, n_nodes = _branch_edges(np.stack([br_r, br_c], 1), porder, bounds, en_p, en_n,
+                                                     rep, mr, mc, n_nodes)
+    edges += _direct_edges(px, node_of, rep)
+    return SkeletonTopology(rep, mr, mc, n_nodes, edges)
 
 
 def graph_from_topology(topo: SkeletonTopology, *, radius: np.ndarray | None = None,
