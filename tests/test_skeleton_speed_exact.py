@@ -97,3 +97,4 @@ def test_branch_edges_are_those_traced_one_by_one():
         for (u, v, p), (wu, wv, wp) in zip(got[0], want[0]):
             assert (u, v) == (wu, wv) and type(u) is type(wu) is int and type(v) is type(wv) is int
             assert p.dtype == wp.dtype and np.array_equal(p, wp)
+

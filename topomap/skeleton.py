@@ -403,24 +403,13 @@ def graph_from_topology(topo: SkeletonTopology, *, radius: np.ndarray | None = N
     the attributes the module docstring lists (``radius`` sampled from the
     clearance image ``radius``, in pixels, at every node and path pixel)."""
     G = nx.MultiGraph(resolution=float(resolution))
-    if topo.n_nodes == 0:
+    n = topo.n_nodes
+    if n == 0:
         return G
     res = float(resolution)
-    rep, mr, mc = topo.rep, topo.mr, topo.mc
-    # world coordinates of all nodes at once
-    if to_world is not None:
-        wx, wy = to_world(mr, mc)
-        wx, wy = np.broadcast_to(wx, mr.shape), np.broadcast_to(wy, mr.shape)
-    for u in range(1, topo.n_nodes + 1):
-        r, c = rep[u]
-        attrs = dict(row=float(mr[u]), col=float(mc[u]), pixel=(int(r), int(c)))
-        if radius is not None:
-            attrs["radius"] = float(radius[r, c]) * res
-        if to_world is not None:
-            attrs["x"], attrs["y"] = float(wx[u]), float(wy[u])
-        G.add_node(u - 1, **attrs)
+    rep = topo.rep[1:n + 1]
     seen_direct = set()  # the direct edges are listed twice
-    edges = []
+    edges, us, vs = [], [], []
     for u, v, path in topo.edges:
         if path.shape[0] == 2:
             key = (min(u, v), max(u, v))
@@ -431,24 +420,51 @@ def graph_from_topology(topo: SkeletonTopology, *, radius: np.ndarray | None = N
             u, v = v, u
             path = path[::-1]
         edges.append((u, v, path))
+        us.append(u)
+        vs.append(v)
+    # every node's attributes as columns of Python values (the same floats as float() of each
+    # numpy value), its kind from the degrees the edges will give it
+    keys, cols = ["row", "col", "pixel"], [np.asarray(topo.mr[1:n + 1], float).tolist(),
+                                           np.asarray(topo.mc[1:n + 1], float).tolist(),
+                                           list(zip(rep[:, 0].tolist(), rep[:, 1].tolist()))]
+    if radius is not None:
+        keys.append("radius")
+        cols.append((radius[rep[:, 0], rep[:, 1]].astype(float) * res).tolist())
+    if to_world is not None:
+        wx, wy = to_world(topo.mr, topo.mc)
+        keys += ["x", "y"]
+        cols += [np.asarray(np.broadcast_to(w, topo.mr.shape), float)[1:n + 1].tolist() for w in (wx, wy)]
+    ends = np.array([us, vs], np.int64).T - 1
+    known = ends.size == 0 or (ends.min() >= 0 and ends.max() < n)  # else networkx adds bare nodes
+    if known:
+        names = np.array(["isolated", "endpoint", "loop", "junction"], object)
+        keys.append("kind")
+        cols.append(names[np.minimum(np.bincount(ends.ravel(), minlength=n), 3)].tolist())
+    G.add_nodes_from(range(n))
+    for (_, attrs), vals in zip(G.nodes(data=True), zip(*cols)):
+        attrs.update(zip(keys, vals))
     if edges:
         # every path's step lengths and clearances at once; each edge's length is still the sum
-        # over its own steps (the same float sum as on its own array)
+        # over its own steps (np.add.reduce of its slice: the same pairwise float sum as
+        # ``.sum()`` on its own array; a batched reduceat sums in another order)
         P = np.concatenate([path for _, _, path in edges])
-        first = np.cumsum([0] + [len(path) for _, _, path in edges])
+        first = np.cumsum([0] + [len(path) for _, _, path in edges]).tolist()
         d = np.diff(P, axis=0)
         step = np.sqrt((d * d).sum(1))
-        if radius is not None:
+        add = np.add.reduce
+        lengths = [float(add(step[a:b - 1]) if b > a else 0.0) * res for a, b in zip(first[:-1], first[1:])]
+        add_edge = G.add_edge
+        if radius is None:
+            for (u, v, path), length in zip(edges, lengths):
+                add_edge(u - 1, v - 1, path=path, start=u - 1, length=length)
+        else:
             rad_all = radius[P[:, 0], P[:, 1]].astype(float) * res
-    for k, (u, v, path) in enumerate(edges):
-        a, b = first[k], first[k + 1]
-        attrs = dict(path=path, start=u - 1, length=float(step[a:b - 1].sum() if b > a else 0.0) * res)
-        if radius is not None:
-            rad = rad_all[a:b].copy()
-            attrs["radius"] = rad
-            attrs["radius_min"] = float(rad.min())
-        G.add_edge(u - 1, v - 1, **attrs)
-    _set_kinds(G)
+            rad_min = np.minimum.reduceat(rad_all, first[:-1]).tolist()  # a minimum in any order
+            for (u, v, path), length, a, b, rmin in zip(edges, lengths, first[:-1], first[1:], rad_min):
+                add_edge(u - 1, v - 1, path=path, start=u - 1, length=length, radius=rad_all[a:b],
+                         radius_min=rmin)
+    if not known:
+        _set_kinds(G)
     return G
 
 
