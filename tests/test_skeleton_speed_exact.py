@@ -98,3 +98,19 @@ def test_branch_edges_are_those_traced_one_by_one():
             assert (u, v) == (wu, wv) and type(u) is type(wu) is int and type(v) is type(wv) is int
             assert p.dtype == wp.dtype and np.array_equal(p, wp)
 
+
+
+@pytest.mark.parametrize("copy", [True, False])
+def test_prune_spurs_kinds_follow_the_degrees(copy):
+    # prune_spurs keeps the degrees up to date itself: the kinds must be those of the pruned graph
+    from scipy import ndimage as ndi
+
+    from topomap.skeleton import prune_spurs, skeleton_graph, skeletonize
+
+    names = {0: "isolated", 1: "endpoint", 2: "loop"}
+    rng = np.random.default_rng(7)
+    for _ in range(40):
+        m = ndi.binary_closing(rng.random(tuple(int(v) for v in rng.integers(10, 80, 2))) < 0.7)
+        G = skeleton_graph(skeletonize(m), radius=np.ones(m.shape), resolution=0.05)
+        H = prune_spurs(G, float(rng.uniform(0.05, 1.0)), copy=copy)
+        assert {n: names.get(d, "junction") for n, d in H.degree} == dict(H.nodes(data="kind"))

@@ -500,11 +500,16 @@ def skeleton_graph(skel: np.ndarray, *, radius: np.ndarray | None = None,
                                to_world=to_world)
 
 
-def _set_kinds(G):
-    """Set node ``kind``: endpoint (degree 1), junction (3+), isolated (0), loop (2)."""
+def _set_kinds(G, degree=None):
+    """Set node ``kind``: endpoint (degree 1), junction (3+), isolated (0), loop (2).
+
+    ``degree``: every node's degree, when the caller knows them (``G.degree`` otherwise).
+    """
     names = {0: "isolated", 1: "endpoint", 2: "loop"}
-    for n in G.nodes:
-        G.nodes[n]["kind"] = names.get(G.degree(n), "junction")
+    if degree is None:
+        degree = dict(G.degree)  # one degree view for all nodes (G.degree(n) makes one per node)
+    for n, attrs in G.nodes(data=True):
+        attrs["kind"] = names.get(degree[n], "junction")
 
 
 def prune_spurs(G: nx.MultiGraph, min_length: float, *, copy: bool = True) -> nx.MultiGraph:
@@ -520,24 +525,31 @@ def prune_spurs(G: nx.MultiGraph, min_length: float, *, copy: bool = True) -> nx
     of the merged path) can differ between the two.
     """
     H = G.copy() if copy else G
+    # the degrees counted once and kept up to date as branches go (networkx counts a node's
+    # branches afresh on every degree asked: three passes over the nodes were most of the time)
+    deg = dict(H.degree)
     spurs = [(u, v, k) for u, v, k, d in H.edges(keys=True, data=True)
-             if d["length"] < min_length and u != v and (H.degree(u) == 1 or H.degree(v) == 1)
-             and not (H.degree(u) == 1 and H.degree(v) == 1)]
+             if d["length"] < min_length and u != v and (deg[u] == 1) != (deg[v] == 1)]
     for u, v, k in spurs:
         if H.has_edge(u, v, k):
             H.remove_edge(u, v, k)
             for n in (u, v):
-                if H.degree(n) == 0:
+                deg[n] -= 1
+                if deg[n] == 0:
                     H.remove_node(n)
-    _contract(H)
-    _set_kinds(H)
+                    del deg[n]
+    _contract(H, deg)
+    _set_kinds(H, deg)
     return H
 
 
-def _contract(H: nx.MultiGraph):
-    """Merge the two branches at every degree-2 node into one branch."""
-    for n in sorted(H.nodes):
-        if n not in H or H.degree(n) != 2:
+def _contract(H: nx.MultiGraph, deg: dict):
+    """Merge the two branches at every degree-2 node into one branch (``deg``: every node's
+    degree, kept up to date)."""
+    # a merge leaves every other node's degree as it was (two branches out, one in): the
+    # degree-2 nodes can be listed at the start
+    for n in sorted(n for n, d in deg.items() if d == 2):
+        if n not in H:
             continue
         es = list(H.edges(n, keys=True, data=True))
         if len(es) != 2 or any(u == v for u, v, _, _ in es):
@@ -558,6 +570,7 @@ def _contract(H: nx.MultiGraph):
             attrs["radius_min"] = float(rad.min())
         u, v = o1, o2
         H.remove_node(n)
+        del deg[n]
         H.add_edge(u, v, **attrs)
 
 
