@@ -114,3 +114,50 @@ def test_prune_spurs_kinds_follow_the_degrees(copy):
         G = skeleton_graph(skeletonize(m), radius=np.ones(m.shape), resolution=0.05)
         H = prune_spurs(G, float(rng.uniform(0.05, 1.0)), copy=copy)
         assert {n: names.get(d, "junction") for n, d in H.degree} == dict(H.nodes(data="kind"))
+
+
+def _rings_and_soups(rng, k):
+    """Pixel sets with loops of every length (with and without touching lines) and random soups."""
+    out = []
+    for _ in range(k):
+        h, w = (int(v) for v in rng.integers(6, 50, 2))
+        m = rng.random((h, w)) < rng.uniform(0.02, 0.6)
+        if rng.random() < 0.5:
+            m[:] = False
+            for _ in range(int(rng.integers(1, 4))):
+                r0, c0 = int(rng.integers(0, h - 3)), int(rng.integers(0, w - 3))
+                r1, c1 = int(rng.integers(r0 + 2, h)), int(rng.integers(c0 + 2, w))
+                m[r0, c0:c1 + 1] = m[r1, c0:c1 + 1] = m[r0:r1 + 1, c0] = m[r0:r1 + 1, c1] = True
+            if rng.random() < 0.5:
+                m[int(rng.integers(0, h)), :] = True
+        out.append(m)
+    return out
+
+
+def test_clusters_are_components():
+    from topomap.skeleton import _PixelGraph
+
+    rng = np.random.default_rng(11)
+    for img in _rings_and_soups(rng, 200):
+        px = _PixelGraph(img)
+        for mask in (px.deg >= 3, rng.random(px.npx) < 0.5, np.ones(px.npx, bool)):
+            lab = px.clusters(mask)
+            assert lab.dtype == np.int64 and np.array_equal(lab, px.components(mask))
+
+
+def test_branch_labels_are_components():
+    # the branches' labels from pointer jumping are those of the branch pixels' image, loops
+    # without a node (lists that never end) included; an end pixel's list ends at the other end
+    from topomap.skeleton import _Branches, _PixelGraph
+
+    rng = np.random.default_rng(12)
+    for img in _rings_and_soups(rng, 300):
+        px = _PixelGraph(img)
+        # nodes as _find_nodes makes them (junctions, ends: a branch pixel has two neighbours), some more at random
+        node_of = ((px.deg >= 3) | (px.deg <= 1) | (rng.random(px.npx) < rng.choice([0, 0.1]))).astype(np.int64)
+        br = _Branches.of(px, node_of)
+        if br is None:
+            continue
+        comp = px.components(node_of == 0)[br.bidx]
+        assert np.array_equal(br.lab, comp)
+        assert np.array_equal(br.first, [np.flatnonzero(comp == k)[0] for k in range(1, comp.max() + 1)])

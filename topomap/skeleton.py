@@ -176,35 +176,122 @@ class _PixelGraph:
             lab[idx] = rank[inv]
         return lab
 
+    def clusters(self, mask_px: np.ndarray) -> np.ndarray:
+        """:meth:`components` of pixels that form small clusters (the junction pixels, a few in
+        each), without an image: every pixel takes the least index over its pairs in the set
+        (and that index's own) until nothing changes, which is each component's first pixel.
+
+        On the ipa mid-size maps' skeletons 0.10 ms a graph instead of OpenCV's 0.22 (0.47
+        instead of 0.92 with cold caches); a set that has not settled after
+        :data:`_CLUSTER_ROUNDS` rounds is labelled by :meth:`components`.
+        """
+        lab = np.zeros(self.npx, np.int64)
+        idx = np.flatnonzero(mask_px)
+        if not idx.size:
+            return lab
+        local = np.full(self.npx, -1, np.int64)
+        local[idx] = np.arange(idx.size)
+        m = mask_px[self.src] & mask_px[self.dst]
+        s, d = local[self.src[m]], local[self.dst[m]]
+        low = np.arange(idx.size)
+        for _ in range(_CLUSTER_ROUNDS):
+            new = low.copy()
+            np.minimum.at(new, s, low[d])
+            new = new[new]
+            if np.array_equal(new, low):
+                lab[idx] = np.cumsum(low == np.arange(idx.size))[low]  # numbered by first pixel
+                return lab
+            low = new
+        return self.components(mask_px)
+
+
+#: Rounds after which :meth:`_PixelGraph.clusters` leaves a set to OpenCV's labelling.
+_CLUSTER_ROUNDS = 16
+
 
 def _find_nodes(px: _PixelGraph):
-    """Node label per pixel (0 = branch pixel), the node count, the branch
-    pixels and their components.
+    """Node label per pixel (0 = branch pixel), the node count and the branch
+    pixels traced (:class:`_Branches`; None when there is none).
 
     Nodes are clusters of junction pixels (3+ neighbours) and single end or
     isolated pixels; a loop without any node gets its first pixel as node.
     """
     is_junc = px.deg >= 3
-    node_of = px.components(is_junc)
+    node_of = px.clusters(is_junc)
     nj = int(node_of.max())
     single = np.flatnonzero(px.deg <= 1)
     node_of[single] = nj + 1 + np.arange(single.size)
     n_nodes = nj + single.size
-    is_br = node_of == 0
-    blab = px.components(is_br)
-    if blab.max():
-        touches = np.zeros(px.npx, bool)
-        touches[px.src[node_of[px.dst] > 0]] = True
-        has_node = np.zeros(int(blab.max()) + 1, bool)
-        has_node[blab[is_br & touches]] = True
-        loops = np.flatnonzero(~has_node[1:]) + 1
+    br = _Branches.of(px, node_of)
+    if br is not None:
+        # a branch pixel has two neighbours: a branch without an end pixel is a loop that
+        # touches no node
+        has_end = np.zeros(br.first.size + 1, bool)
+        has_end[br.lab[br.bdeg <= 1]] = True
+        loops = np.flatnonzero(~has_end[1:])
         if loops.size:
-            firsts = np.array([np.flatnonzero(blab == lv)[0] for lv in loops])
-            node_of[firsts] = n_nodes + 1 + np.arange(firsts.size)
-            n_nodes += firsts.size
-            is_br = node_of == 0
-            blab = px.components(is_br)
-    return node_of, n_nodes, is_br, blab
+            node_of[br.bidx[br.first[loops]]] = n_nodes + 1 + np.arange(loops.size)
+            n_nodes += loops.size
+            br = _Branches.of(px, node_of)
+    return node_of, n_nodes, br
+
+
+class _Branches:
+    """The branch pixels of a skeleton (the pixels of no node) and the paths they form.
+
+    ``is_br``: per pixel; ``bidx``: the pixel of each branch pixel, in row-major order (their
+    *local* indices ``0..n-1``); ``local``: per pixel, its local index or -1; ``s_l``,
+    ``d_l``: every step from a branch pixel to a neighbouring one (local, sorted by ``s_l``);
+    ``bdeg``: branch neighbours per branch pixel; ``lab``: the branch (component) of each
+    branch pixel, ``1..K`` numbered in row-major order of their first pixels, which are
+    ``first``; ``nxt``, ``rank``: per step, the last step of its list (the steps that follow
+    it, each out of the pixel the one before goes to and not back) and the number of steps
+    after it up to there.
+
+    The labels are those of :meth:`_PixelGraph.components` of the branch pixels, found with
+    the lists instead of an image: pointer jumping along the lists (each step's least pixel
+    up to its list's end taken on) gives every branch pixel its branch's first pixel. The
+    lists and the labels at once: 0.86 ms a graph instead of 1.24 ms for the labelling and
+    the lists apart, on the ipa mid-size maps' skeletons.
+    """
+
+    @classmethod
+    def of(cls, px: _PixelGraph, node_of: np.ndarray):
+        """The branch pixels of the nodes ``node_of``; None when there is none."""
+        is_br = node_of == 0
+        bidx = np.flatnonzero(is_br)
+        return cls(px, is_br, bidx) if bidx.size else None
+
+    def __init__(self, px: _PixelGraph, is_br: np.ndarray, bidx: np.ndarray):
+        self.is_br, self.bidx = is_br, bidx
+        self.n = nbr = bidx.size
+        self.local = local = np.full(px.npx, -1, np.int64)
+        local[bidx] = np.arange(nbr)
+        m = is_br[px.src] & is_br[px.dst]
+        self.s_l, self.d_l = s_l, d_l = local[px.src[m]], local[px.dst[m]]
+        self.bdeg = bdeg = np.bincount(s_l, minlength=nbr)
+        # the step after each one; a last step is its own successor
+        fb = np.r_[0, np.cumsum(bdeg)[:-1]][d_l]
+        step = np.arange(s_l.size)
+        nxt = np.where(bdeg[d_l] == 2, fb + (d_l[fb] == s_l), step)
+        rank = (nxt != step).astype(np.int64)
+        low = np.minimum(s_l, d_l)  # the least pixel of the steps from each one to its successor
+        # the lists are done when every step's successor is a last step; a loop's lists never
+        # are, but each of its steps has gone round it once 2 ** rounds >= nbr
+        for _ in range(int(np.ceil(np.log2(max(nbr, 2)))) + 1):
+            jump = nxt[nxt]
+            if np.array_equal(jump, nxt):
+                break
+            rank += rank[nxt]
+            np.minimum(low, low[nxt], out=low)
+            nxt = jump
+        np.minimum(low, low[nxt], out=low)  # and the last step's own pixels
+        self.nxt, self.rank = nxt, rank
+        least = np.arange(nbr)
+        np.minimum.at(least, s_l, low)  # a pixel's steps go to both ends of its branch
+        is_first = least == np.arange(nbr)
+        self.lab = np.cumsum(is_first)[least]
+        self.first = np.flatnonzero(is_first)
 
 
 def _node_positions(px: _PixelGraph, node_of: np.ndarray, n_nodes: int):
@@ -225,74 +312,42 @@ def _node_positions(px: _PixelGraph, node_of: np.ndarray, n_nodes: int):
     return rep, mr, mc
 
 
-def _ordered_branches(px: _PixelGraph, node_of, is_br, blab):
+def _ordered_branches(px: _PixelGraph, node_of, br: _Branches):
     """The pixels of every branch in order along it, and the nodes each
     branch pixel touches: ``(branch rows, cols, porder, bounds, en_p, en_n)``.
 
     Branch ``k`` (label ``k + 1``) is the branch pixels (local indices)
-    ``porder[bounds[k]:bounds[k + 1]]`` in order; ``(en_p, en_n)`` are the
-    (branch pixel, node) pairs of touching pixels, sorted.
+    ``porder[bounds[k]:bounds[k + 1]]`` in order, from its first end; ``(en_p,
+    en_n)`` are the (branch pixel, node) pairs of touching pixels, sorted.
     """
-    bidx = np.flatnonzero(is_br)
-    nbr = bidx.size
-    local = np.full(px.npx, -1, np.int64)
-    local[bidx] = np.arange(nbr)
-    br_r, br_c, br_l = px.pr[bidx], px.pc[bidx], blab[bidx]
+    is_br, local, nbr, br_l, s_l, d_l = br.is_br, br.local, br.n, br.lab, br.s_l, br.d_l
+    br_r, br_c = px.pr[br.bidx], px.pc[br.bidx]
     src, dst = px.src, px.dst
-    m = is_br[src] & is_br[dst]
-    s_l, d_l = local[src[m]], local[dst[m]]  # sorted by s_l
     # (branch pixel, node) pairs of touching pixels, sorted
     m2 = is_br[src] & (node_of[dst] > 0)
     nn = int(node_of.max()) + 1
     en = np.sort(local[src[m2]] * nn + node_of[dst[m2]])
     en_p, en_n = np.divmod(en[np.r_[True, en[1:] != en[:-1]]] if en.size else en, nn)
     # order along each branch (a path: at most two branch neighbours), from its first end
-    bdeg = np.bincount(s_l, minlength=nbr)
-    ends = np.flatnonzero(bdeg <= 1)
+    ends = np.flatnonzero(br.bdeg <= 1)
     ends = ends[np.argsort(br_l[ends], kind="stable")]
     e_l = br_l[ends]
     starts = ends[np.r_[True, e_l[1:] != e_l[:-1]]] if ends.size else ends
-    pos = _path_positions(s_l, d_l, bdeg, starts, br_l, nbr)
-    if pos is None:  # a branch without an end: order by distance from the ends
+    if starts.size != br.first.size:  # a branch without an end: order by distance from the ends
         w = np.hypot(br_r[s_l] - br_r[d_l], br_c[s_l] - br_c[d_l])
         A = sparse.csr_matrix((w, (s_l, d_l)), shape=(nbr, nbr))
         dist = csgraph.dijkstra(A, directed=False, indices=starts, min_only=True)
         porder = np.lexsort((dist, br_l))
     else:
+        # a pixel's position is one more than the number of steps after its step towards the start
+        pos = np.zeros(nbr, np.int64)
+        back = d_l[br.nxt] == starts[br_l[s_l] - 1]
+        pos[s_l[back]] = br.rank[back] + 1
         first = np.r_[0, np.cumsum(np.bincount(br_l))[:-1]]
         porder = np.empty(nbr, np.int64)
         porder[first[br_l] + pos] = np.arange(nbr)
     bounds = np.flatnonzero(np.r_[True, br_l[porder][1:] != br_l[porder][:-1], True])
     return br_r, br_c, porder, bounds, en_p, en_n
-
-
-def _path_positions(s_l, d_l, bdeg, starts, br_l, n):
-    """Position (steps from the branch's start pixel ``starts[label - 1]``) of every pixel of
-    branches that are paths, by pointer jumping over the directed steps; None when a branch
-    has no start (labels ``br_l`` are 1..K, every label with one start otherwise).
-
-    Each step ``a -> b`` (``s_l``, ``d_l``, sorted by ``s_l``) is followed by the step out of
-    ``b`` that does not go back to ``a``; a step's list ends at an end pixel, and a pixel's
-    position is one more than the number of steps after its step that ends at the start.
-    """
-    n_lab = int(br_l.max())
-    if starts.size != n_lab:
-        return None
-    pos = np.zeros(n, np.int64)
-    if not s_l.size:
-        return pos
-    first = np.r_[0, np.cumsum(bdeg)[:-1]]
-    fb = first[d_l]
-    step = np.arange(s_l.size)
-    # the step after each one; a last step is its own successor
-    nxt = np.where(bdeg[d_l] == 2, fb + (d_l[fb] == s_l), step)
-    rank = (nxt != step).astype(np.int64)
-    for _ in range(int(np.ceil(np.log2(max(int(np.bincount(br_l).max()), 2))))):
-        rank += rank[nxt]
-        nxt = nxt[nxt]
-    back = d_l[nxt] == starts[br_l[s_l] - 1]  # the steps towards the start
-    pos[s_l[back]] = rank[back] + 1
-    return pos
 
 
 def _branch_edges(rc, porder, bounds, en_p, en_n, rep, mr, mc, n_nodes):
@@ -386,11 +441,11 @@ def skeleton_topology(skel: np.ndarray) -> SkeletonTopology:
     px = _PixelGraph(skel)
     if px.npx == 0:
         return SkeletonTopology(np.zeros((1, 2), int), np.zeros(1), np.zeros(1), 0, [])
-    node_of, n_nodes, is_br, blab = _find_nodes(px)
+    node_of, n_nodes, br = _find_nodes(px)
     rep, mr, mc = _node_positions(px, node_of, n_nodes)
     edges = []
-    if blab.max():
-        br_r, br_c, porder, bounds, en_p, en_n = _ordered_branches(px, node_of, is_br, blab)
+    if br is not None:
+        br_r, br_c, porder, bounds, en_p, en_n = _ordered_branches(px, node_of, br)
         edges, rep, mr, mc, n_nodes = _branch_edges(np.stack([br_r, br_c], 1), porder, bounds, en_p, en_n,
                                                      rep, mr, mc, n_nodes)
     edges += _direct_edges(px, node_of, rep)
