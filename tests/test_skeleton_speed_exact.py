@@ -161,3 +161,28 @@ def test_branch_labels_are_components():
         comp = px.components(node_of == 0)[br.bidx]
         assert np.array_equal(br.lab, comp)
         assert np.array_equal(br.first, [np.flatnonzero(comp == k)[0] for k in range(1, comp.max() + 1)])
+
+
+def test_copy_is_networkx_copy():
+    # the same graph, orders included (prune_spurs' merged paths follow each node's order of branches)
+    import networkx as nx
+
+    from topomap.skeleton import _copy, skeleton_graph, skeletonize
+
+    def everything(G):
+        return (dict(G.graph), list(G.nodes(data=True)),
+                [(u, [(v, [(k, list(d.items())) for k, d in kd.items()]) for v, kd in nb.items()]) for u, nb in G.adj.items()])
+
+    rng = np.random.default_rng(4)
+    graphs = [skeleton_graph(skeletonize(rng.random((40, 40)) < 0.7), radius=np.ones((40, 40)), resolution=0.05)
+              for _ in range(10)]
+    G = nx.MultiGraph(name="x")
+    G.add_edges_from([(3, 1), (1, 3), (2, 2), (0, 3, {"w": 1}), (3, 0, 7, {1: "a"})])
+    G.add_node(9, kind="isolated")
+    for G in graphs + [G]:
+        H, want = _copy(G), G.copy()
+        assert everything(H) == everything(want)
+        for (_, a), (_, b) in zip(H.nodes(data=True), G.nodes(data=True)):
+            assert a is not b
+        for (*_, a), (*_, b) in zip(H.edges(keys=True, data=True), G.edges(keys=True, data=True)):
+            assert a is not b
