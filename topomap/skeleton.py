@@ -12,9 +12,9 @@ Voronoi diagram) becomes a :class:`networkx.MultiGraph`:
   along the path), ``radius`` ((K,) float array, metres, clearance along the
   path) and ``radius_min`` (metres).
 
-The conversion is vectorised: pixels are never visited in a Python loop; the
-branch order along the path comes from one multi-source Dijkstra on the
-sparse pixel graph.
+The conversion is vectorised: pixels and branches are never visited in a Python
+loop; the branches and the order of the pixels along each come from pointer
+jumping over the steps between neighbouring branch pixels (:class:`_Branches`).
 """
 
 from __future__ import annotations
