@@ -526,7 +526,11 @@ def coarse_skeleton_graph(skel: np.ndarray, factor: int, radius: np.ndarray, gri
         lim = np.array([fh - 1, fw - 1])
         topo.rep = np.minimum(topo.rep * factor + off, lim)
         topo.mr, topo.mc = topo.mr * factor + off, topo.mc * factor + off
-        topo.edges = [(u, v, np.minimum(p * factor + off, lim)) for u, v, p in topo.edges]
+        if topo.edges:  # every path moved at once, then cut into its edges again (views of one array;
+            # 0.86 -> 0.19 ms per graph on the free graphs of 4 ipa mid maps, min of 25)
+            first = np.cumsum([0] + [len(p) for _, _, p in topo.edges]).tolist()
+            moved = np.minimum(np.concatenate([p for _, _, p in topo.edges]) * factor + off, lim)
+            topo.edges = [(u, v, moved[a:b]) for (u, v, _), a, b in zip(topo.edges, first[:-1], first[1:])]
     return S.graph_from_topology(topo, radius=radius, resolution=grid.resolution, to_world=grid.pixel_to_world)
 
 
