@@ -14,7 +14,7 @@ import pytest
 from scipy import ndimage as ndi
 
 from topomap._fast import lookup
-from topomap.rooms import _fill_pieces, _rooms_first, fill_unlabeled
+from topomap.rooms import _fill_pieces, _rooms_first, _runs, fill_unlabeled
 
 
 def _case(rng, shape, small_share):
@@ -30,13 +30,12 @@ def _case(rng, shape, small_share):
             c = rng.integers(0, shape[1])
             cut[:, c:c + rng.integers(1, 25)] = True
     whole = free & ~cut
-    n, pieces, stats, _ = cv2.connectedComponentsWithStats(whole.view(np.uint8), connectivity=4,
-                                                           ltype=cv2.CV_16U)
+    n, pieces = cv2.connectedComponents(whole.view(np.uint8), connectivity=4, ltype=cv2.CV_16U)
     seed = rng.permutation(n).astype(np.int32)  # any numbering, 0 kept on the background
     seed[seed == 0] = seed[0]
     seed[0] = 0
     seed[1:][rng.random(n - 1) < small_share] = 0
-    return free, pieces, seed, stats, free > whole
+    return free, pieces, seed, _runs(whole, pieces), free > whole
 
 
 @pytest.mark.parametrize("small_share", [0.0, 0.3, 0.8])
@@ -46,9 +45,9 @@ def test_fill_pieces_is_the_general_route(small_share, min_cells):
     kinds = set()
     for _ in range(12):
         shape = tuple(int(v) for v in rng.integers(40, 140, size=2))
-        free, pieces, seed, stats, between = _case(rng, shape, small_share)
+        free, pieces, seed, runs, between = _case(rng, shape, small_share)
         want, want_rooms = _rooms_first(fill_unlabeled(seed[pieces], free), min_cells)
-        got, got_rooms = _fill_pieces(pieces, seed, stats, free, between, min_cells)
+        got, got_rooms = _fill_pieces(pieces, seed, runs, free, between, min_cells)
         assert got.dtype == want.dtype
         np.testing.assert_array_equal(got, want)
         assert got_rooms == want_rooms
@@ -62,12 +61,12 @@ def test_fill_pieces_wide_gap_between_two_labels():
     pieces = np.zeros(free.shape, np.uint16)
     pieces[:, :30] = 1
     pieces[:, 60:] = 2
-    n, pieces, stats, _ = cv2.connectedComponentsWithStats(((pieces == 1) | (pieces == 2)).view(np.uint8),
-                                                           connectivity=4, ltype=cv2.CV_16U)
+    whole = (pieces == 1) | (pieces == 2)
+    n, pieces = cv2.connectedComponents(whole.view(np.uint8), connectivity=4, ltype=cv2.CV_16U)
     seed = np.arange(n, dtype=np.int32)
     between = free & (pieces == 0)
     want, want_rooms = _rooms_first(fill_unlabeled(seed[pieces], free), 0)
-    got, got_rooms = _fill_pieces(pieces, seed, stats, free, between, 0)
+    got, got_rooms = _fill_pieces(pieces, seed, _runs(whole, pieces), free, between, 0)
     np.testing.assert_array_equal(got, want)
     assert got_rooms == want_rooms == 2
     assert set(np.unique(got[:, 30:60])) == {1, 2}

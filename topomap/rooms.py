@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy import ndimage as ndi
 
-from ._fast import label_stats, lookup, ranges
+from ._fast import label, lookup, ranges
 from .geometry import line_pixels
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -199,8 +199,6 @@ def cut_rooms(grid: OccupancyGrid, segments, *, space=None, min_room_cells: int 
     n_rooms : int
         Number of rooms.
     """
-    import cv2
-
     free = grid.free
     space = free if space is None else (space & free)
     # stage "cutting rooms" of the Voronoi methods: the door segments' cells taken out of the space
@@ -208,9 +206,13 @@ def cut_rooms(grid: OccupancyGrid, segments, *, space=None, min_room_cells: int 
     whole = space.copy()
     for rc in lines:
         whole[rc] = False
-    n, pieces, stats, _ = label_stats(whole, connectivity=4)
-    n -= 1
-    area = stats[:, cv2.CC_STAT_AREA].astype(np.int64)
+    # the pieces without OpenCV's statistics (connectedComponents: 2.0 ms a map against 7.9 with
+    # them, 14 ipa mid maps; cut_rooms 21.8 -> 15.9 ms); areas, first cells and cells from the row runs
+    pieces, n = label(whole, connectivity=4)
+    if n < 2 ** 16:  # 16-bit labels: the lookups on them are faster
+        pieces = pieces.astype(np.uint16)
+    runs = _runs(whole, pieces)
+    area = np.bincount(runs[2], weights=runs[1] - runs[0], minlength=n + 1).astype(np.int64)
     seed = np.arange(n + 1, dtype=np.int32)  # piece -> its seed label (0: none)
     small = np.zeros(n + 1, bool)
     # cells where a robot fits, per piece
@@ -231,20 +233,38 @@ def cut_rooms(grid: OccupancyGrid, segments, *, space=None, min_room_cells: int 
         rank = np.empty(n + 1, np.int32)
         rank[np.argsort(area, kind="stable")] = np.arange(n + 1, dtype=np.int32)
         seed = np.where(small, 0, rank).astype(np.int32)
-    labels, n_rooms = _fill_pieces(pieces, seed, stats, free, free > whole, min_room_cells, wide, piece_wide)
+    labels, n_rooms = _fill_pieces(pieces, seed, runs, free, free > whole, min_room_cells, wide, piece_wide)
     doors = [d for d in _doors_between(grid, labels, segments, lines) if max(d.rooms) <= n_rooms]
     for k, d in enumerate(doors):
         d.id = k
     return labels, doors, n_rooms
 
 
-def _fill_pieces(pieces: np.ndarray, seed: np.ndarray, stats: np.ndarray, free: np.ndarray, between: np.ndarray,
+def _runs(whole: np.ndarray, pieces: np.ndarray):
+    """The row runs of ``whole`` in raster order: ``(start, end, piece)``, the flat index of each
+    run's first cell, one past its last, and its piece in ``pieces``.
+
+    A piece's runs give its area, its first cell (row-major: its first run's start) and its cells
+    without a look at the rest of the map.
+    """
+    H, W = whole.shape
+    # each row after a 0, and a 0 at the end: the changes alternate run start, run end
+    flat = np.zeros(H * (W + 1) + 1, np.uint8)
+    flat[:-1].reshape(H, W + 1)[:, 1:] = whole
+    t = np.flatnonzero(flat[1:] != flat[:-1]) + 1
+    s, e = t[0::2], t[1::2]
+    start = s - s // (W + 1) - 1
+    end = start + (e - s)
+    return start, end, pieces.ravel()[start].astype(np.intp)
+
+
+def _fill_pieces(pieces: np.ndarray, seed: np.ndarray, runs, free: np.ndarray, between: np.ndarray,
                  min_cells: int, wide=None, piece_wide=None):
     """``_rooms_first(fill_unlabeled(seed[pieces], free), min_cells, wide)``, cell for cell, touching only the
     cells without a seed.
 
-    ``pieces``: the cut pieces (OpenCV components, ``stats`` their
-    statistics); ``seed``: each piece's seed label (0: none); ``between``:
+    ``pieces``: the cut pieces (OpenCV components, ``runs`` their row
+    runs, :func:`_runs`); ``seed``: each piece's seed label (0: none); ``between``:
     the free cells in no piece; ``wide``, ``piece_wide``: the cells where a
     robot fits and their number in each piece. The seeds' label image is never made: the free cells without a seed (few: the
     cuts, the small pieces, the closed gaps) are grown one 8-neighbourhood
@@ -263,12 +283,13 @@ def _fill_pieces(pieces: np.ndarray, seed: np.ndarray, stats: np.ndarray, free: 
     if top == 0 or top >= 2 ** 24:  # no seed, or more than _grow handles: the general route
         return _rooms_first(fill_unlabeled(lookup(seed, pieces), free), min_cells, wide)
     # the free cells without a seed (flat indices, ascending)
-    parts = [np.flatnonzero(between)]
-    for i in np.flatnonzero(seed[1:] == 0) + 1:  # pieces too small to be rooms
-        c0, r0, w, h = (int(v) for v in stats[i, :4])
-        rr, cc = np.nonzero(pieces[r0:r0 + h, c0:c0 + w] == i)
-        parts.append((rr + r0) * W + (cc + c0))
-    todo = np.sort(np.concatenate(parts)) if len(parts) > 1 else parts[0]
+    start, end, run_piece = runs
+    todo = np.flatnonzero(between)
+    unseeded = seed == 0
+    unseeded[0] = False
+    if unseeded.any():  # pieces too small to be rooms: the cells of their runs
+        on = unseeded[run_piece]
+        todo = np.sort(np.concatenate([todo, ranges(start[on], end[on])]))
     val = np.zeros(todo.size, np.int32)
     open_ = np.arange(todo.size)  # the cells still without a label
     flat = pieces.ravel()
@@ -338,15 +359,10 @@ def _fill_pieces(pieces: np.ndarray, seed: np.ndarray, stats: np.ndarray, free: 
     n_lab = top + n_rest + 1
     first = np.full(n_lab, np.iinfo(np.int64).max, np.int64)
     count = np.zeros(n_lab, np.int64)
-    kept = np.flatnonzero(seed)
-    left, row, width = (stats[kept, k].astype(np.int64) for k in (0, 1, 2))
-    # the first cell of a piece is on the top row of its box: the first of that row's cells in the piece
-    start = np.cumsum(width) - width
-    cells = ranges(row * W + left, row * W + left + width)
-    mine = pieces.ravel()[cells] == np.repeat(kept, width)
-    at = np.where(mine, cells, np.iinfo(np.int64).max)
-    first[seed[kept]] = np.minimum.reduceat(at, start) if kept.size else []
-    count[seed[kept]] = stats[kept, 4]
+    # a seeded piece: its first run's start, its runs' cells
+    on = seed[run_piece] > 0
+    np.minimum.at(first, seed[run_piece[on]], start[on])
+    np.add.at(count, seed[run_piece[on]], (end - start)[on])
     if todo.size:
         np.minimum.at(first, val, todo)
         count += np.bincount(val, minlength=n_lab)
