@@ -143,21 +143,30 @@ def _wall_to_wall(rc, p, q, space, reach: int = 2):
     to the nearest of the 8 neighbours (integer steps: the same cells
     whichever way the map is turned)."""
     H, W = space.shape
-    v = np.asarray(q, float) - np.asarray(p, float)
-    a = np.abs(v)
-    if a.max() < 1e-9:
+    # on Python floats and ints, not tiny arrays (the same values), the cells only copied when the cut
+    # goes on: 1.25 -> 0.29 ms a map (14 ipa mid maps)
+    v0, v1 = float(q[0]) - float(p[0]), float(q[1]) - float(p[1])
+    a0, a1 = abs(v0), abs(v1)
+    top = max(a0, a1)
+    if top < 1e-9:
         return rc
     # a component counts when it is at least tan(22.5 deg) of the other
-    step = np.where(a >= np.tan(np.pi / 8) * a.max(), np.sign(v), 0).astype(int)
-    rr, cc = [rc[0]], [rc[1]]
-    for (r, c), s in (((rc[0][-1], rc[1][-1]), step), ((rc[0][0], rc[1][0]), -step)):
+    s0 = ((v0 > 0) - (v0 < 0)) if a0 >= _TAN_22_5 * top else 0
+    s1 = ((v1 > 0) - (v1 < 0)) if a1 >= _TAN_22_5 * top else 0
+    rr, cc = [], []
+    for r, c, d0, d1 in ((int(rc[0][-1]), int(rc[1][-1]), s0, s1), (int(rc[0][0]), int(rc[1][0]), -s0, -s1)):
         for _ in range(reach):
-            r, c = r + s[0], c + s[1]
+            r, c = r + d0, c + d1
             if not (0 <= r < H and 0 <= c < W) or not space[r, c]:
                 break
-            rr.append(np.array([r]))
-            cc.append(np.array([c]))
-    return np.concatenate(rr), np.concatenate(cc)
+            rr.append(r)
+            cc.append(c)
+    if not rr:
+        return rc
+    return np.concatenate([rc[0], np.array(rr, rc[0].dtype)]), np.concatenate([rc[1], np.array(cc, rc[1].dtype)])
+
+
+_TAN_22_5 = float(np.tan(np.pi / 8))
 
 
 def cut_rooms(grid: OccupancyGrid, segments, *, space=None, min_room_cells: int = 0, wide=None):
