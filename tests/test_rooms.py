@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 from scipy import ndimage as ndi
 
+from topomap import rooms
 from topomap._fast import lookup
 from topomap.rooms import _fill_pieces, _rooms_first, _runs, fill_unlabeled
 
@@ -38,9 +39,12 @@ def _case(rng, shape, small_share):
     return free, pieces, seed, _runs(whole, pieces), free > whole
 
 
+@pytest.mark.parametrize("box", [(rooms._BOX_CELLS, rooms._BOX_PER_CELL), (0, 0)])  # components: OpenCV, scipy
 @pytest.mark.parametrize("small_share", [0.0, 0.3, 0.8])
 @pytest.mark.parametrize("min_cells", [0, 1, 40])
-def test_fill_pieces_is_the_general_route(small_share, min_cells):
+def test_fill_pieces_is_the_general_route(small_share, min_cells, box, monkeypatch):
+    monkeypatch.setattr(rooms, "_BOX_CELLS", box[0])
+    monkeypatch.setattr(rooms, "_BOX_PER_CELL", box[1])
     rng = np.random.default_rng(int(small_share * 10) * 100 + min_cells)
     kinds = set()
     for _ in range(12):
