@@ -15,7 +15,7 @@ from scipy import ndimage as ndi
 
 from topomap import rooms
 from topomap._fast import lookup
-from topomap.rooms import _fill_pieces, _rooms_first, _runs, fill_unlabeled
+from topomap.rooms import _fill_pieces, _rooms_first, _run_sums, _runs, fill_unlabeled
 
 
 def _case(rng, shape, small_share):
@@ -106,3 +106,24 @@ def test_a_cut_reaches_the_walls_it_was_rounded_short_of(short):
     labels, doors, n = cut_rooms(grid, [seg])
     assert n == 2 and len(doors) == 1
     assert (labels > 0)[free].all()
+
+
+@pytest.mark.parametrize("edge", [False, True])
+def test_runs_and_run_sums(edge):
+    # row runs of the pieces, and the cells of a mask in each piece, against the plain counts
+    # (with `edge`: free cells along every side, so runs start and end on the map's edges)
+    rng = np.random.default_rng(7 + edge)
+    for _ in range(20):
+        shape = tuple(int(v) for v in rng.integers(1, 60, size=2))
+        whole = rng.random(shape) < 0.6
+        if edge:
+            whole[[0, -1], :] = whole[:, [0, -1]] = True
+        n, pieces = cv2.connectedComponents(whole.view(np.uint8), connectivity=4, ltype=cv2.CV_16U)
+        start, end, piece = runs = _runs(whole, pieces)
+        cells = np.concatenate([np.arange(s, e) for s, e in zip(start, end)]) if start.size else np.zeros(0, int)
+        np.testing.assert_array_equal(cells, np.flatnonzero(whole))
+        assert (pieces.ravel()[cells] == np.repeat(piece, end - start)).all()
+        mask = rng.random(shape) < 0.3
+        want = np.bincount(pieces[mask & whole], minlength=n)
+        want[0] = 0
+        np.testing.assert_array_equal(_run_sums(mask, runs, n - 1), want)
