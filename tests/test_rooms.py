@@ -39,12 +39,16 @@ def _case(rng, shape, small_share):
     return free, pieces, seed, _runs(whole, pieces), free > whole
 
 
-@pytest.mark.parametrize("box", [(rooms._BOX_CELLS, rooms._BOX_PER_CELL), (0, 0)])  # components: OpenCV, scipy
+# the components by OpenCV, the neighbours by a table; by scipy, by a binary search
+@pytest.mark.parametrize("box", [(rooms._BOX_CELLS, rooms._BOX_PER_CELL, rooms._DENSE_CELLS, rooms._DENSE_PER_CELL),
+                                 (0, 0, 0, 0)])
 @pytest.mark.parametrize("small_share", [0.0, 0.3, 0.8])
 @pytest.mark.parametrize("min_cells", [0, 1, 40])
 def test_fill_pieces_is_the_general_route(small_share, min_cells, box, monkeypatch):
     monkeypatch.setattr(rooms, "_BOX_CELLS", box[0])
     monkeypatch.setattr(rooms, "_BOX_PER_CELL", box[1])
+    monkeypatch.setattr(rooms, "_DENSE_CELLS", box[2])
+    monkeypatch.setattr(rooms, "_DENSE_PER_CELL", box[3])
     rng = np.random.default_rng(int(small_share * 10) * 100 + min_cells)
     kinds = set()
     for _ in range(12):

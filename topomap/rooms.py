@@ -322,8 +322,18 @@ def _fill_pieces(pieces: np.ndarray, seed: np.ndarray, runs, free: np.ndarray, b
         rn, cn = r[:, None] + _NR, c[:, None] + _NC
         ok = (rn >= 0) & (rn < H) & (cn >= 0) & (cn < W)
         nb = np.where(ok, rn * W + cn, 0)
-        pos = np.minimum(np.searchsorted(todo, nb), todo.size - 1)
-        inside = ok & (todo[pos] == nb)  # the neighbour is itself a cell without a seed
+        # each neighbour's place in todo (any place when it is none: inside says which), by a table
+        # over the flat indices todo's neighbours span: 0.64 -> 0.21 ms a map against a binary
+        # search (14 ipa mid maps; 1.30 -> 0.26 with the real maps'); the search when that span
+        # is large for a few cells
+        lo, hi = max(int(todo[0]) - W - 1, 0), int(todo[-1]) + W + 2
+        if hi - lo <= max(_DENSE_CELLS, _DENSE_PER_CELL * todo.size) and todo.size < 2 ** 31:
+            at = np.zeros(hi - lo, np.int32)
+            at[todo - lo] = np.arange(todo.size, dtype=np.int32)
+            pos = np.take(at, nb - lo, mode="clip")
+        else:
+            pos = np.minimum(np.searchsorted(todo, nb), todo.size - 1)
+        inside = ok & (np.take(todo, pos) == nb)  # the neighbour is itself a cell without a seed
         fixed = np.where(ok & ~inside, seed[flat[nb]], 0)
         del rn, cn, nb, r, c
         # _grow's steps, all cells at once: a cell still open after a step gets a label in the
@@ -448,6 +458,11 @@ def _components(cells: np.ndarray, todo: np.ndarray, pos: np.ndarray, inside: np
     n, comp = connected_components(A, directed=False)
     return comp.astype(np.int32) + 1, int(n)
 
+
+#: Largest span of flat indices (cells) in which :func:`_fill_pieces` finds the unseeded cells'
+#: neighbours by a table whatever the number of cells (a 32 MB table), and the span per cell up
+#: to which it does for more.
+_DENSE_CELLS, _DENSE_PER_CELL = 2 ** 23, 64
 
 #: Largest bounding box (cells) :func:`_components` labels with OpenCV whatever the number of
 #: cells, and the box's cells per cell up to which it does for more (an empty megacell: ~0.3 ms).
