@@ -361,7 +361,11 @@ def _fill_pieces(pieces: np.ndarray, seed: np.ndarray, runs, free: np.ndarray, b
         comp, n_comp = _components(open_, todo, pos, inside, free.shape)
         near = np.where(inside[open_], val[pos[open_]], fixed[open_])
         hit = near > 0
-        pairs = np.unique(np.stack([np.broadcast_to(comp[:, None], near.shape)[hit], near[hit]]), axis=1)
+        # the (component, label) pairs, as one int key each: 1.0 -> 0.5 ms a call against np.unique
+        # along an axis (21 of the 52 captured calls, line_profiler)
+        span = int(near.max()) + 1
+        key = np.unique(np.broadcast_to(comp[:, None], near.shape)[hit].astype(np.int64) * span + near[hit])
+        pairs = np.stack([key // span, key % span])
         if pairs.shape[1] and np.bincount(pairs[0]).max() > 1:
             # a component between two labels, 8 steps or more from their seeds: fill_unlabeled's
             # watershed, on its very input
