@@ -15,7 +15,7 @@ from scipy import ndimage as ndi
 
 from topomap import rooms
 from topomap._fast import lookup
-from topomap.rooms import _fill_pieces, _rooms_first, _run_sums, _runs, fill_unlabeled
+from topomap.rooms import _fill_pieces, _rooms_first, _runs, fill_unlabeled
 
 
 def _case(rng, shape, small_share):
@@ -40,15 +40,12 @@ def _case(rng, shape, small_share):
 
 
 # the components by OpenCV, the neighbours by a table; by scipy, by a binary search
-@pytest.mark.parametrize("box", [(rooms._BOX_CELLS, rooms._BOX_PER_CELL, rooms._DENSE_CELLS, rooms._DENSE_PER_CELL),
-                                 (0, 0, 0, 0)])
+@pytest.mark.parametrize("box", [(rooms._BOX_CELLS, rooms._DENSE_CELLS), (0, 0)])
 @pytest.mark.parametrize("small_share", [0.0, 0.3, 0.8])
 @pytest.mark.parametrize("min_cells", [0, 1, 40])
 def test_fill_pieces_is_the_general_route(small_share, min_cells, box, monkeypatch):
     monkeypatch.setattr(rooms, "_BOX_CELLS", box[0])
-    monkeypatch.setattr(rooms, "_BOX_PER_CELL", box[1])
-    monkeypatch.setattr(rooms, "_DENSE_CELLS", box[2])
-    monkeypatch.setattr(rooms, "_DENSE_PER_CELL", box[3])
+    monkeypatch.setattr(rooms, "_DENSE_CELLS", box[1])
     rng = np.random.default_rng(int(small_share * 10) * 100 + min_cells)
     kinds = set()
     for _ in range(12):
@@ -113,8 +110,8 @@ def test_a_cut_reaches_the_walls_it_was_rounded_short_of(short):
 
 
 @pytest.mark.parametrize("edge", [False, True])
-def test_runs_and_run_sums(edge):
-    # row runs of the pieces, and the cells of a mask in each piece, against the plain counts
+def test_runs(edge, monkeypatch):
+    # row runs of the pieces against the pieces' cells; in bands of rows as on a large map
     # (with `edge`: free cells along every side, so runs start and end on the map's edges)
     rng = np.random.default_rng(7 + edge)
     for _ in range(20):
@@ -127,7 +124,8 @@ def test_runs_and_run_sums(edge):
         cells = np.concatenate([np.arange(s, e) for s, e in zip(start, end)]) if start.size else np.zeros(0, int)
         np.testing.assert_array_equal(cells, np.flatnonzero(whole))
         assert (pieces.ravel()[cells] == np.repeat(piece, end - start)).all()
-        mask = rng.random(shape) < 0.3
-        want = np.bincount(pieces[mask & whole], minlength=n)
-        want[0] = 0
-        np.testing.assert_array_equal(_run_sums(mask, runs, n - 1), want)
+        for band in (1, 5, 64):  # a band of rows at a time: the same runs
+            monkeypatch.setattr(rooms, "_RUN_BAND", band)
+            for a, b in zip(runs, _runs(whole, pieces)):
+                np.testing.assert_array_equal(a, b)
+            monkeypatch.undo()

@@ -225,7 +225,7 @@ def cut_rooms(grid: OccupancyGrid, segments, *, space=None, min_room_cells: int 
     seed = np.arange(n + 1, dtype=np.int32)  # piece -> its seed label (0: none)
     small = np.zeros(n + 1, bool)
     # cells where a robot fits, per piece
-    piece_wide = _run_sums(wide, runs, n) if wide is not None and min_room_cells > 0 else None
+    piece_wide = np.bincount(pieces[wide], minlength=n + 1) if wide is not None and min_room_cells > 0 else None
     if n and min_room_cells > 0:
         # a piece smaller than a room is never a room of its own: its
         # cells join the room they are connected to, or become a fragment
@@ -257,29 +257,26 @@ def _runs(whole: np.ndarray, pieces: np.ndarray):
     without a look at the rest of the map.
     """
     H, W = whole.shape
-    # each row after a 0, and a 0 at the end: the changes alternate run start, run end
-    flat = np.zeros(H * (W + 1) + 1, np.uint8)
-    flat[:-1].reshape(H, W + 1)[:, 1:] = whole
-    t = np.flatnonzero(flat[1:] != flat[:-1]) + 1
-    s, e = t[0::2], t[1::2]
-    start = s - s // (W + 1) - 1
-    end = start + (e - s)
+    # a band of rows at a time (its temporaries a few MB, whatever the map's size: at once they
+    # raised the peak memory of the 25 M-cell synthetic building by 85 MB); each row after a 0,
+    # and a 0 at the end: the changes alternate run start, run end
+    rows = max(1, _RUN_BAND // (W + 1))
+    starts, ends = [], []
+    for r0 in range(0, H, rows):
+        h = min(rows, H - r0)
+        flat = np.zeros(h * (W + 1) + 1, np.uint8)
+        flat[:-1].reshape(h, W + 1)[:, 1:] = whole[r0:r0 + h]
+        t = np.flatnonzero(flat[1:] != flat[:-1]) + 1
+        s, e = t[0::2], t[1::2]
+        starts.append(s - s // (W + 1) - 1 + r0 * W)
+        ends.append(starts[-1] + (e - s))
+    start = np.concatenate(starts) if starts else np.zeros(0, np.intp)
+    end = np.concatenate(ends) if ends else np.zeros(0, np.intp)
     return start, end, pieces.ravel()[start].astype(np.intp)
 
 
-def _run_sums(mask: np.ndarray, runs, n: int) -> np.ndarray:
-    """The number of ``mask`` cells in each of the ``n`` pieces of ``runs`` (:func:`_runs`;
-    index 0, no piece: 0), summed run by run: 0.71 -> 0.42 ms a map against a bincount of the
-    pieces' labels under the mask (14 ipa mid maps)."""
-    start, end, run_piece = runs
-    if not start.size:
-        return np.zeros(n + 1, np.int64)
-    m = np.asarray(mask, bool).ravel().view(np.uint8)
-    at = np.stack([start, end], 1).ravel()
-    if at[-1] == m.size:  # the last run ends the map: its sum runs to the end
-        at = at[:-1]
-    per_run = np.add.reduceat(m, at, dtype=np.int64)[0::2]  # [start, end) of each run, then the gap after it
-    return np.bincount(run_piece, weights=per_run, minlength=n + 1).astype(np.int64)
+#: Cells of the band of rows :func:`_runs` scans at a time.
+_RUN_BAND = 1 << 20
 
 
 def _fill_pieces(pieces: np.ndarray, seed: np.ndarray, runs, free: np.ndarray, between: np.ndarray,
@@ -325,9 +322,9 @@ def _fill_pieces(pieces: np.ndarray, seed: np.ndarray, runs, free: np.ndarray, b
         # each neighbour's place in todo (any place when it is none: inside says which), by a table
         # over the flat indices todo's neighbours span: 0.64 -> 0.21 ms a map against a binary
         # search (14 ipa mid maps; 1.30 -> 0.26 with the real maps'); the search when that span
-        # is large for a few cells
+        # is larger than :data:`_DENSE_CELLS`
         lo, hi = max(int(todo[0]) - W - 1, 0), int(todo[-1]) + W + 2
-        if hi - lo <= max(_DENSE_CELLS, _DENSE_PER_CELL * todo.size) and todo.size < 2 ** 31:
+        if hi - lo <= _DENSE_CELLS:
             at = np.zeros(hi - lo, np.int32)
             at[todo - lo] = np.arange(todo.size, dtype=np.int32)
             pos = np.take(at, nb - lo, mode="clip")
@@ -433,8 +430,8 @@ def _components(cells: np.ndarray, todo: np.ndarray, pos: np.ndarray, inside: np
     component, never its number.
 
     OpenCV's labelling of the cells' bounding box when that box holds at most :data:`_BOX_CELLS`
-    cells or :data:`_BOX_PER_CELL` per cell, against the graph's components in scipy (kept for a
-    few cells far apart on a large map): 0.44 -> 0.32 ms a call on the ipa mid maps (54-431 cells
+    cells, against the graph's components in scipy (kept for larger boxes: a few cells far apart
+    on a large map, or a large map's many cells): 0.44 -> 0.32 ms a call on the ipa mid maps (54-431 cells
     in boxes of 0.3-1 M cells), 1.9 -> 0.59 ms on the real maps' calls too (up to 26 k cells).
     """
     H, W = shape
@@ -442,7 +439,7 @@ def _components(cells: np.ndarray, todo: np.ndarray, pos: np.ndarray, inside: np
     r, c = np.divmod(flat, W)
     r0, c0 = int(r[0]), int(c.min())
     h, w = int(r[-1]) - r0 + 1, int(c.max()) - c0 + 1
-    if h * w <= max(_BOX_CELLS, _BOX_PER_CELL * cells.size):
+    if h * w <= _BOX_CELLS:
         r -= r0
         c -= c0
         box = np.zeros((h, w), np.uint8)
@@ -464,13 +461,13 @@ def _components(cells: np.ndarray, todo: np.ndarray, pos: np.ndarray, inside: np
 
 
 #: Largest span of flat indices (cells) in which :func:`_fill_pieces` finds the unseeded cells'
-#: neighbours by a table whatever the number of cells (a 32 MB table), and the span per cell up
-#: to which it does for more.
-_DENSE_CELLS, _DENSE_PER_CELL = 2 ** 23, 64
+#: neighbours by a table (32 MB at most: a table over a larger span, for the many cells of a large
+#: map, raised the peak memory of the 25 M-cell synthetic building by 40 MB).
+_DENSE_CELLS = 2 ** 23
 
-#: Largest bounding box (cells) :func:`_components` labels with OpenCV whatever the number of
-#: cells, and the box's cells per cell up to which it does for more (an empty megacell: ~0.3 ms).
-_BOX_CELLS, _BOX_PER_CELL = 2 ** 21, 32
+#: Largest bounding box (cells) :func:`_components` labels with OpenCV (10 MB of images at most;
+#: an empty megacell costs ~0.3 ms).
+_BOX_CELLS = 2 ** 21
 
 
 def _rooms_first(labels: np.ndarray, min_cells: int, wide=None):
