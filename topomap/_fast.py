@@ -50,12 +50,13 @@ def edt(mask: np.ndarray, *, exact: bool = True) -> np.ndarray:
     return cv2.distanceTransform(m, cv2.DIST_L2, cv2.DIST_MASK_PRECISE if exact else 5)
 
 
-def label(mask: np.ndarray, connectivity: int = 8):
-    """Connected components of ``mask``: ``(labels int32, count)``; 0 = background."""
+def label(mask: np.ndarray, connectivity: int = 8, *, small: bool = False):
+    """Connected components of ``mask``: ``(labels int32, count)``; 0 = background. With
+    ``small``, the labels are 16-bit when they fit (:func:`_small_labels`)."""
     import cv2
 
     n, lab = cv2.connectedComponents(_bytes(mask), connectivity=connectivity, ltype=cv2.CV_32S)
-    return lab, n - 1
+    return (_small_labels(lab, n) if small else lab), n - 1
 
 
 def label_stats(mask: np.ndarray, connectivity: int = 8):
@@ -68,7 +69,13 @@ def label_stats(mask: np.ndarray, connectivity: int = 8):
     import cv2
 
     n, lab, stats, cen = cv2.connectedComponentsWithStats(_bytes(mask), connectivity=connectivity, ltype=cv2.CV_32S)
-    return n, (lab.astype(np.uint16) if n <= 2 ** 16 else lab), stats, cen
+    return n, _small_labels(lab, n), stats, cen
+
+
+def _small_labels(lab: np.ndarray, n: int) -> np.ndarray:
+    """OpenCV's int32 labels ``lab`` (``n`` labels, background included) as 16-bit labels when
+    they fit (the lookups on them are faster, :func:`lookup`), as they are otherwise."""
+    return lab.astype(np.uint16) if n <= 2 ** 16 else lab
 
 
 def lookup(table: np.ndarray, labels: np.ndarray) -> np.ndarray:

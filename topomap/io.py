@@ -870,7 +870,13 @@ def _warn_free_area(name, area: float):
 def pgm_bytes(gray) -> bytes:
     """Binary (P5) PGM encoding of an (M, N) uint8 image, no comment line."""
     g = np.ascontiguousarray(gray, dtype=np.uint8)
-    return b"P5\n%d %d\n255\n" % (g.shape[1], g.shape[0]) + g.tobytes()
+    return pgm_header(g.shape, 255) + g.tobytes()
+
+
+def pgm_header(shape, maxval: int) -> bytes:
+    """The header of a binary (P5) PGM of an image of ``shape`` (M, N) whose largest value is
+    ``maxval`` (255: 8-bit pixels; up to 65535: 16-bit, big-endian), no comment line."""
+    return b"P5\n%d %d\n%d\n" % (shape[1], shape[0], maxval)
 
 
 def _fmt_float(v: float) -> str:

@@ -297,13 +297,12 @@ class _RoomSpace:
         first = np.cumsum(n) - n
         self.door_px = {}
         if d2.size:
-            has = np.add.reduceat(ok, first[n > 0]) > 0
-            low = np.minimum.reduceat(d2, first[n > 0])
+            low = np.minimum.reduceat(d2, first[n > 0])  # inf: no cell of the door on the rooms
             at = np.flatnonzero(d2 == np.repeat(low, n[n > 0]))
             best = at[np.r_[True, owner[at][1:] != owner[at][:-1]]]  # the first minimum of each door
             pick = dict(zip(owner[best].tolist(), best.tolist()))
-            for k, h in zip(np.flatnonzero(n > 0).tolist(), has.tolist()):
-                if h:
+            for k, reached in zip(np.flatnonzero(n > 0).tolist(), np.isfinite(low).tolist()):
+                if reached:
                     i = pick[k]
                     self.door_px[doors[k]] = (int(RR[i]), int(CC[i]))
         self.mask = mask

@@ -492,9 +492,8 @@ def graph_from_topology(topo: SkeletonTopology, *, radius: np.ndarray | None = N
     ends = np.array([us, vs], np.int64).T - 1
     known = ends.size == 0 or (ends.min() >= 0 and ends.max() < n)  # else networkx adds bare nodes
     if known:
-        names = np.array(["isolated", "endpoint", "loop", "junction"], object)
         keys.append("kind")
-        cols.append(names[np.minimum(np.bincount(ends.ravel(), minlength=n), 3)].tolist())
+        cols.append(np.array(_KINDS, object)[np.minimum(np.bincount(ends.ravel(), minlength=n), 3)].tolist())
     G.add_nodes_from(range(n))
     for (_, attrs), vals in zip(G.nodes(data=True), zip(*cols)):
         attrs.update(zip(keys, vals))
@@ -560,11 +559,14 @@ def _set_kinds(G, degree=None):
 
     ``degree``: every node's degree, when the caller knows them (``G.degree`` otherwise).
     """
-    names = {0: "isolated", 1: "endpoint", 2: "loop"}
     if degree is None:
         degree = dict(G.degree)  # one degree view for all nodes (G.degree(n) makes one per node)
     for n, attrs in G.nodes(data=True):
-        attrs["kind"] = names.get(degree[n], "junction")
+        attrs["kind"] = _KINDS[min(degree[n], 3)]
+
+
+#: Node ``kind`` by degree: 0, 1, 2, 3 and more.
+_KINDS = ("isolated", "endpoint", "loop", "junction")
 
 
 def prune_spurs(G: nx.MultiGraph, min_length: float, *, copy: bool = True) -> nx.MultiGraph:
