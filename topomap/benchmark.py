@@ -26,7 +26,9 @@ Conventions:
   room: they are not in the room graph), ``n_true_rooms`` the ground
   truth's rooms;
 * true doors (ipa layout) are extracted from the *unfurnished* map in both
-  variants;
+  variants; a simulated case lists its doors (``gt_doors.json``, metres),
+  drawn as lines of cells of the grid as loaded; only doors joining two
+  true rooms are scored (as on the ipa maps);
 * ``runtime_s`` is the wall time of the user's job up to the segmentation:
   ``load_map(...)`` plus ``segment(...)`` (``t_load`` is the loading part);
   scoring is excluded. Every method runs in the same process and the same
@@ -50,7 +52,7 @@ from typing import Callable, Iterable, Optional, Sequence
 
 import numpy as np
 
-from .datasets import LABELLED_VARIANT, VARIANTS
+from .datasets import LABELLED_VARIANT, SIMULATED_VARIANTS, VARIANTS
 from .errors import ParameterError
 
 __all__ = [
@@ -146,16 +148,32 @@ def _check_methods(methods) -> list:
 
 
 def _check_variants(variants) -> list:
+    """The variants asked for, in order; ``"both"`` stays as given (each layout reads it its own way)."""
     if isinstance(variants, str):
-        variants = list(VARIANTS) if variants == "both" else [variants]
+        variants = [variants]
     out = []
     for v in variants:
-        if v not in VARIANTS:
-            raise ParameterError(f"variant must be 'unfurnished', 'furnished' or 'both', got {v!r}")
+        if v != "both" and v not in VARIANTS + SIMULATED_VARIANTS:
+            raise ParameterError(f"variant must be 'unfurnished', 'furnished', 'plan', 'scan' or 'both', "
+                                 f"got {v!r}")
         if v not in out:
             out.append(v)
     if not out:
         raise ParameterError("no variant given")
+    return out
+
+
+def _layout_variants(layout, variants, directory) -> list:
+    """The variants of ``layout`` that ``variants`` (checked by :func:`_check_variants`) select."""
+    own = VARIANTS if layout == "ipa" else SIMULATED_VARIANTS
+    out = []
+    for v in variants:
+        for w in (own if v == "both" else (v,)):
+            if w not in own:
+                raise ParameterError(f"{directory}: variant {w!r} is not one of this {layout} data set's "
+                                     f"({', '.join(own)} or both)")
+            if w not in out:
+                out.append(w)
     return out
 
 
@@ -188,6 +206,28 @@ def _error_row(row, exc, runtime, jobs):
     return row
 
 
+def _score(bm, grid, seg) -> dict:
+    """:func:`topomap.evaluation.evaluate` of one segmentation of ``bm`` (the grid as loaded)."""
+    from .datasets import door_cells
+    from .errors import MapError
+    from .evaluation import evaluate
+
+    if grid.shape != bm.gt_rooms.shape:
+        raise MapError(f"{bm.load_path}: map is {grid.shape[1]} x {grid.shape[0]} cells, its ground truth "
+                       f"{bm.gt_path.name} {bm.gt_rooms.shape[1]} x {bm.gt_rooms.shape[0]}")
+    true_doors = true_edges = None
+    if bm.gt_doors is not None:
+        # doors joining two true rooms, as the door lines of the ipa ground truth (min_rooms=2)
+        inner = [d for d in bm.gt_doors if len(d["rooms"]) == 2 and min(d["rooms"]) > 0
+                 and d["rooms"][0] != d["rooms"][1]]
+        true_doors = door_cells(inner, grid)
+        true_edges = {tuple(sorted(d["rooms"])) for d in inner}
+    # the rooms a user gets: fragments (not in the room graph) are no room
+    return evaluate(seg.room_labels, bm.map_gray, bm.gt_gray, pred_doors=[d.segment for d in seg.doors],
+                    resolution=grid.resolution, door_map_gray=bm.unfurnished_gray,
+                    scored=grid.free, gt_rooms=bm.gt_rooms, true_doors=true_doors, true_edges=true_edges)
+
+
 def run_map(bm, method: str, *, jobs: int = 1, warm_up: bool = True) -> dict:
     """Segment one benchmark map with one method, as a user would, and score it.
 
@@ -210,8 +250,6 @@ def run_map(bm, method: str, *, jobs: int = 1, warm_up: bool = True) -> dict:
         loading or the method raises, the row has ``error`` set to a
         one-line message and NaN scores.
     """
-    from .evaluation import evaluate
-
     row = {"method": method, "variant": bm.variant, "map": bm.name}
     if warm_up:
         _warm_up(method)
@@ -220,11 +258,10 @@ def run_map(bm, method: str, *, jobs: int = 1, warm_up: bool = True) -> dict:
         grid, seg, runtime = segment_map(bm, method)
     except Exception as exc:  # noqa: BLE001 - one failing map does not stop the benchmark
         return _error_row(row, exc, time.perf_counter() - t0, jobs)
-    doors = [d.segment for d in seg.doors]
-    # the rooms a user gets: fragments (not in the room graph) are no room
-    ev = evaluate(seg.room_labels, bm.map_gray, bm.gt_gray, pred_doors=doors,
-                  resolution=grid.resolution, door_map_gray=bm.unfurnished_gray,
-                  scored=grid.free, gt_rooms=bm.gt_rooms)
+    try:
+        ev = _score(bm, grid, seg)
+    except Exception as exc:  # noqa: BLE001 - e.g. a YAML naming an image of another size than the truth
+        return _error_row(row, exc, runtime, jobs)
     for k in _SCORE_KEYS:
         v = ev.get(k, math.nan)
         row[k] = int(v) if isinstance(v, (int, np.integer)) and not isinstance(v, bool) else float(v)
@@ -257,12 +294,14 @@ def _pool_task(bm, method, jobs):
 
 
 def _load_maps(directory, variants, maps) -> dict:
-    """``{variant: [BenchmarkMap]}`` for either layout (the labelled one has one variant)."""
-    from .datasets import detect_layout, load_benchmark, load_labelled
+    """``{variant: [BenchmarkMap]}`` for any layout (the labelled one has one variant)."""
+    from .datasets import detect_layout, load_benchmark, load_labelled, load_simulated
 
-    if detect_layout(directory) == "labelled":
+    layout = detect_layout(directory)
+    if layout == "labelled":
         return {LABELLED_VARIANT: load_labelled(directory, names=maps)}
-    return {v: load_benchmark(directory, variant=v, names=maps) for v in variants}
+    load = load_benchmark if layout == "ipa" else load_simulated
+    return {v: load(directory, variant=v, names=maps) for v in _layout_variants(layout, variants, directory)}
 
 
 def _execute(tasks, jobs, progress) -> dict:
@@ -296,7 +335,7 @@ def _execute(tasks, jobs, progress) -> dict:
 
 
 def run_benchmark(directory, *, methods: Optional[Sequence[str]] = None,
-                  variants: Iterable[str] | str = VARIANTS, jobs: int = 1,
+                  variants: Iterable[str] | str = "both", jobs: int = 1,
                   progress: Optional[Callable[[int, int, dict], None]] = None,
                   names: Optional[Iterable[str]] = None,
                   maps: Optional[Iterable[str] | str] = None) -> list:
@@ -305,17 +344,20 @@ def run_benchmark(directory, *, methods: Optional[Sequence[str]] = None,
     Parameters
     ----------
     directory : str or Path
-        A folder in either layout of :mod:`topomap.datasets`, picked by what
+        A folder in any layout of :mod:`topomap.datasets`, picked by what
         it holds (:func:`topomap.datasets.detect_layout`): ``NAME.png``,
-        ``NAME_furnitures.png``, ``NAME_gt_segmentation.png`` (ipa), or
-        ``NAME.png`` + ``NAME.yaml`` + ``NAME_gt.png`` (labelled).
+        ``NAME_furnitures.png``, ``NAME_gt_segmentation.png`` (ipa),
+        ``NAME.png`` + ``NAME.yaml`` + ``NAME_gt.png`` (labelled), or case
+        folders ``CASE/`` with ``map.yaml``, ``plan.yaml``, ``gt_rooms.png``
+        and ``gt_doors.json`` (simulated).
     methods : sequence of str or str, optional
         Method names (or one comma-separated string); default every method
         of :data:`topomap.segmentation.METHODS`.
     variants : iterable of str or str, optional
-        ipa layout: ``"unfurnished"``, ``"furnished"`` or both (default; the
-        string ``"both"`` is accepted too). Ignored for the labelled layout,
-        whose rows have the variant ``"map"``.
+        ipa layout: ``"unfurnished"``, ``"furnished"`` or ``"both"``
+        (default); simulated layout: ``"plan"`` (the drawn floor plan),
+        ``"scan"`` (the simulated robot map) or ``"both"``. Ignored for the
+        labelled layout, whose rows have the variant ``"map"``.
     jobs : int, optional
         Number of worker processes (:class:`concurrent.futures.ProcessPoolExecutor`);
         1 (default) runs everything in this process, the only setting whose
@@ -338,7 +380,7 @@ def run_benchmark(directory, *, methods: Optional[Sequence[str]] = None,
     Raises
     ------
     ParameterError
-        An unknown method or variant, or ``jobs < 1``.
+        An unknown method or variant (or one of another layout), or ``jobs < 1``.
     topomap.datasets.BenchmarkNotFoundError
         No benchmark maps in ``directory``, or a ``maps`` pattern matches none.
     """
@@ -406,7 +448,7 @@ def _group(rows) -> list:
     for r in rows:
         groups.setdefault((r["method"], r["variant"]), []).append(r)
     keys = list(groups)
-    vorder = [v for v in VARIANTS if any(k[1] == v for k in keys)]
+    vorder = [v for v in VARIANTS + SIMULATED_VARIANTS if any(k[1] == v for k in keys)]
     vorder += [k[1] for k in keys if k[1] not in vorder]
     morder = list(dict.fromkeys(k[0] for k in keys))
     keys.sort(key=lambda k: (vorder.index(k[1]), morder.index(k[0])))

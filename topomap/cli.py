@@ -421,8 +421,9 @@ def demo_cmd(outdir, method):
 @click.argument("dataset_dir", type=click.Path(path_type=Path))
 @click.option("--methods", default=None,
               help="Comma-separated methods (default: every method of topomap.segmentation.METHODS).")
-@click.option("--variant", type=click.Choice(["unfurnished", "furnished", "both"]), default="both",
-              show_default=True, help="Which maps: without furniture, with furniture, or both.")
+@click.option("--variant", type=click.Choice(["unfurnished", "furnished", "plan", "scan", "both"]), default="both",
+              show_default=True, help="Which maps: without furniture, with furniture, or both; of a simulated "
+                                      "corpus: the floor plan, the simulated scan, or both.")
 @click.option("--jobs", type=click.IntRange(min=1), default=1, show_default=True,
               help="Parallel worker processes (timings are only fully comparable with 1).")
 @click.option("--out", "out", type=click.Path(path_type=Path), default=None,
@@ -436,8 +437,9 @@ def benchmark_cmd(dataset_dir, methods, variant, jobs, out, maps):
     DATASET_DIR holds either NAME.png, NAME_furnitures.png and
     NAME_gt_segmentation.png per map (the layout of Bormann et al. 2016), or
     NAME.png, NAME.yaml and NAME_gt.png (a map_server map and its label
-    image; --variant is then ignored). Each map is loaded as `topomap
-    segment` loads it; runtimes are of loading plus segmentation.
+    image; --variant is then ignored), or one folder per simulated case
+    (map.yaml, plan.yaml, gt_rooms.png, gt_doors.json). Each map is loaded
+    as `topomap segment` loads it; runtimes are of loading plus segmentation.
     """
     from .benchmark import _check_methods, format_table, run_benchmark, write_rows
 
@@ -449,7 +451,6 @@ def benchmark_cmd(dataset_dir, methods, variant, jobs, out, maps):
             raise ParameterError(f"--out must end in .csv or .json, got {out.name!r}")
     except Exception as exc:  # noqa: BLE001
         sys.exit(_fail(exc))
-    variants = ("unfurnished", "furnished") if variant == "both" else (variant,)
     state = {}
 
     def progress(done, total, row):
@@ -464,7 +465,7 @@ def benchmark_cmd(dataset_dir, methods, variant, jobs, out, maps):
             log.warning("%s %s %s: %s", row["method"], row["variant"], row["map"], row["error"])
 
     try:
-        rows = run_benchmark(dataset_dir, methods=names, variants=variants, jobs=jobs, progress=progress,
+        rows = run_benchmark(dataset_dir, methods=names, variants=variant, jobs=jobs, progress=progress,
                              maps=maps)
     except Exception as exc:  # noqa: BLE001
         if state.get("bar") is not None:

@@ -1,6 +1,6 @@
 """Loading room-segmentation benchmarks and labelled map pairs.
 
-Two data-set layouts are read (:func:`detect_layout` tells them apart):
+Three data-set layouts are read (:func:`detect_layout` tells them apart):
 
 ``"ipa"`` -- the benchmark of Bormann et al. (ICRA 2016), from the
 ``ipa_room_segmentation`` package: per map ``NAME``, ``NAME.png`` (map
@@ -17,6 +17,15 @@ and ``NAME_gt.png``, an 8- or 16-bit label image (0 = no room, 1..K = rooms;
 a room may be several pieces). The map is loaded through its YAML
 (``load_map("NAME.yaml")``, i.e. ``topomap segment NAME.yaml``).
 
+``"simulated"`` -- a corpus of simulated cases (``topomap simulate PLAN...
+-o CORPUS``): one folder ``CORPUS/CASE/`` per case, with the simulated robot
+map ``map.pgm`` + ``map.yaml`` (variant ``"scan"``), the drawn floor plan on
+the same grid ``plan.pgm`` + ``plan.yaml`` (variant ``"plan"``), the room
+labels ``gt_rooms.png`` (16-bit, 0 = no room) and the true doors
+``gt_doors.json`` (``{"doors": [{"p1": [x, y], "p2": [x, y], "rooms": [a, b],
+...}]}``, metres in the map frame of the YAML, room 0 = outside). Each map is
+loaded through its YAML, as a user loads it.
+
 The data sets' licences may forbid redistributing them, so topomap never
 ships them: code reads them from a directory given at run time (see
 :func:`benchmark_dir`).
@@ -29,14 +38,18 @@ evaluation does.
 from __future__ import annotations
 
 import fnmatch
+import json
+import math
 import os
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterable, Optional
 
 import numpy as np
 
-from .errors import BenchmarkNotFoundError, MapError, MapFileError, ParameterError
+from .errors import (BenchmarkNotFoundError, MapError, MapFileError, MapTooLargeError, ParameterError,
+                     first_line)
 from .io import FREE_GRAY  # noqa: F401  (re-exported: the benchmark's white level)
 
 __all__ = [
@@ -44,6 +57,7 @@ __all__ = [
     "FREE_GRAY",
     "VARIANTS",
     "LABELLED_VARIANT",
+    "SIMULATED_VARIANTS",
     "BenchmarkNotFoundError",
     "BenchmarkMap",
     "LabeledMap",
@@ -52,6 +66,9 @@ __all__ = [
     "detect_layout",
     "load_benchmark",
     "load_labelled",
+    "load_simulated",
+    "read_doors",
+    "door_cells",
     "load_dataset",
     "load_pairs",
     "select_names",
@@ -66,10 +83,16 @@ BENCHMARK_RESOLUTION = 0.05
 VARIANTS = ("unfurnished", "furnished")
 #: The one variant of the labelled layout: the map as given.
 LABELLED_VARIANT = "map"
+#: The two variants of the simulated layout: the drawn floor plan, the simulated robot map.
+SIMULATED_VARIANTS = ("plan", "scan")
 
 _GT_SUFFIX = "_gt_segmentation.png"
 _FURN_SUFFIX = "_furnitures.png"
 _LABEL_SUFFIX = "_gt.png"
+#: Files of one case of the simulated layout: the map of each variant (YAML stem), the ground truth.
+_CASE_MAPS = {"plan": "plan", "scan": "map"}
+_CASE_ROOMS = "gt_rooms.png"
+_CASE_DOORS = "gt_doors.json"
 
 
 @dataclass(frozen=True, eq=False)
@@ -107,6 +130,10 @@ class BenchmarkMap:
     gt_rooms : (M, N) ndarray of int32, optional
         Ground-truth room labels (0 = no room); default derived from
         ``gt_gray`` (:func:`topomap.evaluation.gt_rooms_from_image`).
+    gt_doors : tuple of dict, optional
+        True doors in map-frame metres (simulated layout, :func:`read_doors`):
+        ``{"p1": (x, y), "p2": (x, y), "rooms": (a, b)}``; None when the true
+        doors are the lines of ``gt_gray`` (ipa layout) or unknown.
     """
 
     name: str
@@ -120,6 +147,7 @@ class BenchmarkMap:
     load_path: Optional[Path] = None
     load_kwargs: Optional[dict] = None
     gt_rooms: Optional[np.ndarray] = field(default=None, repr=False)
+    gt_doors: Optional[tuple] = field(default=None, repr=False)
 
     def __post_init__(self):
         if self.unfurnished_gray is None:
@@ -189,8 +217,15 @@ def _open(path: Path):
     if path.is_dir():
         raise MapFileError(f"{path}: is a directory, not an image")
     try:
-        img = Image.open(path)
+        with warnings.catch_warnings():  # the size is checked against MAX_CELLS below
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+            img = Image.open(path)
+        from .io import _check_size
+
+        _check_size(str(path), img.size[1], img.size[0])
         img.load()
+    except Image.DecompressionBombError as exc:
+        raise MapTooLargeError(f"{path}: image too large to decode ({first_line(exc)})") from None
     except UnidentifiedImageError as exc:
         raise MapError(f"{path}: not a readable image ({exc})") from None
     except OSError as exc:
@@ -364,16 +399,23 @@ def _labelled_names(directory: Path) -> dict:
     return out
 
 
+def _simulated_cases(directory: Path) -> dict:
+    """``{CASE: folder}`` of the case folders (holding a ``gt_rooms.png``) of a simulated corpus."""
+    return {p.name: p for p in directory.iterdir()
+            if p.is_dir() and (p / _CASE_ROOMS).is_file()} if directory.is_dir() else {}
+
+
 def detect_layout(directory) -> str:
-    """Which data-set layout ``directory`` holds: ``"ipa"`` or ``"labelled"``.
+    """Which data-set layout ``directory`` holds: ``"ipa"``, ``"labelled"`` or ``"simulated"``.
 
     ``"ipa"`` if it holds a ``*_gt_segmentation.png``, else ``"labelled"`` if
-    it holds a ``NAME.png`` + ``NAME.yaml`` + ``NAME_gt.png`` triple.
+    it holds a ``NAME.png`` + ``NAME.yaml`` + ``NAME_gt.png`` triple, else
+    ``"simulated"`` if it holds case folders with a ``gt_rooms.png``.
 
     Raises
     ------
     BenchmarkNotFoundError
-        The directory does not exist or holds neither.
+        The directory does not exist or holds none of these.
     """
     directory = Path(directory)
     if not directory.is_dir():
@@ -382,9 +424,11 @@ def detect_layout(directory) -> str:
         return "ipa"
     if _labelled_names(directory):
         return "labelled"
+    if _simulated_cases(directory):
+        return "simulated"
     raise BenchmarkNotFoundError(
-        f"{directory}: no benchmark maps found (neither NAME_gt_segmentation.png files nor "
-        "NAME.png + NAME.yaml + NAME_gt.png triples)")
+        f"{directory}: no benchmark maps found (neither NAME_gt_segmentation.png files, "
+        "NAME.png + NAME.yaml + NAME_gt.png triples nor CASE/gt_rooms.png case folders)")
 
 
 def load_labelled(directory, *, names=None) -> list:
@@ -428,14 +472,165 @@ def load_labelled(directory, *, names=None) -> list:
     return maps
 
 
-def load_dataset(directory, *, variant: str = "unfurnished", names=None) -> list:
-    """Load the maps of either layout (:func:`detect_layout`).
+def _point(path, i, key, value) -> tuple:
+    try:
+        x, y = (float(v) for v in value)
+    except (TypeError, ValueError):
+        raise MapError(f"{path}: door {i}: {key} must be [x, y] in metres, got {value!r}"[:300]) from None
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise MapError(f"{path}: door {i}: {key} must be finite, got {value!r}")
+    return x, y
 
-    ``variant`` selects the map image of the ipa layout and is ignored for
-    the labelled layout (one variant). ``names``: names or shell patterns.
+
+def read_doors(path) -> tuple:
+    """Read the true doors of a simulated case (``gt_doors.json``).
+
+    Parameters
+    ----------
+    path : str or Path
+        ``{"doors": [{"p1": [x, y], "p2": [x, y], "rooms": [a, b], ...}, ...]}``:
+        the end points of each doorway in map-frame metres and the two
+        ground-truth rooms it joins (0 = outside; ``rooms`` may be absent).
+        Other keys (``id``, ``width``) are ignored.
+
+    Returns
+    -------
+    tuple of dict
+        ``{"p1": (x, y), "p2": (x, y), "rooms": (a, b) or ()}`` per door.
+
+    Raises
+    ------
+    MapFileError
+        The file is missing or unreadable.
+    MapError
+        It is not JSON of that shape (the message names the file and the door).
     """
-    if detect_layout(directory) == "ipa":
-        return load_benchmark(directory, variant=variant, names=names)
+    path = Path(path)
+    if not path.is_file():
+        raise MapFileError(f"{path}: file does not exist")
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise MapError(f"{path}: not valid JSON ({first_line(exc)})") from None
+    except OSError as exc:
+        raise MapFileError(f"{path}: cannot be read ({exc.strerror or exc})") from None
+    doors = data.get("doors") if isinstance(data, dict) else None
+    if not isinstance(doors, list):
+        raise MapError(f"{path}: expected an object with a list 'doors'")
+    out = []
+    for i, d in enumerate(doors):
+        if not isinstance(d, dict):
+            raise MapError(f"{path}: door {i}: expected an object, got {d!r}"[:300])
+        rooms = d.get("rooms", ())
+        try:
+            rooms = tuple(int(r) for r in rooms)
+        except (TypeError, ValueError):
+            raise MapError(f"{path}: door {i}: rooms must be integer labels, got {rooms!r}"[:300]) from None
+        out.append({"p1": _point(path, i, "p1", d.get("p1")), "p2": _point(path, i, "p2", d.get("p2")),
+                    "rooms": rooms})
+    return tuple(out)
+
+
+def door_cells(doors, grid) -> list:
+    """True doors in metres as pixel cell groups of ``grid`` (for :func:`topomap.evaluation.score_doors`).
+
+    Parameters
+    ----------
+    doors : iterable of dict
+        As :func:`read_doors` returns them.
+    grid : topomap.io.OccupancyGrid
+        The map the doors are drawn on (its origin and resolution).
+
+    Returns
+    -------
+    list of (K, 2) ndarray of int
+        The cells ``(row, col)`` of the digital line from ``p1`` to ``p2``
+        (:func:`topomap.geometry.line_pixels`), one array per door.
+    """
+    from .geometry import line_pixels
+
+    out = []
+    for d in doors:
+        (x1, y1), (x2, y2) = d["p1"], d["p2"]
+        r, c = line_pixels(grid.world_to_pixel(x1, y1), grid.world_to_pixel(x2, y2), grid.shape)
+        out.append(np.column_stack([r, c]))
+    return out
+
+
+def load_simulated(directory, *, variant: str = "scan", names=None) -> list:
+    """Load the cases of a simulated corpus (one folder per case).
+
+    Parameters
+    ----------
+    directory : str or Path
+        A folder of case folders ``CASE/`` holding ``map.pgm`` + ``map.yaml``
+        (the simulated robot map), ``plan.pgm`` + ``plan.yaml`` (the drawn
+        floor plan on the same grid), ``gt_rooms.png`` (room labels, 0 = no
+        room) and ``gt_doors.json`` (:func:`read_doors`).
+    variant : {"scan", "plan"}
+        Which map: ``map.yaml`` or ``plan.yaml``.
+    names : iterable of str or str, optional
+        Only these cases (names or shell patterns, see :func:`select_names`).
+
+    Returns
+    -------
+    list of BenchmarkMap
+        Sorted by case name; ``load_path`` the variant's YAML (loaded as
+        ``topomap segment CASE/map.yaml``, scored on the free cells of the
+        grid as loaded, the true rooms kept whole), ``gt_rooms`` the label
+        image, ``gt_doors`` the doors of ``gt_doors.json``.
+
+    Raises
+    ------
+    BenchmarkNotFoundError
+        No case folder, or a pattern matches no case.
+    MapFileError
+        A case lacks the variant's map or its ``gt_doors.json``.
+    MapError
+        A file is unreadable (bad JSON, not an image), or the label image
+        differs in size from the map.
+    ParameterError
+        ``variant`` is not one of :data:`SIMULATED_VARIANTS`.
+    """
+    if variant not in SIMULATED_VARIANTS:
+        raise ParameterError(f"<array>: variant of a simulated corpus must be 'plan' or 'scan', got {variant!r}")
+    directory = Path(directory)
+    found = _simulated_cases(directory)
+    if not found:
+        detect_layout(directory)  # raises the right message
+        raise BenchmarkNotFoundError(f"{directory}: no CASE/{_CASE_ROOMS} case folders")
+    maps = []
+    stem = _CASE_MAPS[variant]
+    for name in select_names(found, names, directory):
+        case = found[name]
+        yml, pgm = case / f"{stem}.yaml", case / f"{stem}.pgm"
+        for f in (yml, pgm):
+            if not f.is_file():
+                raise MapFileError(f"{f}: missing {variant} map of case {name}")
+        gt = case / _CASE_ROOMS
+        map_gray = read_gray(pgm)
+        labels = read_label_image(gt)
+        if labels.shape != map_gray.shape:
+            raise MapError(f"{gt}: label image shape {labels.shape} differs from map "
+                           f"{pgm.name} shape {map_gray.shape}")
+        maps.append(BenchmarkMap(name, variant, pgm, gt, map_gray, None, load_path=yml, load_kwargs={},
+                                 gt_rooms=labels, gt_doors=read_doors(case / _CASE_DOORS)))
+    return maps
+
+
+def load_dataset(directory, *, variant: Optional[str] = None, names=None) -> list:
+    """Load the maps of any layout (:func:`detect_layout`).
+
+    ``variant`` selects the map image of the ipa layout (``"unfurnished"``,
+    the default, or ``"furnished"``) or the map of a simulated case
+    (``"scan"``, the default, or ``"plan"``), and is ignored for the labelled
+    layout (one variant). ``names``: names or shell patterns.
+    """
+    layout = detect_layout(directory)
+    if layout == "ipa":
+        return load_benchmark(directory, variant=variant or VARIANTS[0], names=names)
+    if layout == "simulated":
+        return load_simulated(directory, variant=variant or "scan", names=names)
     return load_labelled(directory, names=names)
 
 

@@ -663,7 +663,7 @@ def _room_scores(labels, gt, scored, min_size) -> dict:
 
 def evaluate(labels, map_gray, gt_gray, *, pred_doors=None, resolution: float = 0.05,
              tol_m: float = 0.5, min_size: int = MIN_SIZE, door_map_gray=None,
-             scored=None, gt_rooms=None) -> dict:
+             scored=None, gt_rooms=None, true_doors=None, true_edges=None) -> dict:
     """All scores of one benchmark map.
 
     Parameters
@@ -677,9 +677,9 @@ def evaluate(labels, map_gray, gt_gray, *, pred_doors=None, resolution: float = 
         door lines black). None when the ground truth is a label image
         (``gt_rooms``); doors are then not scored.
     pred_doors : sequence of ((r1, c1), (r2, c2)), optional
-        Detected door segments in pixels; if given (and ``gt_gray`` is),
-        door and adjacency scores are added under ``door_*`` and
-        ``adjacency_*`` keys.
+        Detected door segments in pixels; if given (and ``gt_gray`` or
+        ``true_doors`` is), door and adjacency scores are added under
+        ``door_*`` and ``adjacency_*`` keys.
     resolution : float, optional
         Metres per pixel (benchmark: 0.05).
     tol_m : float, optional
@@ -696,6 +696,13 @@ def evaluate(labels, map_gray, gt_gray, *, pred_doors=None, resolution: float = 
     gt_rooms : (M, N) array_like of int, optional
         Ground-truth room labels; default :func:`gt_rooms_from_image` of
         ``gt_gray``.
+    true_doors : list of (K, 2) array_like of int, optional
+        The true doors as pixel cell groups, when the ground truth lists them
+        (e.g. :func:`topomap.datasets.door_cells` of a simulated case);
+        default the door lines of ``gt_gray`` (:func:`gt_doors_from_images`).
+    true_edges : iterable of (int, int), optional
+        The true room-adjacency edges (ground-truth labels) with
+        ``true_doors``; default :func:`true_adjacency` of ``true_doors``.
 
     Returns
     -------
@@ -723,14 +730,16 @@ def evaluate(labels, map_gray, gt_gray, *, pred_doors=None, resolution: float = 
         gt = np.asarray(gt_rooms)
     labels, gt, scored = _as_inputs(labels, gt, scored)
     out = _room_scores(labels, gt, scored, min_size)
-    if pred_doors is not None and gt_gray is not None:
+    if pred_doors is not None and true_doors is None and gt_gray is not None:
         dmap = map_gray if door_map_gray is None else np.asarray(door_map_gray)
         true_doors = gt_doors_from_images(dmap, gt_gray, room_min_size=min_size)
+    if pred_doors is not None and true_doors is not None:
         d = score_doors(pred_doors, true_doors, resolution=resolution, tol_m=tol_m)
         for k in ("precision", "recall", "f1", "tp", "fp", "fn"):
             out[f"door_{k}"] = d[k]
+        edges = true_adjacency(gt, true_doors) if true_edges is None else true_edges
         a = score_adjacency(labels, gt, room_adjacency_from_doors(labels, pred_doors),
-                            true_adjacency(gt, true_doors), scored=scored, min_size=min_size)
+                            edges, scored=scored, min_size=min_size)
         for k in ("precision", "recall", "f1"):
             out[f"adjacency_{k}"] = a[k]
     return out

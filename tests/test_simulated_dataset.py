@@ -1,0 +1,208 @@
+"""The simulated-corpus layout of topomap.datasets: one folder per case (map, plan, ground truth)."""
+
+import json
+import math
+import shutil
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from PIL import Image
+
+from topomap.benchmark import run_benchmark
+from topomap.cli import main
+from topomap.datasets import (BenchmarkNotFoundError, detect_layout, door_cells, load_dataset,
+                              load_simulated, read_doors)
+from topomap.errors import MapError, MapFileError, ParameterError
+from topomap.io import FREE, OCCUPIED, UNKNOWN, load_map, save_map
+
+RES = 0.05
+H, W = 80, 120
+ORIGIN = (-3.0, 1.5, 0.0)  # not (0, 0): a door placed with the wrong frame misses
+DOOR_ROWS, DOOR_COL = (35, 47), 60  # the gap in the wall between the rooms (cols 58..61)
+
+
+def _world(row, col):
+    """Centre of cell (row, col) in map-frame metres (ROS convention), written out by hand."""
+    return [ORIGIN[0] + (col + 0.5) * RES, ORIGIN[1] + (H - row - 0.5) * RES]
+
+
+def _cells(scan):
+    c = np.full((H, W), OCCUPIED, np.int8)
+    c[:2, :] = c[-2:, :] = UNKNOWN  # outside the building
+    c[5:75, 5:58] = FREE
+    c[5:75, 62:115] = FREE
+    c[DOOR_ROWS[0]:DOOR_ROWS[1], 58:62] = FREE
+    if scan:  # what a robot map adds: unknown patches, a clutter speck
+        c[10:14, 10:30] = UNKNOWN
+        c[60, 90] = OCCUPIED
+    return c
+
+
+def _gt():
+    g = np.zeros((H, W), np.uint16)
+    g[5:75, 5:60] = 1
+    g[5:75, 60:115] = 2
+    g[_cells(False) == OCCUPIED] = 0
+    return g
+
+
+def _door(row0=DOOR_ROWS[0], row1=DOOR_ROWS[1] - 1, col=DOOR_COL, rooms=(1, 2), i=1):
+    return {"id": i, "p1": _world(row0, col), "p2": _world(row1, col), "width": (row1 - row0 + 1) * RES,
+            "rooms": list(rooms)}
+
+
+def write_case(folder, doors=None):
+    folder.mkdir(parents=True)
+    save_map(_cells(True), folder / "map", resolution=RES, origin=ORIGIN)
+    save_map(_cells(False), folder / "plan", resolution=RES, origin=ORIGIN)
+    Image.fromarray(_gt()).save(folder / "gt_rooms.png")
+    doors = [_door()] if doors is None else doors
+    (folder / "gt_doors.json").write_text(json.dumps({"doors": doors}))
+    (folder / "gt_rooms.json").write_text(json.dumps({"rooms": [
+        {"id": 1, "kinds": ["bedroom"], "area": float((_gt() == 1).sum() * RES ** 2)},
+        {"id": 2, "kinds": ["kitchen"], "area": float((_gt() == 2).sum() * RES ** 2)}]}))
+    (folder / "simulation.json").write_text(json.dumps({"plan": folder.name, "seed": 0}))
+    return folder
+
+
+@pytest.fixture
+def corpus(tmp_path):
+    d = tmp_path / "corpus"
+    write_case(d / "house_a")
+    # the door 2 m off its doorway (in the wall of the right room's far side)
+    write_case(d / "house_b", doors=[_door(col=DOOR_COL + 40)])
+    return d
+
+
+def test_layout_and_both_variants(corpus):
+    assert detect_layout(corpus) == "simulated"
+    for variant, stem in (("scan", "map"), ("plan", "plan")):
+        maps = load_simulated(corpus, variant=variant)
+        assert [m.name for m in maps] == ["house_a", "house_b"]
+        m = maps[0]
+        assert m.variant == variant and m.load_path == corpus / "house_a" / f"{stem}.yaml"
+        grid = m.load()
+        ref = load_map(corpus / "house_a" / f"{stem}.yaml")
+        np.testing.assert_array_equal(grid.cells, ref.cells)  # the user's load
+        assert grid.origin == ORIGIN and m.gt_rooms.shape == grid.shape
+        assert set(np.unique(m.gt_rooms)) == {0, 1, 2}
+        np.testing.assert_array_equal(m.scored, grid.free)
+    assert load_dataset(corpus)[0].variant == "scan"
+    assert [m.name for m in load_dataset(corpus, variant="plan", names="*_b")] == ["house_b"]
+    with pytest.raises(ParameterError, match="'plan' or 'scan'"):
+        load_simulated(corpus, variant="furnished")
+
+
+def test_doors_in_metres_become_the_doorway_cells(corpus):
+    (d,) = read_doors(corpus / "house_a" / "gt_doors.json")
+    assert d["rooms"] == (1, 2)
+    grid = load_map(corpus / "house_a" / "map.yaml")
+    (cells,) = door_cells([d], grid)
+    assert cells.tolist() == [[r, DOOR_COL] for r in range(DOOR_ROWS[0], DOOR_ROWS[1])]
+
+
+def test_benchmark_rows_score_the_doors(corpus):
+    rows = run_benchmark(corpus, methods="topomap,watershed", variants="both")
+    assert [(r["method"], r["variant"], r["map"]) for r in rows] == [
+        (m, v, c) for m in ("topomap", "watershed") for v in ("plan", "scan") for c in ("house_a", "house_b")]
+    for r in rows:
+        assert r["error"] == "" and r["n_true_rooms"] == 2
+    top = {(r["variant"], r["map"]): r for r in rows if r["method"] == "topomap"}
+    for v in ("plan", "scan"):
+        a, b = top[(v, "house_a")], top[(v, "house_b")]
+        assert a["n_rooms"] == 2 and a["precision"] > 0.95 and a["recall"] > 0.95
+        # the true door is found where it is ...
+        assert (a["door_tp"], a["door_fp"], a["door_fn"]) == (1, 0, 0)
+        assert a["door_precision"] == a["door_recall"] == 1.0 and a["adjacency_f1"] == 1.0
+        # ... and not where it is not: the door of house_b is listed 2 m away from the doorway
+        assert (b["door_tp"], b["door_fp"], b["door_fn"]) == (0, 1, 1)
+    ws = [r for r in rows if r["method"] == "watershed"]
+    assert all(r["door_recall"] == 0.0 and r["n_doors"] == 0 for r in ws)
+
+
+def test_doors_to_the_outside_are_not_scored(tmp_path):
+    d = tmp_path / "c"
+    write_case(d / "one", doors=[_door(), _door(row0=5, row1=10, col=2, rooms=(1, 0), i=2)])
+    (r,) = run_benchmark(d, methods="topomap", variants="plan")
+    assert (r["door_tp"], r["door_fn"]) == (1, 0)
+
+
+def test_cli_variants(corpus, tmp_path):
+    out = tmp_path / "r.csv"
+    res = CliRunner().invoke(main, ["benchmark", str(corpus), "--methods", "topomap", "--variant", "plan",
+                                    "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    assert "| topomap | plan | 2 |" in res.output and "| scan |" not in res.output
+    res = CliRunner().invoke(main, ["benchmark", str(corpus), "--methods", "watershed"])
+    assert res.exit_code == 0, res.output
+    assert "| watershed | plan | 2 |" in res.output and "| watershed | scan | 2 |" in res.output
+    res = CliRunner().invoke(main, ["benchmark", str(corpus), "--variant", "furnished"])
+    assert res.exit_code == 1 and "variant 'furnished'" in res.output
+    assert len(res.output.strip().splitlines()) == 1
+
+
+def _cli_error(corpus, variant="both"):
+    res = CliRunner().invoke(main, ["benchmark", str(corpus), "--methods", "watershed", "--variant", variant])
+    assert res.exit_code == 1, res.output
+    lines = res.output.strip().splitlines()
+    assert len(lines) == 1, res.output
+    return lines[0]
+
+
+@pytest.mark.parametrize("text, msg", [
+    ("{not json", "not valid JSON"),
+    ('{"rooms": []}', "list 'doors'"),
+    ('{"doors": [{"p1": [0, 1], "p2": "x"}]}', "door 0: p2"),
+    ('{"doors": [{"p1": [0, NaN], "p2": [1, 1]}]}', "door 0: p1 must be finite"),
+    ('{"doors": [{"p1": [0, 1], "p2": [1, 1], "rooms": ["a", 2]}]}', "rooms must be integer"),
+])
+def test_bad_door_files(corpus, text, msg):
+    bad = corpus / "house_b" / "gt_doors.json"
+    bad.write_text(text)
+    with pytest.raises(MapError, match=msg):
+        read_doors(bad)
+    line = _cli_error(corpus)
+    assert str(bad) in line and msg in line
+
+
+def test_missing_files(corpus):
+    (corpus / "house_b" / "gt_doors.json").unlink()
+    with pytest.raises(MapFileError, match="gt_doors.json: file does not exist"):
+        load_simulated(corpus)
+    assert str(corpus / "house_b" / "gt_doors.json") in _cli_error(corpus)
+    shutil.rmtree(corpus / "house_b")
+    (corpus / "house_a" / "map.yaml").unlink()
+    assert len(load_simulated(corpus, variant="plan")) == 1  # the plan variant needs no scan
+    line = _cli_error(corpus, "scan")
+    assert str(corpus / "house_a" / "map.yaml") in line and "missing scan map" in line
+
+
+def test_bad_label_image(corpus):
+    bad = corpus / "house_a" / "gt_rooms.png"
+    bad.write_bytes(b"not a png")
+    assert str(bad) in _cli_error(corpus)
+    Image.fromarray(np.zeros((5, 5), np.uint16)).save(bad)
+    line = _cli_error(corpus)
+    assert str(bad) in line and "differs from map" in line
+
+
+def test_not_a_corpus(tmp_path):
+    (tmp_path / "case").mkdir()
+    (tmp_path / "case" / "map.yaml").write_text("image: map.pgm\n")
+    with pytest.raises(BenchmarkNotFoundError, match="case folders"):
+        detect_layout(tmp_path)
+
+
+def test_ipa_variants_are_refused_on_a_corpus_and_the_other_way(corpus, tmp_path):
+    with pytest.raises(ParameterError, match="variant 'unfurnished'"):
+        run_benchmark(corpus, methods="watershed", variants="unfurnished")
+    ipa = tmp_path / "ipa"
+    ipa.mkdir()
+    free = np.where(_cells(False) == FREE, 255, 0).astype(np.uint8)
+    Image.fromarray(free).save(ipa / "m.png")
+    Image.fromarray(free).save(ipa / "m_furnitures.png")
+    Image.fromarray(free).save(ipa / "m_gt_segmentation.png")
+    with pytest.raises(ParameterError, match="variant 'scan'"):
+        run_benchmark(ipa, methods="watershed", variants=["scan"])
+    assert math.isfinite(run_benchmark(ipa, methods="watershed", variants="both")[0]["precision"])
