@@ -1,0 +1,137 @@
+#!/usr/bin/env python
+"""The simulated corpus as a benchmark: every method on the drawn plans and on their simulated scans.
+
+Run (not a test)::
+
+    python benchmarks/simulated.py CORPUS [--jobs 2] [--maps 'a*,b*'] [--methods topomap,paper]
+        [--csv rows.csv] [--out benchmarks/sections/89_simulated.md]
+
+``CORPUS`` is what ``topomap simulate PLAN... -o CORPUS`` writes: one folder
+per case with the simulated robot map (``map.yaml``), the floor plan drawn
+on the same grid (``plan.yaml``), the room labels (``gt_rooms.png``) and the
+doors (``gt_doors.json``). One :func:`topomap.benchmark.run_benchmark` call
+(``topomap benchmark CORPUS --variant both``) scores every method on both
+variants:
+
+* ``plan``: the drawn floor plan, as a user loads ``CASE/plan.yaml``;
+* ``scan``: the simulated robot map, as a user loads ``CASE/map.yaml``.
+
+Per method and variant the section gives the mean precision / recall of
+Bormann et al. under the **original protocol** (true rooms whole; segments
+on the free cells of the map as loaded), the rooms reported against the
+true rooms (summed over the cases), and door precision / recall pooled
+over the cases (detected doors within 0.5 m of a true door between two
+rooms, matched one to one: the true positives of every case over all
+detections, resp. over all true doors). ``--maps`` takes a fixed subset
+(names or shell patterns), for a run that fits the time at hand.
+"""
+
+from __future__ import annotations
+
+import logging
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _section  # noqa: E402
+from _section import _commit, _machine  # noqa: E402
+
+log = logging.getLogger("benchmarks.simulated")
+
+#: topomap's methods and the baselines of topomap.segmentation.METHODS (voronoi about 1 s a map).
+METHODS = "topomap,paper,voronoi,watershed,morphological,distance"
+
+
+def _mean_pct(rows, key) -> str:
+    v = np.array([float(r[key]) for r in rows], float)
+    v = v[np.isfinite(v)]
+    return f"{100 * v.mean():.1f}" if v.size else "–"
+
+
+def _ratio(num, den) -> str:
+    return f"{100 * num / den:.1f}" if den else "–"
+
+
+def table(rows) -> str:
+    """The section's table, one line per method and variant (order of the rows)."""
+    groups = {}
+    for r in rows:
+        groups.setdefault((r["method"], r["variant"]), []).append(r)
+    order = sorted(groups, key=lambda k: (k[1] != "plan", list(dict.fromkeys(r["method"] for r in rows)).index(k[0])))
+    out = ["| method | variant | cases | P (%) | R (%) | rooms found / true | door P (%) | door R (%) "
+           "| median s / case | failed |",
+           "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
+    for key in order:
+        g = groups[key]
+        ok = [r for r in g if not r.get("error")]
+        tp = sum(int(r["door_tp"]) for r in ok)
+        n_pred = sum(int(r["n_doors"]) for r in ok)
+        n_true = sum(int(r["door_tp"]) + int(r["door_fn"]) for r in ok)
+        doorless = n_pred == 0
+        rooms = f"{sum(int(r['n_rooms']) for r in ok)} / {sum(int(r['n_true_rooms']) for r in ok)}" if ok else "–"
+        secs = np.median([float(r["runtime_s"]) for r in g]) if g else float("nan")
+        out.append(f"| {key[0]} | {key[1]} | {len(ok)} | {_mean_pct(ok, 'precision')} | {_mean_pct(ok, 'recall')} "
+                   f"| {rooms} | {'–' if doorless else _ratio(tp, n_pred)} | {_ratio(tp, n_true)} "
+                   f"| {secs:.2f} | {len(g) - len(ok)} |")
+    return "\n".join(out) + "\n"
+
+
+def main(argv=None) -> int:
+    from topomap.benchmark import run_benchmark, write_rows
+
+    ap = _section.parser(__doc__, "the simulated corpus (one folder per case)", "89_simulated.md")
+    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--maps", default=None, help="comma-separated case names or shell patterns (default all)")
+    ap.add_argument("--methods", default=METHODS)
+    ap.add_argument("--csv", type=Path, default=None, help="also save the per-case rows here")
+    a = ap.parse_args(argv)
+    if a.directory is None or not Path(a.directory).is_dir():
+        sys.exit(f"error: no corpus directory {a.directory or ''} (pass the folder topomap simulate wrote)")
+    logging.basicConfig(level=logging.WARNING, format="%(message)s")
+    log.setLevel(logging.INFO)
+    t0 = time.perf_counter()
+
+    def progress(done, total, row):
+        if done % 20 == 0 or done == total or row.get("error"):
+            log.info("%d / %d %s %s %s %s", done, total, row["method"], row["variant"], row["map"],
+                         row.get("error", ""))
+
+    rows = run_benchmark(a.directory, methods=a.methods, variants="both", jobs=a.jobs, maps=a.maps,
+                         progress=progress)
+    if a.csv is not None:
+        write_rows(rows, a.csv)
+    n_cases = len({r["map"] for r in rows})
+    cmd = f"python benchmarks/simulated.py CORPUS --jobs {a.jobs}"
+    if a.maps:
+        cmd += f" --maps '{a.maps}'"
+    if a.methods != METHODS:
+        cmd += f" --methods {a.methods}"
+    tab = table(rows)
+    errors = sorted({f"{r['map']} ({r['variant']}): {r['error']}" for r in rows if r.get("error")})
+    err_text = ("\nFailed runs:\n\n" + "\n".join(f"- {e}" for e in errors[:10]) + "\n") if errors else ""
+    text = f"""## Simulated maps of home floor plans
+
+`{cmd}` (the folder `topomap simulate` wrote as `CORPUS`), {n_cases} cases, commit `{_commit()}`; {_machine()}.
+
+Each case is a home floor plan twice, on one grid: the plan as drawn
+(**plan**: walls, free rooms, unknown outside) and the robot map a laser
+SLAM run through it gives (**scan**), with the plan's rooms and doors as
+the ground truth. Each map is loaded as `topomap segment CASE/plan.yaml`
+(or `CASE/map.yaml`) loads it. P / R: mean precision / recall of Bormann
+et al. over the cases, **original protocol** (true rooms whole; segments on
+the free cells of the map as loaded; segments and rooms of 100 cells or
+fewer ignored). Rooms: reported (room-graph nodes) / true, summed over the
+cases. Door P / R: detected doors within 0.5 m of a true door between two
+rooms, matched one to one, pooled over the cases (–: the method reports
+no doors). Runtimes with {a.jobs} parallel jobs.
+
+{tab}{err_text}"""
+    _section.write(a.out, text, tab, time.perf_counter() - t0)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
