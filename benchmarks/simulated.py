@@ -114,7 +114,7 @@ def main(argv=None) -> int:
     err_text = ("\nFailed runs:\n\n" + "\n".join(f"- {e}" for e in errors[:10]) + "\n") if errors else ""
     text = f"""## Simulated maps of home floor plans
 
-`{cmd}` (the folder `topomap simulate` wrote as `CORPUS`), {n_cases} cases, commit `{_commit()}`; {_machine()}.
+`{cmd}` (the folder `topomap simulate` wrote as `CORPUS`), {n_cases} case{"" if n_cases == 1 else "s"}, commit `{_commit()}`; {_machine()}.
 
 Each case is a home floor plan twice, on one grid: the plan as drawn
 (**plan**: walls, free rooms, unknown outside) and the robot map a laser

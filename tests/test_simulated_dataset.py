@@ -206,3 +206,25 @@ def test_ipa_variants_are_refused_on_a_corpus_and_the_other_way(corpus, tmp_path
     with pytest.raises(ParameterError, match="variant 'scan'"):
         run_benchmark(ipa, methods="watershed", variants=["scan"])
     assert math.isfinite(run_benchmark(ipa, methods="watershed", variants="both")[0]["precision"])
+
+
+def test_the_section_script(corpus, tmp_path):
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
+    import simulated
+
+    out, rows = tmp_path / "s.md", tmp_path / "rows.csv"
+    assert simulated.main([str(corpus), "--methods", "topomap,watershed", "--jobs", "1", "--out", str(out),
+                           "--csv", str(rows)]) == 0
+    text = out.read_text()
+    assert "`python benchmarks/simulated.py CORPUS --jobs 1 --methods topomap,watershed`" in text
+    assert str(corpus) not in text  # no machine path in the page
+    # house_a's door found, house_b's listed 2 m off: pooled door P = R = 1 of 2
+    assert "| topomap | plan | 2 | " in text and "| 4 / 4 | 50.0 | 50.0 |" in text
+    assert "| watershed | scan | 2 | " in text and "| – | 0.0 |" in text
+    assert rows.read_text().count("\n") == 1 + 2 * 2 * 2
+    assert simulated.main([str(corpus), "--maps", "house_a", "--methods", "topomap", "--jobs", "1",
+                           "--out", str(out)]) == 0
+    assert "`CORPUS`), 1 case, commit" in out.read_text() and "--maps 'house_a'" in out.read_text()
