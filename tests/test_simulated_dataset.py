@@ -156,6 +156,9 @@ def _cli_error(corpus, variant="both"):
     ('{"doors": [{"p1": [0, 1], "p2": "x"}]}', "door 0: p2"),
     ('{"doors": [{"p1": [0, NaN], "p2": [1, 1]}]}', "door 0: p1 must be finite"),
     ('{"doors": [{"p1": [0, 1], "p2": [1, 1], "rooms": ["a", 2]}]}', "rooms must be integer"),
+    ('{"doors": [{"p1": [0, 1], "p2": [1, 1], "rooms": "12"}]}', "rooms must be integer"),
+    ('{"doors": [{"p1": [0, 1], "p2": [1, 1], "rooms": [1.5, 2]}]}', "rooms must be integer"),
+    ('[1, 2]', "list 'doors'"),
 ])
 def test_bad_door_files(corpus, text, msg):
     bad = corpus / "house_b" / "gt_doors.json"

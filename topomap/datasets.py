@@ -523,6 +523,8 @@ def read_doors(path) -> tuple:
             raise MapError(f"{path}: door {i}: expected an object, got {d!r}"[:300])
         rooms = d.get("rooms", ())
         try:
+            if not isinstance(rooms, (list, tuple)) or any(isinstance(r, (bool, float)) for r in rooms):
+                raise TypeError
             rooms = tuple(int(r) for r in rooms)
         except (TypeError, ValueError):
             raise MapError(f"{path}: door {i}: rooms must be integer labels, got {rooms!r}"[:300]) from None
