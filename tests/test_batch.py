@@ -228,7 +228,7 @@ def test_single_map_rerun_is_skipped(tmp_path):
     p = png(tmp_path, "a.png", T.gray(T.two_rooms().array))
     assert invoke("segment", p, "-o", tmp_path / "o").exit_code == 0
     r = invoke("segment", p, "-o", tmp_path / "o")
-    assert r.exit_code == 0 and "2 rooms, 1 doors" in r.stdout and "up to date" in r.stdout
+    assert r.exit_code == 0 and "2 rooms, 1 door" in r.stdout and "up to date" in r.stdout
 
 
 _KILLER = textwrap.dedent("""
