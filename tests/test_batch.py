@@ -177,7 +177,7 @@ def test_internal_error_in_a_batch_exits_3(tmp_path, monkeypatch):
 def test_scheduler_without_dask_is_a_clear_error(tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "distributed", None)
     maps = [png(tmp_path, f"{s}.png", T.gray(T.two_rooms().array)) for s in "ab"]
-    with pytest.raises(MissingDependencyError, match=r"topomap\[dask\]"):
+    with pytest.raises(MissingDependencyError, match=r"topomap-rooms\[dask\]"):
         segment_many(maps, tmp_path / "out", scheduler="tcp://127.0.0.1:1")
     r = invoke("segment", *maps, "-o", tmp_path / "out", "--scheduler", "tcp://127.0.0.1:1")
     assert r.exit_code == 1 and r.stderr.startswith("error: ") and "topomap[dask]" in r.stderr
