@@ -180,7 +180,7 @@ def test_scheduler_without_dask_is_a_clear_error(tmp_path, monkeypatch):
     with pytest.raises(MissingDependencyError, match=r"topomap-rooms\[dask\]"):
         segment_many(maps, tmp_path / "out", scheduler="tcp://127.0.0.1:1")
     r = invoke("segment", *maps, "-o", tmp_path / "out", "--scheduler", "tcp://127.0.0.1:1")
-    assert r.exit_code == 1 and r.stderr.startswith("error: ") and "topomap[dask]" in r.stderr
+    assert r.exit_code == 1 and r.stderr.startswith("error: ") and "topomap-rooms[dask]" in r.stderr
 
 
 def test_bad_options(tmp_path):
