@@ -4,7 +4,7 @@
 An example, not part of the topomap package. Running it needs a ROS 2
 installation (``rclpy``, ``nav_msgs``, ``sensor_msgs``,
 ``visualization_msgs``; source its ``setup.bash``) and
-``pip install topomap[ros]`` in the same Python::
+``pip install 'topomap-rooms[ros]'`` in the same Python::
 
     python3 examples/ros2_node.py
 

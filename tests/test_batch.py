@@ -177,10 +177,10 @@ def test_internal_error_in_a_batch_exits_3(tmp_path, monkeypatch):
 def test_scheduler_without_dask_is_a_clear_error(tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "distributed", None)
     maps = [png(tmp_path, f"{s}.png", T.gray(T.two_rooms().array)) for s in "ab"]
-    with pytest.raises(MissingDependencyError, match=r"topomap\[dask\]"):
+    with pytest.raises(MissingDependencyError, match=r"topomap-rooms\[dask\]"):
         segment_many(maps, tmp_path / "out", scheduler="tcp://127.0.0.1:1")
     r = invoke("segment", *maps, "-o", tmp_path / "out", "--scheduler", "tcp://127.0.0.1:1")
-    assert r.exit_code == 1 and r.stderr.startswith("error: ") and "topomap[dask]" in r.stderr
+    assert r.exit_code == 1 and r.stderr.startswith("error: ") and "topomap-rooms[dask]" in r.stderr
 
 
 def test_bad_options(tmp_path):
@@ -228,7 +228,7 @@ def test_single_map_rerun_is_skipped(tmp_path):
     p = png(tmp_path, "a.png", T.gray(T.two_rooms().array))
     assert invoke("segment", p, "-o", tmp_path / "o").exit_code == 0
     r = invoke("segment", p, "-o", tmp_path / "o")
-    assert r.exit_code == 0 and "2 rooms, 1 doors" in r.stdout and "up to date" in r.stdout
+    assert r.exit_code == 0 and "2 rooms, 1 door" in r.stdout and "up to date" in r.stdout
 
 
 _KILLER = textwrap.dedent("""

@@ -70,7 +70,7 @@ def test_odd_but_valid_map_exit_0(tmp_path, name):
     out = tmp_path / "out"
     r = invoke("segment", path, "-o", out)
     assert r.exit_code == 0, r.stderr
-    assert f"{n_rooms} rooms, {n_doors} doors" in r.stdout
+    assert f"{cli._count(n_rooms, 'room')}, {cli._count(n_doors, 'door')}" in r.stdout
     assert ("fragment" in r.stdout) == (n_frag > 0)
     assert {"labels.png", "overlay.png", "rooms.graphml", "rooms.json"} <= {p.name for p in out.iterdir()}
     labels = np.asarray(Image.open(out / "labels.png"))
@@ -361,4 +361,4 @@ def test_segment_summary_reports_fragments(tmp_path):
     Image.fromarray(np.where(free, 254, 0).astype(np.uint8)).save(p)
     r = CliRunner().invoke(main, ["segment", str(p), "-o", str(tmp_path / "o")])
     assert r.exit_code == 0, r.output
-    assert "1 rooms, 0 doors, 1 fragment (0.0025 m²)" in r.output
+    assert "1 room, 0 doors, 1 fragment (0.0025 m²)" in r.output

@@ -1,9 +1,18 @@
-"""The documentation builds, and the graph-attributes page matches the code."""
+"""The documentation builds, the graph-attributes page matches the code, the
+index and the site's navigation list every page, and the command outputs the
+pages show are what the commands print.
+
+``python tests/test_docs.py`` rewrites those outputs (after a change to what a
+command prints).
+"""
 
 import importlib.util
+import os
 import re
+import shlex
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -120,3 +129,97 @@ def test_every_candidate_status_is_explained():
     assert len(statuses) == 16
     missing = [s for s in sorted(statuses) if f"`{s}`" not in page]
     assert not missing, f"how-it-works.md does not explain candidate status {missing}"
+
+
+# --------------------------------------------------------------------------
+# The index and the navigation
+
+def _pages():
+    return sorted(p.name for p in (ROOT / "docs").glob("*.md"))
+
+
+def test_every_page_is_in_the_nav_and_on_the_index():
+    yaml = pytest.importorskip("yaml")
+    nav = yaml.safe_load((ROOT / "mkdocs.yml").read_text(encoding="utf-8"))["nav"]
+    in_nav = [page for item in nav for page in item.values()]
+    assert sorted(in_nav) == _pages(), "mkdocs.yml nav: not every page of docs/ exactly once"
+    index = (ROOT / "docs" / "index.md").read_text(encoding="utf-8")
+    linked = set(re.findall(r"\]\(([\w-]+\.md)\)", index))
+    missing = set(_pages()) - {"index.md"} - linked
+    assert not missing, f"docs/index.md links no {sorted(missing)}"
+
+
+def test_every_command_is_on_the_index_and_on_the_cli_page():
+    from topomap.cli import main
+
+    index = (ROOT / "docs" / "index.md").read_text(encoding="utf-8")
+    row = next(line for line in index.splitlines() if line.startswith("| [Command line]"))
+    cli_page = (ROOT / "docs" / "cli.md").read_text(encoding="utf-8")
+    for name in main.commands:
+        assert f"`{name}`" in row or f"`topomap {name}`" in row, f"docs/index.md: command {name} not listed"
+        assert f"## `topomap {name}`" in cli_page, f"docs/cli.md: no section for topomap {name}"
+
+
+# --------------------------------------------------------------------------
+# Command outputs shown on the pages
+
+#: A shown session: a ```text block whose first line is "$ topomap ...".
+_SESSION = re.compile(r"^```text\n(\$ topomap .*?)^```$", re.M | re.S)
+#: Pages with such sessions; each page's sessions run in order in one fresh folder.
+SESSION_PAGES = ("cli.md",)
+
+
+def _run_session(block: str) -> str:
+    """``block`` with the output under each ``$ topomap ...`` line replaced by what it prints now."""
+    from click.testing import CliRunner
+
+    from topomap.cli import main
+
+    out = []
+    for line in block.splitlines():
+        if not line.startswith("$ "):
+            continue
+        argv = shlex.split(line[2:])
+        assert argv[0] == "topomap", line
+        r = CliRunner().invoke(main, argv[1:])
+        assert r.exit_code == 0, f"{line}: exit {r.exit_code}\n{r.output}"
+        out.append(f"{line}\n{r.stdout}")
+    return "".join(out)
+
+
+def _render(page: Path) -> str:
+    """The text of ``page`` with every shown session re-run, in a fresh folder."""
+    text = page.read_text(encoding="utf-8")
+    here = os.getcwd()
+    with tempfile.TemporaryDirectory() as tmp:
+        os.chdir(tmp)
+        try:
+            return _SESSION.sub(lambda m: "```text\n" + _run_session(m.group(1)) + "```", text)
+        finally:
+            os.chdir(here)
+
+
+@pytest.mark.parametrize("name", SESSION_PAGES)
+def test_shown_command_output_is_what_the_commands_print(name):
+    page = ROOT / "docs" / name
+    text = page.read_text(encoding="utf-8")
+    shown = _SESSION.findall(text)
+    assert shown, f"docs/{name}: no shown command output"
+    rendered = _render(page)
+    for old, new in zip(shown, _SESSION.findall(rendered)):
+        assert old == new, (f"docs/{name}: the output shown differs from what the command prints "
+                            f"(python tests/test_docs.py rewrites it):\n--- shown\n{old}--- printed\n{new}")
+
+
+def test_cli_page_shows_the_demo_plan_tour_and_export():
+    commands = {shlex.split(line)[2] for block in _SESSION.findall((ROOT / "docs" / "cli.md").read_text("utf-8"))
+                for line in block.splitlines() if line.startswith("$ ")}
+    assert {"demo", "plan", "tour", "export"} <= commands
+
+
+if __name__ == "__main__":
+    sys.path.insert(0, str(ROOT))
+    for name in SESSION_PAGES:
+        page = ROOT / "docs" / name
+        page.write_text(_render(page), encoding="utf-8")
+        print(f"docs/{name}: shown command output rewritten")

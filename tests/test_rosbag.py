@@ -288,7 +288,7 @@ def test_without_rosbags_a_clear_error(tmp_path, monkeypatch):
         monkeypatch.setitem(sys.modules, mod, None)  # import fails as if not installed
     with pytest.raises(MissingDependencyError) as err:
         load_map(bag)
-    assert "pip install topomap[ros]" in _one_line_naming(err.value, bag)
+    assert "pip install 'topomap-rooms[ros]'" in _one_line_naming(err.value, bag)
     assert isinstance(err.value, ImportError)
 
 

@@ -323,7 +323,7 @@ def _client(scheduler):
         from distributed import Client
     except ImportError:
         raise MissingDependencyError("running on a Dask cluster needs dask.distributed: "
-                                     "pip install 'topomap[dask]'") from None
+                                     "pip install 'topomap-rooms[dask]'") from None
     if isinstance(scheduler, Client):
         return scheduler, False
     if not isinstance(scheduler, str) or not scheduler.strip():
@@ -447,7 +447,7 @@ def segment_many(paths: Sequence, out, *, jobs: int = 1, scheduler=None, overwri
     scheduler : str or distributed.Client, optional
         Run on this Dask distributed cluster instead (a scheduler address
         like ``"tcp://10.0.0.5:8786"``, or a client); ``jobs`` must then be 1.
-        Needs ``pip install 'topomap[dask]'`` here and topomap on every
+        Needs ``pip install 'topomap-rooms[dask]'`` here and topomap on every
         worker; maps and ``out`` on a file system the workers share.
     overwrite : bool, optional
         Run every map again, and replace results this batch did not write.

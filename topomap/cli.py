@@ -52,7 +52,7 @@ def _fail(exc, what="") -> int:
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
 @click.option("--debug", is_flag=True, help="Print tracebacks of errors.")
 @click.option("-v", "--verbose", count=True, help="More log output (-v info, -vv debug).")
-@click.version_option(package_name="topomap")
+@click.version_option(package_name="topomap-rooms")
 def main(debug, verbose):
     """Rooms, doors and a room-door graph from occupancy grid maps."""
     _State.debug = debug
@@ -225,14 +225,19 @@ def _id_changes(path) -> str:
     return RoomChanges.from_dict(json.loads(Path(path).read_text(encoding="utf-8"))).summary()
 
 
+def _count(n, noun) -> str:
+    """``"1 room"``, ``"0 rooms"``, ``"2 rooms"``: ``n`` and ``noun``, plural unless ``n`` is 1."""
+    return f"{n} {noun}{'' if n == 1 else 's'}"
+
+
 def _summary(row) -> str:
     """"12 rooms, 11 doors", and ", 40 fragments (1.3 m²)" when free regions
     too small to be a room (scan specks) were set apart (``row``: a summary row of
     :func:`topomap.segment_many`)."""
-    text = f"{row['rooms']} rooms, {row['doors']} doors"
+    text = f"{_count(row['rooms'], 'room')}, {_count(row['doors'], 'door')}"
     nf = row.get("fragments") or 0
     if nf:
-        text += f", {nf} fragment{'s' if nf > 1 else ''} ({row['fragment_area_m2']:.4g} m²)"
+        text += f", {_count(nf, 'fragment')} ({row['fragment_area_m2']:.4g} m²)"
     return text
 
 
@@ -410,7 +415,7 @@ def demo_cmd(outdir, method):
         seg = _segment_one(example_map_path(), outdir, None, method, True)
     except Exception as exc:  # noqa: BLE001
         sys.exit(_fail(exc))
-    click.echo(f"example office: {seg.n_rooms} rooms, {len(seg.doors)} doors "
+    click.echo(f"example office: {_count(seg.n_rooms, 'room')}, {_count(len(seg.doors), 'door')} "
                f"(threshold {seg.threshold if seg.threshold is not None else float('nan'):.2f} m) -> {outdir}")
     for d in seg.doors:
         click.echo(f"  door {d.id}: rooms {d.rooms[0]}-{d.rooms[1]}, width {d.width:.2f} m, "
@@ -593,7 +598,7 @@ def export_cmd(source, target):
         save_graph(G, target)
     except Exception as exc:  # noqa: BLE001
         sys.exit(_fail(exc, _naming(source, exc) and _naming(target, exc)))
-    click.echo(f"{source} -> {target}: {G.number_of_nodes()} rooms, {G.number_of_edges()} doors")
+    click.echo(f"{source} -> {target}: {_count(G.number_of_nodes(), 'room')}, {_count(G.number_of_edges(), 'door')}")
 
 
 if __name__ == "__main__":

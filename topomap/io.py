@@ -698,7 +698,7 @@ def load_map(path, *, resolution=None, origin=None, negate=None, occupied_thresh
         ``free_thresh``, ``mode`` optional; ``image`` relative to the YAML
         file), any image Pillow reads (PGM, PNG, ...), or a ROS bag (``.bag``,
         ``.mcap``, ``.db3`` or a ROS 2 bag directory), read by
-        :func:`topomap.ros.read_map` (needs ``pip install topomap[ros]``).
+        :func:`topomap.ros.read_map` (needs ``pip install 'topomap-rooms[ros]'``).
     resolution : float, optional
         Metres per pixel; overrides the YAML. Images default to
         :data:`DEFAULT_RESOLUTION` (0.05 m/px).

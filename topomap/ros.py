@@ -1,7 +1,7 @@
 """ROS without a ROS installation: maps from bags, results as ROS messages and bags.
 
 Built on the pure-Python `rosbags <https://pypi.org/project/rosbags/>`_
-library (``pip install topomap[ros]``), imported only when a function here
+library (``pip install 'topomap-rooms[ros]'``), imported only when a function here
 needs it. It reads and writes ROS 1 bags (``.bag``) and ROS 2 bags (a
 directory with ``metadata.yaml`` and sqlite3 ``.db3`` or ``.mcap`` storage,
 or a single ``.db3`` / ``.mcap`` file), with the standard message types.
@@ -101,7 +101,7 @@ def _rosbags(name: str):
     except ImportError:
         raise MissingDependencyError(
             f"{name}: reading and writing ROS bags and messages needs the 'rosbags' package: "
-            f"pip install topomap[ros]") from None
+            f"pip install 'topomap-rooms[ros]'") from None
     import rosbags
 
     return rosbags
@@ -387,7 +387,7 @@ def read_map(path, *, topic: Optional[str] = None, time: Optional[float] = None,
         The message holds no usable map (see :func:`grid_from_message`), or
         ``time`` is not a number >= 0.
     MissingDependencyError
-        ``rosbags`` is not installed (``pip install topomap[ros]``).
+        ``rosbags`` is not installed (``pip install 'topomap-rooms[ros]'``).
     """
     from .io import _as_float, _check_thresholds
 
