@@ -614,6 +614,32 @@ def test_graphml_with_entities_refused(tmp_path):
         load_graph(p)
 
 
+@pytest.mark.parametrize("lead", [70_000, 2_000_000])
+def test_graphml_entity_behind_a_long_comment_refused(tmp_path, lead):
+    """A DOCTYPE is refused wherever it stands, not only in the first 64 KB: behind a long
+    comment an internal entity would otherwise reach the room names."""
+    from topomap.errors import GraphFormatError
+    from topomap.export import load_graph
+
+    p = tmp_path / "late.graphml"
+    p.write_text('<?xml version="1.0"?><!--' + "x" * lead + '--><!DOCTYPE g [<!ENTITY a "INJECTED">]>'
+                 '<graphml xmlns="http://graphml.graphdrawing.org/xmlns"><graph edgedefault="undirected">'
+                 '<node id="&a;"/></graph></graphml>')
+    with pytest.raises(GraphFormatError, match="DOCTYPE or entity") as ei:
+        load_graph(p)
+    assert str(p) in str(ei.value) and len(str(ei.value).splitlines()) == 1
+
+
+def test_graphml_without_namespace_still_reads(tmp_path):
+    from topomap.export import load_graph
+
+    p = tmp_path / "bare.graphml"
+    p.write_text('<?xml version="1.0"?><graphml><graph edgedefault="undirected">'
+                 '<node id="1"/><node id="2"/><edge source="1" target="2"/></graph></graphml>')
+    G = load_graph(p)
+    assert sorted(G.nodes) == [1, 2] and G.number_of_edges() == 1
+
+
 @pytest.mark.parametrize("bad", [[1, 2], {"type": "FeatureCollection", "features": [[1]]},
                                  {"type": "FeatureCollection", "features": [{"properties": {"kind": "room"}}]}])
 def test_odd_geojson_is_a_format_error(tmp_path, bad):
