@@ -893,7 +893,7 @@ def integrate(shape: tuple, poses: np.ndarray, ranges: np.ndarray, resolution: f
     rad_px = np.hypot(yy, xx)
     mapx = (rad_px / step).astype(np.float32)
     mapx[rad_px * resolution > options.range_max] = -10.0  # off the polar image: no update
-    ang_base = (np.arctan2(-yy, xx) / dth).astype(np.float32)  # beams, counter-clockwise
+    ang_base = np.mod(np.arctan2(-yy, xx) / dth, n360).astype(np.float32)  # beams, counter-clockwise
     rho = np.arange(n_rad, dtype=np.float32) * step * resolution
     half = np.float32(resolution / 2)
     lut = np.array([0.0, _logit(options.miss_probability), _logit(options.hit_probability)], np.float32)
@@ -908,17 +908,20 @@ def integrate(shape: tuple, poses: np.ndarray, ranges: np.ndarray, resolution: f
         if a1 <= 0 or b1 <= 0 or a0 >= H or b0 >= W:
             continue
         rng_k = ranges[k]
-        state = np.zeros((n360, n_rad), np.uint8)
+        state = np.zeros((2 * n360, n_rad), np.uint8)  # a full turn twice: no wrap in the look-up
         ok = ~np.isnan(rng_k)
-        rk = np.where(np.isfinite(rng_k), rng_k, np.inf)[ok][:, None]
-        st = np.where(rho[None, :] < rk - half, 1, np.where(rho[None, :] <= rk + half, 2, 0))
-        state[rows[ok]] = st.astype(np.uint8)
-        mapy = ang_base - np.float32(th / dth)
-        np.mod(mapy, n360, out=mapy)
-        mapy[mapy > n360 - 0.5] -= n360
+        rk = rng_k[ok]
+        # per beam: samples before its end free (1), within half a cell of it the hit (2)
+        n_free = np.searchsorted(rho, rk - half, side="left")
+        n_end = np.where(np.isfinite(rk), np.searchsorted(rho, rk + half, side="right"), n_free)
+        col = np.arange(n_rad, dtype=np.int32)[None, :]
+        st = (col < n_free[:, None]).view(np.uint8) + 2 * ((col >= n_free[:, None]) & (col < n_end[:, None])).view(np.uint8)
+        state[rows[ok]] = st
+        state[n360:] = state[:n360]
+        mapy = ang_base + np.float32(n360 - (th / dth) % n360)  # in [0, 2 * n360)
         cells = cv2.remap(state, mapx, mapy, cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
         ca0, ca1, cb0, cb1 = max(a0, 0), min(a1, H), max(b0, 0), min(b1, W)
-        upd = lut[cells[ca0 - a0:ca1 - a0, cb0 - b0:cb1 - b0]]
+        upd = np.take(lut, cells[ca0 - a0:ca1 - a0, cb0 - b0:cb1 - b0])
         roi = L[ca0:ca1, cb0:cb1]
         roi += upd
         np.clip(roi, lo, hi, out=roi)
