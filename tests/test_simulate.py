@@ -1,0 +1,140 @@
+"""The laser SLAM simulator (topomap.simulate) on small hand-drawn plans."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import ndimage as ndi
+
+from _floorplans import draw_plan, home
+from topomap.errors import ParameterError
+from topomap.simulate import ScanOptions, simulate_scan
+
+#: Every fault off: the clean laser on the bare plan.
+CLEAN = dict(glass_share=0.0, drift_xy=0.0, drift_yaw=0.0, plan_furniture=False, furniture_density=0.0,
+             closed_doors=0.0, people_per_metre=0.0)
+
+
+@pytest.fixture(scope="module")
+def plan():
+    return home()
+
+
+def _interior(plan, label, margin=2):
+    """Cells of room ``label`` at least ``margin`` cells from its edge."""
+    return ndi.binary_erosion(plan.rooms == label, iterations=margin)
+
+
+def test_grid_frame_and_seed(plan):
+    a = simulate_scan(plan, seed=3)
+    b = simulate_scan(plan, seed=3)
+    c = simulate_scan(plan, seed=4)
+    assert a.grid.shape == plan.shape
+    assert a.grid.resolution == plan.resolution
+    assert a.grid.origin == tuple(float(v) for v in plan.origin)
+    assert np.array_equal(a.grid.cells, b.grid.cells)
+    assert np.array_equal(a.poses, b.poses)
+    assert not np.array_equal(a.grid.cells, c.grid.cells)
+    assert a.grid.free.sum() > 0.5 * plan.inside.sum()  # most of the home is mapped
+
+
+def test_walls_stop_rays_without_glass(plan):
+    r = simulate_scan(plan, options=ScanOptions(**CLEAN), seed=1)
+    outside = ~plan.inside & ~plan.walls
+    assert not (r.grid.free & outside).any()
+    assert set(r.visited) == {1, 2, 3, 4}
+    # the box room with no door, next to the corridor, stays unknown inside
+    assert r.grid.unknown[_interior(plan, 5)].all()
+    # the walls the robot saw are occupied: every room it entered has occupied cells on its edge
+    ring = ndi.binary_dilation(plan.rooms == 2, iterations=2) & plan.walls
+    assert r.grid.occupied[ring].sum() > 0.3 * ring.sum() / 4
+
+
+def test_glass_lets_rays_out(plan):
+    opts = ScanOptions(**{**CLEAN, "glass_share": 0.3})
+    r = simulate_scan(plan, options=opts, seed=1)
+    outside = ~plan.inside & ~plan.walls
+    assert r.glass.any() and not (r.glass & ~plan.outer_walls).any()
+    assert (r.grid.free & outside).sum() > 100
+    # a ray that left through glass crossed a glass cell: every free cell outside lies on the far
+    # side of the facade from a pose, i.e. the free space outside touches glass or the grid's edge
+    lab, n = ndi.label(r.grid.free & outside | r.glass)
+    touching = set(np.unique(lab[r.glass])) - {0}
+    assert set(np.unique(lab[r.grid.free & outside])) - {0} <= touching
+
+
+def test_free_cells_within_range_of_a_pose(plan):
+    opts = ScanOptions(**{**CLEAN, "glass_share": 0.3, "range_max": 4.0, "drift_xy": 0.02, "drift_yaw": 0.3})
+    r = simulate_scan(plan, options=opts, seed=2)
+    rows, cols = np.nonzero(r.grid.free)
+    x, y = r.grid.pixel_to_world(rows, cols)
+    d = np.hypot(x[:, None] - r.map_poses[None, :, 0], y[:, None] - r.map_poses[None, :, 1]).min(axis=1)
+    assert d.max() <= opts.range_max + plan.resolution
+    assert not np.allclose(r.poses, r.map_poses)  # the drift moved the poses the map is drawn at
+
+
+def test_explore_leaves_rooms_unknown(plan):
+    r = simulate_scan(plan, options=ScanOptions(**{**CLEAN, "explore": 0.4, "range_max": 3.0}), seed=5)
+    assert len(r.visited) == 2
+    path_rooms = set(plan.rooms[tuple(np.rint(r.grid.world_to_pixel(r.poses[:, 0], r.poses[:, 1])).astype(int))].tolist())
+    assert path_rooms - {0} <= set(r.visited)
+    for lab in set(range(1, 6)) - set(r.visited):
+        inner = _interior(plan, lab)
+        # seen at most through a door: most of an unvisited room stays unknown
+        assert r.grid.unknown[inner].mean() > 0.5, lab
+
+
+def test_closed_doors_block(plan):
+    r = simulate_scan(plan, options=ScanOptions(**{**CLEAN, "closed_doors": 1.0}), seed=1)
+    assert r.closed_doors == (0, 1, 2)
+    assert len(r.visited) == 1  # every door is shut: the robot stays in its start room
+    for lab in set(range(1, 6)) - set(r.visited):
+        assert r.grid.unknown[_interior(plan, lab)].all(), lab
+
+
+def test_furniture_occupied_only_where_seen():
+    # a room with a shelf box (a plan object) and a closed cupboard room with another
+    plan = draw_plan([(0.2, 0.2, 5.0, 4.0), (5.2, 0.2, 7.0, 4.0)], [],
+                     objects=(("shelf", 2.0, 2.0, 3.0, 2.4), ("shelf", 5.8, 1.0, 6.4, 2.0)))
+    r = simulate_scan(plan, options=ScanOptions(**{**CLEAN, "plan_furniture": True}), seed=1)
+    blocked = r.world.blocked
+    assert blocked.sum() > 0
+    seen = blocked & (plan.rooms == 1)
+    hidden = blocked & (plan.rooms == 2)
+    assert r.grid.occupied[seen].any()
+    assert not r.grid.occupied[hidden].any() and r.grid.unknown[hidden].all()
+    # the inside of the shelf is never free: rays stop at its faces
+    assert not r.grid.free[ndi.binary_erosion(seen)].any()
+
+
+def test_random_furniture_and_people(plan):
+    opts = ScanOptions(**{**CLEAN, "furniture_density": 0.3, "people_per_metre": 0.2})
+    r = simulate_scan(plan, options=opts, seed=1)
+    assert len(r.furniture) > 0 and len(r.people) > 0
+    for kind, x1, y1, x2, y2 in r.furniture:
+        assert kind in ("table", "bed", "shelf") and x2 > x1 and y2 > y1
+        rows, cols = r.grid.world_to_pixel(np.array([x1, x2]), np.array([y1, y2]))
+        labs = plan.rooms[int(round(rows.min())) + 1:int(round(rows.max())), int(round(cols.min())) + 1:int(round(cols.max()))]
+        assert len(np.unique(labs)) == 1 and labs.flat[0] > 0  # wholly inside one room
+    assert not (r.world.blocked & plan.walls).any()
+
+
+@pytest.mark.parametrize("kw, word", [
+    (dict(range_max=0), "range_max"), (dict(range_max=-1.0), "-1.0"), (dict(angle_step=0), "angle_step"),
+    (dict(field_of_view=400), "400"), (dict(explore=1.5), "1.5"), (dict(glass_share=-0.1), "-0.1"),
+    (dict(hit_probability=0.4), "0.4"), (dict(miss_probability=0.6), "0.6"), (dict(clamp_max=0.5), "0.5"),
+    (dict(plan_furniture="yes"), "'yes'"), (dict(pose_spacing="0.3"), "'0.3'"),
+    (dict(free_thresh=0.7), "0.7")])
+def test_options_validation(kw, word):
+    with pytest.raises(ParameterError, match=list(kw)[0]) as err:
+        ScanOptions(**kw)
+    assert word in str(err.value) and "\n" not in str(err.value)
+
+
+def test_bad_arguments(plan):
+    with pytest.raises(ParameterError, match="seed"):
+        simulate_scan(plan, seed=-1)
+    with pytest.raises(ParameterError, match="ScanOptions"):
+        simulate_scan(plan, options={"range_max": 5})
+    with pytest.raises(ParameterError, match="FloorPlan"):
+        simulate_scan(plan.walls)
