@@ -16,6 +16,7 @@ __all__ = [
     "MapFileError",
     "MapFileNotFoundError",
     "MapTooLargeError",
+    "PlanFormatError",
     "ParameterError",
     "GraphFormatError",
     "BenchmarkNotFoundError",
@@ -50,6 +51,10 @@ class MapFileError(TopomapError, OSError):
 
 class MapTooLargeError(MapError):
     """The map has more cells than :data:`topomap.io.MAX_CELLS`."""
+
+
+class PlanFormatError(MapError):
+    """A vector floor plan file cannot be used: a bad line, no walls, no doors to take its scale from."""
 
 
 class ParameterError(TopomapError, ValueError):
