@@ -581,6 +581,63 @@ def tour_cmd(graph, start, rooms, return_to_start, robot_width, as_json):
         click.echo("unreachable rooms: " + ", ".join(str(r) for r in tour["unreachable"]))
 
 
+@main.command("simulate")
+@click.argument("plans", nargs=-1, required=True, type=click.Path(path_type=Path))
+@click.option("-o", "--out", "outdir", required=True, type=click.Path(path_type=str),
+              help="Output folder (several plans: a folder per plan, named as `segment` names them).")
+@click.option("--seed", type=int, default=0, show_default=True,
+              help="Seed of the scan (several plans: each plan's seed is fixed by this seed and its name).")
+@click.option("--explore", type=float, default=None, help="Share of the rooms the robot enters (default 1).")
+@click.option("--glass", type=float, default=None, help="Share of the facade that is glass (default 0.15).")
+@click.option("--closed-doors", "closed_doors", type=float, default=None,
+              help="Share of the doors that are closed (default 0.1).")
+@click.option("--no-drift", "no_drift", is_flag=True, help="No pose drift (walls drawn where they are).")
+@click.option("--no-furniture", "no_furniture", is_flag=True, help="No furniture (neither the plan's nor random).")
+@click.option("--no-people", "no_people", is_flag=True, help="No people (dynamic clutter) along the path.")
+@click.option("--option", "extra", multiple=True, metavar="NAME=VALUE",
+              help="Any other scan option of topomap.simulate.ScanOptions (e.g. range_max=5.6); repeatable.")
+@click.option("--resolution", type=float, default=0.05, show_default=True, help="Metres per cell of the map.")
+@click.option("-j", "--jobs", type=click.IntRange(min=1), default=1, show_default=True,
+              help="Simulate plans in this many local processes.")
+@click.option("--overwrite", is_flag=True, help="Simulate again plans whose case folder is up to date.")
+def simulate_cmd(plans, outdir, seed, explore, glass, closed_doors, no_drift, no_furniture, no_people, extra,
+                 resolution, jobs, overwrite):
+    """Simulate a robot's laser map of each vector floor PLAN, with its ground truth.
+
+    Writes map.pgm + map.yaml (the map as ROS map_saver writes it),
+    plan.pgm + plan.yaml (the drawn plan on the same grid), gt_rooms.png
+    (16-bit room labels), gt_doors.json, gt_rooms.json and simulation.json
+    per plan. The output folder of several plans reads as a data set:
+    `topomap benchmark OUT --variant scan`.
+    """
+    from .corpus import scan_options, simulate_many
+    from .io import check_resolution
+
+    try:
+        check_resolution(resolution, name="--resolution")
+        options = scan_options(explore=explore, glass_share=glass, closed_doors=closed_doors, no_drift=no_drift,
+                               no_furniture=no_furniture, no_people=no_people, extra=extra)
+        outdir = _check_outdir(outdir)
+        rows = simulate_many(plans, outdir, seed=seed, options=options, resolution=resolution, jobs=jobs,
+                             overwrite=overwrite)
+    except Exception as exc:  # noqa: BLE001 - nothing ran
+        sys.exit(_fail(exc))
+    code = EXIT_OK
+    for row in rows:
+        if row["status"] == "failed":
+            click.echo(f"error: {row['error']}", err=True)
+            code = EXIT_INPUT
+        elif len(rows) == 1:
+            done = " (up to date, skipped)" if row["status"] == "skipped" else ""
+            click.echo(f"{row['plan']}: {_count(row['rooms'], 'room')}, {_count(row['doors'], 'door')}, "
+                       f"{row['area']:.1f} m², {100 * row['free_share']:.0f} % of it seen free -> "
+                       f"{row['output']}{done}")
+    if len(rows) > 1:
+        good = sum(r["status"] != "failed" for r in rows)
+        click.echo(f"{good} of {len(rows)} plans simulated -> {outdir}")
+    sys.exit(code)
+
+
 @main.command("export")
 @click.argument("source", metavar="INPUT", type=click.Path(path_type=Path))
 @click.argument("target", metavar="OUTPUT", type=click.Path(path_type=Path))
