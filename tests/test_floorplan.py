@@ -63,9 +63,11 @@ def test_invariants_rooms_doors_closet(plan):
     assert np.array_equal(plan.rooms > 0, plan.inside)
     assert not np.any(plan.inside & plan.walls)
     assert np.all(plan.outer_walls <= plan.walls) and plan.outer_walls.any()
-    # the home is the 600 x 400 units box less its walls (about 33 m of wall, 0.15 m thick)
+    # the home is the 600 x 400 units box less its walls: the inner half (0.075 m) of the 2000
+    # units of facade, the whole 0.15 m of the 1025 units of inner wall; +-40 % for the cells
     box = 600 * 400 * plan.scale ** 2
-    assert box - 33 * 0.15 * 1.3 < plan.area < box - 33 * 0.15 * 0.7
+    loss = 2000 * plan.scale * 0.075 + 1025 * plan.scale * 0.15
+    assert box - 1.4 * loss < plan.area < box - 0.6 * loss
 
 
 def test_doors_lie_on_wall_lines_and_are_open(plan):
