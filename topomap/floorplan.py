@@ -28,7 +28,7 @@ from .geometry import point_segment_distances
 from .io import FREE, MAX_CELLS, OCCUPIED, UNKNOWN, OccupancyGrid, _check_file, _msg, check_resolution, save_map
 from .options import _check_area, check_length
 
-__all__ = ["PlanDoor", "FloorPlan", "read_plan", "plan_grid", "ROOM_KINDS", "STORAGE_KINDS", "FIXTURE_KINDS"]
+__all__ = ["PlanDoor", "FloorPlan", "read_plan", "plan_grid", "ground_truth_problems", "ROOM_KINDS", "STORAGE_KINDS", "FIXTURE_KINDS"]
 
 _log = logging.getLogger(__name__)
 
@@ -48,6 +48,9 @@ DOOR_WIDTH = 0.8
 MARGIN = 1.0
 MAX_GAP = 0.3
 NOOK_AREA = 1.5
+#: Door segments narrower than this are left out, the wall closed there (metres): narrower than
+#: anyone walks through (as ``max_gap``); in the plans they are slips of the drawing.
+MIN_DOOR_WIDTH = 0.3
 #: A door segment this close to a wall line and parallel to it is moved onto it (metres).
 DOOR_SNAP = 0.3
 #: Sine of the largest angle between a door and the wall it is moved onto (10 degrees).
@@ -492,8 +495,9 @@ def read_plan(path, *, resolution: float = 0.05, wall_thickness: float = WALL_TH
         ``duplicate_walls`` (left out), ``gaps_extended``,
         ``gaps_bridged`` (wall ends joined across more than the wall
         thickness), ``doors_snapped`` (moved onto their wall's line),
-        ``doors_floating`` (no wall under them), ``doors_dropped`` (open
-        onto the outside on both sides, or a zero-length segment),
+        ``doors_floating`` (no wall under them), ``doors_narrow`` (narrower
+        than :data:`MIN_DOOR_WIDTH`, left out: the wall is closed there),
+        ``doors_dropped`` (no room on either side, or of zero length),
         ``closets_merged``, ``closed_spaces`` (no door into them: not part
         of the home), ``parts`` (pieces of the home no door joins).
 
@@ -543,11 +547,12 @@ def read_plan(path, *, resolution: float = 0.05, wall_thickness: float = WALL_TH
             raise PlanFormatError(_msg(name, "plan has no doors: its scale comes from the door widths "
                                              "(give scale= in metres per plan unit)"))
         scale = dw / float(np.percentile(dl[dl > 0], 25))
-    n_zero_doors = int((dl <= 0).sum())
-    doors_u = doors_u[dl > 0]
+    narrow = dl * scale < MIN_DOOR_WIDTH
+    quirks = {"doors_dropped": int((dl <= 0).sum()), "doors_narrow": int((narrow & (dl > 0)).sum())}
+    doors_u = doors_u[~narrow]
     stem = Path(name).stem
     return _build(stem, walls_u, doors_u, boxes_u, scale=scale, res=res, th=th, margin=margin,
-                  max_gap=max_gap, nook_area=nook_area, quirks={"doors_dropped": n_zero_doors})
+                  max_gap=max_gap, nook_area=nook_area, quirks=quirks)
 
 
 def _build(name, walls_u, doors_u, boxes_u, *, scale, res, th, margin, max_gap, nook_area, quirks):
@@ -589,15 +594,16 @@ def _build(name, walls_u, doors_u, boxes_u, *, scale, res, th, margin, max_gap, 
     hi = np.maximum(a_w, b_w) + th
     opened = []   # (box, cells, signed side) per door
     is_open = np.zeros((H, W), bool)
-    cut_half = half + 0.5
     for d in doors:
         p, q = px(d[:2]), px(d[2:])
+        ud = (d[2:] - d[:2]) / math.hypot(*(d[2:] - d[:2]))
+        # the walls the door opens: along its line, or doubled beside it closer than a wall thickness
+        off = np.maximum(np.abs(_cross(d[:2] - a_w, uw)), np.abs(_cross(d[2:] - a_w, uw)))
+        host = (np.abs(_cross(uw, ud)) < 0.02) & (off <= th)
+        cut_half = (max(float(off[host].max()), 0.0) if host.any() else 0.0) / res + half + 0.5
         box = _box((H, W), p, q, cut_half)
         r0, r1, c0, c1 = box
         cells, side = _rect(box, p, q, cut_half)
-        ud = (d[2:] - d[:2]) / math.hypot(*(d[2:] - d[:2]))
-        host = (np.abs(_cross(uw, ud)) < 0.02) & (np.abs(_cross(d[:2] - a_w, uw)) <= res / 2) \
-            & (np.abs(_cross(d[2:] - a_w, uw)) <= res / 2)
         dlo, dhi = np.minimum(d[:2], d[2:]) - th, np.maximum(d[:2], d[2:]) + th
         near = ~host & np.all(lo <= dhi, axis=1) & np.all(hi >= dlo, axis=1)
         for j in np.flatnonzero(near):
@@ -648,9 +654,8 @@ def _build(name, walls_u, doors_u, boxes_u, *, scale, res, th, margin, max_gap, 
         _, s = _signed(rr + g0, cc + h0, *segment)
         vals = raw[g0:g1, h0:h1][rr, cc]
         outs = outside[g0:g1, h0:h1][rr, cc]
-        pos = _mode(np.where(outs, 0, vals)[s >= 0])
-        neg = _mode(np.where(outs, 0, vals)[s < 0])
-        door_sides.append((pos, neg))
+        vals = np.where(outs, 0, vals)
+        door_sides.append((_mode(vals[s >= 0]), _mode(vals[s < 0]), (rr + g0, cc + h0, s >= 0, vals)))
 
     # ---- closets and nooks join the room they open into
     area = np.bincount(raw.ravel(), minlength=n + 1) * res * res
@@ -671,7 +676,7 @@ def _build(name, walls_u, doors_u, boxes_u, *, scale, res, th, margin, max_gap, 
         if (ks and all(c in STORAGE_KINDS for c in ks)) or (not ks and not fixture[k] and area[k] < nook_area):
             storage.add(int(k))
     widths = {}
-    for (pos, neg), d in zip(door_sides, doors):
+    for (pos, neg, _), d in zip(door_sides, doors):
         if pos > 0 and neg > 0 and pos != neg:
             wd = math.hypot(*(d[2:] - d[:2]))
             for x, y in ((pos, neg), (neg, pos)):
@@ -710,19 +715,23 @@ def _build(name, walls_u, doors_u, boxes_u, *, scale, res, th, margin, max_gap, 
     # ---- door cells to the rooms either side; the doors' ground truth
     plan_doors = []
     dropped = 0
-    for (box, cells, side), (pos, neg), d in zip(opened, door_sides, doors):
+    for (box, cells, side), (pos, neg, ring), d in zip(opened, door_sides, doors):
         fp = final[merged[pos]] if pos > 0 else 0
         fn = final[merged[neg]] if neg > 0 else 0
         if fp == 0 and fn == 0:
             dropped += 1
             continue
+        # each door cell to the room of the nearest cell beside the door on its side of the line
+        # (on the other side when its own is the outside): a door may run past several rooms
         r0, r1, c0, c1 = box
-        sub = rooms[r0:r1, c0:c1]
-        if fp and fn:
-            sub[cells & (side >= 0)] = fp
-            sub[cells & (side < 0)] = fn
-        else:
-            sub[cells] = fp or fn
+        ring_r, ring_c, ring_pos, ring_lab = ring
+        ring_lab = final[merged[ring_lab]]
+        rr, cc = np.nonzero(cells)
+        cell_pos = side[rr, cc] >= 0
+        dist = (rr[:, None] + r0 - ring_r[None]) ** 2 + (cc[:, None] + c0 - ring_c[None]) ** 2
+        dist = dist + np.where(cell_pos[:, None] == ring_pos[None], 0, 1 << 40)
+        dist = np.where(ring_lab[None] > 0, dist, np.iinfo(np.int64).max)
+        rooms[rr + r0, cc + c0] = ring_lab[np.argmin(dist, axis=1)]
         plan_doors.append(PlanDoor(p1=(float(d[0]), float(d[1])), p2=(float(d[2]), float(d[3])),
                                    rooms=tuple(sorted((int(fp), int(fn)))),
                                    width=float(math.hypot(d[2] - d[0], d[3] - d[1]))))
@@ -773,3 +782,74 @@ def _box_label(raw, px, xy, scale, umin, vmax, pad, res):
         return 0
     vals = raw[ra:rb, ca:cb]
     return max(_mode(vals[vals > 0]), 0)
+
+
+def ground_truth_problems(plan: FloorPlan) -> list:
+    """What is wrong with a plan's ground truth: the invariants :func:`read_plan` keeps.
+
+    Parameters
+    ----------
+    plan : FloorPlan
+
+    Returns
+    -------
+    list of str
+        One line per broken invariant (empty when all hold): the rooms are
+        exactly the inside, each room one 4-connected piece; the inside
+        touches neither a wall nor the border of the grid; the facade is
+        wall; the labels are 1..K with a ``kinds`` entry each; every door
+        lies in the grid, at least half of it on free cells of the home,
+        and joins two labels of ``0..K`` (not both 0) found beside it.
+    """
+    out = []
+    rooms, inside, walls = plan.rooms, plan.inside, plan.walls
+    K = plan.n_rooms
+    if not np.array_equal(rooms > 0, inside):
+        out.append(f"{np.count_nonzero((rooms > 0) != inside)} cells where rooms > 0 is not inside")
+    if np.any(inside & walls):
+        out.append(f"{np.count_nonzero(inside & walls)} inside cells are walls")
+    if inside[0].any() or inside[-1].any() or inside[:, 0].any() or inside[:, -1].any():
+        out.append("the inside touches the border of the grid")
+    if plan.outer_walls is not None and np.any(plan.outer_walls & ~walls):
+        out.append("outer_walls holds cells that are not walls")
+    present = np.unique(rooms[rooms > 0])
+    if not np.array_equal(present, np.arange(1, K + 1)) or set(plan.kinds) != set(range(1, K + 1)):
+        out.append(f"labels {present.tolist()[:10]}... are not 1..{K} with a kinds entry each")
+    if K:
+        lab, n = _label(rooms > 0, 4)
+        pieces = np.zeros(K + 1, np.int64)
+        pairs = np.unique(np.stack([rooms[lab > 0], lab[lab > 0]]), axis=1)
+        np.add.at(pieces, pairs[0], 1)
+        split = np.flatnonzero(pieces > 1)
+        if split.size:
+            out.append(f"rooms {split.tolist()} are in more than one piece")
+    H, W = plan.shape
+    res = plan.resolution
+    for i, d in enumerate(plan.doors):
+        a, b = sorted(d.rooms)
+        if tuple(d.rooms) != (a, b) or not (0 <= a <= K and 0 < b <= K):
+            out.append(f"door {i} joins rooms {d.rooms} (labels 1..{K}, 0 the outside, not both)")
+            continue
+        p, q = np.array(d.p1), np.array(d.p2)
+        if abs(math.hypot(*(q - p)) - d.width) > 1e-6:
+            out.append(f"door {i}: width {d.width} is not its length")
+        # the cells along the door: mostly free cells of the home (a wall meeting it may cross it)
+        n_s = max(int(math.ceil(d.width / res)) + 1, 2)
+        xy = p[None] + np.linspace(0.0, 1.0, n_s)[:, None] * (q - p)[None]
+        rows = np.rint(H - xy[:, 1] / res - 0.5).astype(int)
+        cols = np.rint(xy[:, 0] / res - 0.5).astype(int)
+        if rows.min() < 0 or cols.min() < 0 or rows.max() >= H or cols.max() >= W:
+            out.append(f"door {i}: not inside the grid")
+            continue
+        free = inside[rows, cols]
+        if free.mean() < 0.5:
+            out.append(f"door {i}: {np.count_nonzero(~free)} of its {n_s} cells are not free cells of the home")
+            continue
+        # its rooms are the labels of its own cells and of those within a wall thickness of them
+        k = max(int(math.ceil(0.3 / res)), 2)
+        near = set()
+        for r, c in zip(rows[free], cols[free]):
+            near |= set(np.unique(rooms[max(r - k, 0):r + k + 1, max(c - k, 0):c + k + 1]).tolist())
+        if not {a, b} <= (near | {0}):
+            out.append(f"door {i}: rooms {d.rooms} are not beside it (near: {sorted(near)})")
+    return out
