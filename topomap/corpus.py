@@ -299,7 +299,7 @@ def simulate_many(plan_paths: Sequence, out_dir, *, seed: int = 0, options=None,
                     bar.update()
     if bar is not None:
         bar.close()
-    for row in rows:
-        if row["status"] == "failed":
-            log.warning("%s: %s", row["plan"], row["error"])
+    failed = [r for r in rows if r["status"] == "failed"]
+    if failed:
+        log.info("%d of %d plans failed: %s", len(failed), len(rows), "; ".join(r["error"] for r in failed))
     return rows
