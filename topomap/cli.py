@@ -610,6 +610,7 @@ def simulate_cmd(plans, outdir, seed, explore, glass, closed_doors, no_drift, no
     per plan. The output folder of several plans reads as a data set:
     `topomap benchmark OUT --variant scan`.
     """
+    from .batch import FAILED, SKIPPED
     from .corpus import scan_options, simulate_many
     from .io import check_resolution
 
@@ -624,16 +625,16 @@ def simulate_cmd(plans, outdir, seed, explore, glass, closed_doors, no_drift, no
         sys.exit(_fail(exc))
     code = EXIT_OK
     for row in rows:
-        if row["status"] == "failed":
+        if row["status"] == FAILED:
             click.echo(f"error: {row['error']}", err=True)
             code = EXIT_INPUT
         elif len(rows) == 1:
-            done = " (up to date, skipped)" if row["status"] == "skipped" else ""
+            done = " (up to date, skipped)" if row["status"] == SKIPPED else ""
             click.echo(f"{row['plan']}: {_count(row['rooms'], 'room')}, {_count(row['doors'], 'door')}, "
                        f"{row['area']:.1f} m², {100 * row['free_share']:.0f} % of it seen free -> "
                        f"{row['output']}{done}")
     if len(rows) > 1:
-        good = sum(r["status"] != "failed" for r in rows)
+        good = sum(r["status"] != FAILED for r in rows)
         click.echo(f"{good} of {len(rows)} plans simulated -> {outdir}")
     sys.exit(code)
 

@@ -38,6 +38,7 @@ from typing import Optional, Sequence
 
 import numpy as np
 
+from .batch import FAILED, OK, SKIPPED, output_dirs
 from .errors import MapFileError, OutputExistsError, ParameterError
 
 __all__ = ["CASE_FILES", "case_seed", "scan_options", "write_case", "simulate_case", "simulate_many"]
@@ -228,7 +229,7 @@ def simulate_case(plan_path, out_dir, *, seed: int = 0, options=None, resolution
             "options": _options_dict(options)}
     if not overwrite and _up_to_date(out, meta):
         rec = json.loads((out / _RECORD).read_text(encoding="utf-8"))
-        return dict(rec.get("summary", {}), plan=str(plan_path), output=str(out), status="skipped")
+        return dict(rec.get("summary", {}), plan=str(plan_path), output=str(out), status=SKIPPED)
     plan = read_plan(plan_path, resolution=resolution)
     scan = simulate_scan(plan, options=options, seed=seed)
     inside = np.asarray(plan.inside)
@@ -236,7 +237,7 @@ def simulate_case(plan_path, out_dir, *, seed: int = 0, options=None, resolution
     summary = {"rooms": int(len(np.unique(plan.rooms[plan.rooms > 0]))), "doors": len(plan.doors),
                "area": round(float(inside.sum()) * plan.resolution ** 2, 2), "free_share": round(seen, 4)}
     write_case(out, plan, scan.grid, meta=dict(meta, summary=summary))
-    return dict(summary, plan=str(plan_path), output=str(out), status="ok")
+    return dict(summary, plan=str(plan_path), output=str(out), status=OK)
 
 
 def _case_task(args):
@@ -246,7 +247,7 @@ def _case_task(args):
     except Exception as exc:  # noqa: BLE001 - one bad plan never stops the corpus; its row says why
         from .errors import first_line
 
-        return {"plan": str(path), "output": str(out), "status": "failed", "error": first_line(exc)}
+        return {"plan": str(path), "output": str(out), "status": FAILED, "error": first_line(exc)}
 
 
 def simulate_many(plan_paths: Sequence, out_dir, *, seed: int = 0, options=None, resolution: float = 0.05,
@@ -263,7 +264,6 @@ def simulate_many(plan_paths: Sequence, out_dir, *, seed: int = 0, options=None,
     list of dict
         One summary row per plan (see :func:`simulate_case`), in the order given.
     """
-    from .batch import output_dirs
 
     paths = [Path(p) for p in plan_paths]
     if not paths:
@@ -299,7 +299,7 @@ def simulate_many(plan_paths: Sequence, out_dir, *, seed: int = 0, options=None,
                     bar.update()
     if bar is not None:
         bar.close()
-    failed = [r for r in rows if r["status"] == "failed"]
+    failed = [r for r in rows if r["status"] == FAILED]
     if failed:
         log.info("%d of %d plans failed: %s", len(failed), len(rows), "; ".join(r["error"] for r in failed))
     return rows
