@@ -116,7 +116,7 @@ def _pictures(seg, overlay, skeletons):
 
         png = overlay_png(seg, skeletons=skeletons)
     buf = _io.BytesIO()
-    save_labels(seg.labels, buf)
+    save_labels(seg, buf)
     return png, buf.getvalue()
 
 

@@ -49,7 +49,7 @@ import networkx as nx
 from .errors import GraphFormatError, first_line
 from .io import atomic_write  # noqa: F401  (re-exported: topomap.export.atomic_write)
 
-__all__ = ["atomic_write", "save_labels", "label_png_bytes", "save_graphml", "save_json", "to_graphml_graph",
+__all__ = ["atomic_write", "save_labels", "label_png_bytes", "file_labels", "MAX_FILE_LABEL", "save_graphml", "save_json", "to_graphml_graph",
            "node_link", "write_outputs", "save_bytes", "geometry_wkt", "restore_types", "load_graphml", "load_json",
            "to_geojson", "from_geojson", "save_geojson", "load_geojson", "save_label_map", "load_label_map",
            "save_graph", "load_graph", "label_map_bytes", "graphml_bytes", "GRAPH_TYPES", "NODE_TYPES",
@@ -62,20 +62,65 @@ GEOJSON_COORDINATES = ("x, y in metres in the map frame (the frame of the map's 
                        "longitude/latitude")
 
 
-def save_labels(labels: np.ndarray, path) -> Path:
+def save_labels(labels, path) -> Path:
     """Write the label image as a 16-bit PNG (0 = not a room), same size as the map.
 
-    ``path``: a file name (written atomically) or a binary file object
-    (written as it is; the caller owns the file, as :func:`write_outputs`).
+    ``labels``: a :class:`~topomap.segmentation.Segmentation` or an (M, N)
+    array of labels. ``path``: a file name (written atomically) or a binary
+    file object (written as it is; the caller owns the file, as
+    :func:`write_outputs`). Labels above the largest room ID are fragments;
+    when the labels of a segmentation do not fit 16 bits, every fragment
+    gets the one label after the largest room ID (:func:`file_labels`).
     """
-    labels = np.asarray(labels)
-    if labels.max(initial=0) > 65535:
-        raise ValueError(f"{_name(path)}: {int(labels.max())} rooms do not fit a 16-bit PNG")
-    if labels.ndim != 2 or labels.size == 0:
-        from .errors import ParameterError
+    return _write(label_png_bytes(file_labels(labels, _name(path, "labels.png"), "PNG")), path)
 
-        raise ParameterError(f"{_name(path)}: a label image must be a non-empty 2-D array, got shape {labels.shape}")
-    return _write(label_png_bytes(labels), path)
+
+#: Largest label a label file holds (16 bits).
+MAX_FILE_LABEL = 65535
+
+
+def file_labels(seg, name: str = "<labels>", kind: str = "PNG") -> np.ndarray:
+    """The labels a 16-bit label file holds for ``seg``.
+
+    Parameters
+    ----------
+    seg : Segmentation or (M, N) ndarray of int
+        A segmentation, or a label image (0 = not a room).
+    name, kind : str
+        The file and its format, for messages.
+
+    Returns
+    -------
+    (M, N) ndarray of int
+        ``seg.labels`` itself when every label is at most
+        :data:`MAX_FILE_LABEL`; else (a segmentation with fragments: free
+        regions too small to be a room, which are in no room graph) the
+        labels with every fragment set to ``top_room_id + 1``, so that the
+        rooms keep their IDs and a label above the largest room ID is still
+        a fragment.
+
+    Raises
+    ------
+    ParameterError
+        Not a non-empty 2-D array, a negative label, or room IDs beyond
+        65534 (65535 for a label array).
+    """
+    from .errors import ParameterError
+
+    is_seg = hasattr(seg, "labels") and hasattr(seg, "top_room_id")
+    labels = np.asarray(seg.labels if is_seg else seg)
+    if labels.ndim != 2 or labels.size == 0:
+        raise ParameterError(f"{name}: a label image must be a non-empty 2-D array, got shape {labels.shape}")
+    if labels.min(initial=0) < 0:
+        raise ParameterError(f"{name}: labels must be >= 0, got {int(labels.min())}")
+    top = int(labels.max(initial=0))
+    if top <= MAX_FILE_LABEL:
+        return labels
+    rooms = int(seg.top_room_id) if is_seg else top
+    if rooms >= MAX_FILE_LABEL:
+        raise ParameterError(f"{name}: room IDs up to {rooms} do not fit a 16-bit {kind} "
+                             f"(at most {MAX_FILE_LABEL - 1} with fragments, {MAX_FILE_LABEL} without)")
+    return np.minimum(labels, rooms + 1)
 
 
 #: Rows of the label image filtered and compressed at a time by :func:`label_png_bytes` (about 1 MB).
@@ -121,8 +166,9 @@ def _is_file(path) -> bool:
     return hasattr(path, "write")
 
 
-def _name(path) -> str:
-    return str(getattr(path, "name", path)) if _is_file(path) else str(path)
+def _name(path, default: str = "<buffer>") -> str:
+    """The file name of ``path`` for messages (``default`` for a file object that has none, as io.BytesIO)."""
+    return str(getattr(path, "name", default)) if _is_file(path) else str(path)
 
 
 def _write(data: bytes, path) -> Path:
@@ -1159,21 +1205,14 @@ def _label_map_parts(seg, image_name: str, *, resolution=None, origin=None, name
     """:func:`label_map_bytes` as ``(PGM header, PGM pixels as a C-contiguous array, yaml_bytes)``: the
     pixels written as they are by :func:`write_outputs`, not copied into one bytes object with the
     header (fresh pages for a megabyte: making and writing labels.pgm 2.2 -> 1.3 ms on the ipa maps)."""
-    from .errors import ParameterError
     from .io import FREE_THRESH, OCCUPIED_THRESH, pgm_header, yaml_text
 
     name = image_name if name is None else name
     if hasattr(seg, "labels") and hasattr(seg, "grid"):
-        labels = np.asarray(seg.labels)
         resolution = seg.grid.resolution if resolution is None else resolution
         origin = seg.grid.origin if origin is None else origin
-    else:
-        labels = np.asarray(seg)
-    if labels.ndim != 2 or labels.size == 0:
-        raise ParameterError(f"{name}: a label image must be a non-empty 2-D array, got shape {labels.shape}")
+    labels = file_labels(seg, name, "PGM")
     top = labels.max(initial=0)
-    if labels.min(initial=0) < 0 or top > 65535:
-        raise ParameterError(f"{name}: labels must be in 0..65535 to fit a 16-bit PGM")
     res = float(0.05 if resolution is None else resolution)
     org = [float(v) for v in ((0.0, 0.0, 0.0) if origin is None else origin)]
     if len(org) == 2:
@@ -1324,7 +1363,7 @@ def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None, geojs
         fh.write(head)
         fh.write(pixels.data)
 
-    writers = {"labels": lambda p: save_labels(seg.labels, p) if labels_png is None else _write(labels_png, p),
+    writers = {"labels": lambda p: save_labels(seg, p) if labels_png is None else _write(labels_png, p),
                "label_map_pgm": write_pgm,
                "label_map": lambda p: save_bytes(map_pair()["yaml"], p),
                "graphml": lambda p: save_graphml(graph, p),
