@@ -399,3 +399,12 @@ def test_keep_freed_memory_shares_the_pages_between_threads():
     default, kept, one = faults("default", "thread"), faults("keep", "thread"), faults("keep")
     assert kept * 4 < default, (kept, default)
     assert kept < 1.5 * one, (kept, one)
+
+
+def test_summary_floats_are_rounded(tmp_path):
+    rows = [{"map": "a.png", "output": "o/a", "status": "ok", "rooms": 2, "doors": 1, "fragments": 0,
+             "room_area_m2": 154.39500000000004, "fragment_area_m2": 0.1 + 0.2, "seconds": 1.5, "error": ""}]
+    batch._write_summary(rows, tmp_path / "summary.csv")
+    text = (tmp_path / "summary.csv").read_text()
+    assert "154.395," in text and ",0.3," in text and "00000" not in text
+    assert read_summary(tmp_path / "summary.csv")[0]["room_area_m2"] == 154.395

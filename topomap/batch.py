@@ -56,6 +56,7 @@ import csv
 import io as _io
 import json
 import logging
+import math
 import os
 import sys
 import time
@@ -391,13 +392,21 @@ def _columns(rows) -> list:
     return [*SUMMARY_COLUMNS, *stages, "error"]
 
 
+def _cell(v):
+    """A summary cell: floats rounded to 12 significant digits (``154.395``, not the
+    ``154.39500000000004`` a sum of cell areas gives), written as the repr of the rounded value."""
+    if type(v) is float and math.isfinite(v):
+        return repr(float(f"{v:.12g}"))
+    return v
+
+
 def _write_summary(rows, path: Path):
     from .io import atomic_write
 
     buf = _io.StringIO()
     w = csv.DictWriter(buf, fieldnames=_columns(rows), restval="", extrasaction="ignore", lineterminator="\n")
     w.writeheader()
-    w.writerows(rows)
+    w.writerows([{k: _cell(v) for k, v in r.items()} for r in rows])
     with atomic_write(path, "w") as fh:
         fh.write(buf.getvalue())
 
