@@ -408,3 +408,11 @@ def test_summary_floats_are_rounded(tmp_path):
     text = (tmp_path / "summary.csv").read_text()
     assert "154.395," in text and ",0.3," in text and "00000" not in text
     assert read_summary(tmp_path / "summary.csv")[0]["room_area_m2"] == 154.395
+
+
+def test_output_dirs_stay_inside_out(tmp_path):
+    out = tmp_path / "out"
+    dirs = output_dirs(["m/...png", "m/..png", "m/b.png"], out)
+    assert dirs == [out / "__", out / "_", out / "b"]
+    for d in dirs:
+        assert d.resolve().parent == out.resolve()

@@ -106,6 +106,12 @@ _STAGES = ("start", "import", "warmup", "load", "previous", "preprocess", "walls
 # Output folders
 # --------------------------------------------------------------------------
 
+def _safe_part(name: str) -> str:
+    """A folder name for one part of a map's path: a name that is empty or only dots (the stem of
+    ``...png`` is ``..``) would leave ``out``; its dots become underscores (``..`` -> ``__``)."""
+    return name if name.strip(".") else "_" * max(len(name), 1)
+
+
 def output_dirs(paths: Sequence, out) -> list:
     """The output folder of every map of a batch (the rule of the module docstring).
 
@@ -138,7 +144,7 @@ def output_dirs(paths: Sequence, out) -> list:
         seen[a] = p
     base = Path(os.path.commonpath([str(a.parent) for a in absolute]))
     rel = [a.relative_to(base) for a in absolute]
-    stems = [r.parent / r.stem if r.suffix else r for r in rel]
+    stems = [Path(*[_safe_part(c) for c in (r.parent / r.stem if r.suffix else r).parts]) for r in rel]
     count = Counter(stems)
     dirs = [out / (s if count[s] == 1 else s.parent / f"{s.name}_{r.suffix[1:]}") for s, r in zip(stems, rel)]
     clash = Counter(dirs)
