@@ -144,7 +144,7 @@ def output_dirs(paths: Sequence, out) -> list:
         seen[a] = p
     base = Path(os.path.commonpath([str(a.parent) for a in absolute]))
     rel = [a.relative_to(base) for a in absolute]
-    stems = [Path(*[_safe_part(c) for c in (r.parent / r.stem if r.suffix else r).parts]) for r in rel]
+    stems = [Path(*r.parent.parts, _safe_part(r.stem if r.suffix else r.name)) for r in rel]
     count = Counter(stems)
     dirs = [out / (s if count[s] == 1 else s.parent / f"{s.name}_{r.suffix[1:]}") for s, r in zip(stems, rel)]
     clash = Counter(dirs)
