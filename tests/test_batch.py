@@ -255,7 +255,8 @@ def test_resume_after_a_kill(tmp_path):
     script = tmp_path / "killer.py"
     script.write_text(_KILLER)
     args = [sys.executable, str(script), "3", "segment", *map(str, maps), "-o", str(out)]
-    p = subprocess.run(args, capture_output=True, text=True, timeout=300)
+    env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[1]))  # this checkout's topomap
+    p = subprocess.run(args, capture_output=True, text=True, timeout=300, env=env)
     assert p.returncode == -signal.SIGKILL, p.stderr
     # killed while writing the third map: the first two complete, no half-written file under a final name
     third = out / "plan"
