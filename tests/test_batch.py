@@ -417,3 +417,18 @@ def test_output_dirs_stay_inside_out(tmp_path):
     assert dirs == [out / "__", out / "_", out / "b"]
     for d in dirs:
         assert d.resolve().parent == out.resolve()
+
+
+def test_rerun_after_the_previous_graph_changed_runs_again(tmp_path):
+    p = png(tmp_path, "a.png", T.gray(T.two_rooms().array))
+    assert invoke("segment", p, "-o", tmp_path / "o1").exit_code == 0
+    prev = tmp_path / "prev.graphml"
+    prev.write_bytes((tmp_path / "o1" / "rooms.graphml").read_bytes())
+    assert invoke("segment", p, "-o", tmp_path / "o2", "--previous", prev).exit_code == 0
+    assert "up to date" in invoke("segment", p, "-o", tmp_path / "o2", "--previous", prev).stdout
+    prev.write_bytes(prev.read_bytes() + b"\n")  # changed
+    r = invoke("segment", p, "-o", tmp_path / "o2", "--previous", prev)
+    assert r.exit_code == 0 and "up to date" not in r.stdout
+    (tmp_path / "o2" / "changes.json").unlink()
+    r = invoke("segment", p, "-o", tmp_path / "o2", "--previous", prev)
+    assert "up to date" not in r.stdout and (tmp_path / "o2" / "changes.json").exists()

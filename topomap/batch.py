@@ -272,6 +272,14 @@ def _run_one(task: dict) -> dict:
     previous = claimed = None
     try:
         inputs = _fingerprint(Path(task["path"]))
+        extra_out = []
+        for key in ("previous", "bag"):  # the --previous graph is an input, the --bag an output
+            given = task["write_options"].get(key)
+            if given is not None:
+                if key == "previous":
+                    inputs[os.path.abspath(given)] = _stat(given)
+                else:
+                    extra_out.append(os.path.abspath(given))
         record = {"topomap": _version(), "input": task["input"], "inputs": inputs, "settings": s}
         folder.mkdir(parents=True, exist_ok=True)
         # writing the record removes the temporaries a killed run left here (io.atomic_write)
@@ -289,7 +297,8 @@ def _run_one(task: dict) -> dict:
                    fragment_area_m2=float(seg.fragment_area))
         row["seconds"] = time.perf_counter() - t0
         row.update({f"t_{k}": float(v) for k, v in seg.timings.items()})
-        files = {n: _stat(folder / n) for n in OUTPUT_NAMES if (folder / n).exists()}
+        files = {n: _stat(folder / n) for n in (*OUTPUT_NAMES, "changes.json") if (folder / n).exists()}
+        files.update({f: _stat(f) for f in extra_out})
         _write_record(folder, dict(record, status=COMPLETE, files=files, row=row))
         row["error"] = ""
         row["traceback"] = ""
