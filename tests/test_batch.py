@@ -432,3 +432,14 @@ def test_rerun_after_the_previous_graph_changed_runs_again(tmp_path):
     (tmp_path / "o2" / "changes.json").unlink()
     r = invoke("segment", p, "-o", tmp_path / "o2", "--previous", prev)
     assert "up to date" not in r.stdout and (tmp_path / "o2" / "changes.json").exists()
+
+
+def test_an_input_is_never_an_output(tmp_path):
+    m = ros_map(tmp_path / "labels", T.two_rooms())  # labels.yaml + labels.pgm, -o their folder
+    before = m.read_bytes()
+    r = invoke("segment", m, "-o", tmp_path)
+    assert r.exit_code == 1 and "is an input of this run" in r.stderr and m.read_bytes() == before
+    p = png(tmp_path, "a.png", T.gray(T.two_rooms().array))
+    with pytest.raises(ParameterError, match="--bag .*is an input of this run"):
+        segment_many([p], tmp_path / "o", write_options={"bag": str(p)})
+    assert not (tmp_path / "o").exists()

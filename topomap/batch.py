@@ -217,6 +217,31 @@ def _up_to_date(rec: dict, settings: dict, folder: Path) -> bool:
     return all(_stat(folder / name) == v for name, v in files.items())
 
 
+def _same_file(a, b) -> bool:
+    if os.path.realpath(a) == os.path.realpath(b):
+        return True
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return False
+
+
+def _refuse_inputs_as_outputs(paths, dirs, write_options):
+    """ParameterError when an output file of the run (a map's files, changes.json, summary.csv, the
+    --bag) would be one of its input files (a map, the image its YAML names, the --previous graph)."""
+    inputs = [f for p in paths for f in _input_files(Path(p))]
+    if write_options.get("previous") is not None:
+        inputs.append(Path(os.path.abspath(write_options["previous"])))
+    outs = [(d / n, None) for d in dirs for n in (*OUTPUT_NAMES, RECORD, "changes.json")]
+    if write_options.get("bag") is not None:
+        outs.append((Path(write_options["bag"]), "--bag"))
+    for o, what in outs:
+        for i in inputs:
+            if _same_file(o, i):
+                raise ParameterError(f"{what + ' ' if what else ''}{o}: is an input of this run ({i}); "
+                                     "it would be replaced: choose another output")
+
+
 def _plan(paths, dirs, settings, overwrite):
     """Per map ``"run"`` or ``"skip"`` (with the earlier row); raises on a folder this run must not write."""
     plan, refused = [], []
@@ -529,6 +554,7 @@ def segment_many(paths: Sequence, out, *, jobs: int = 1, scheduler=None, overwri
     settings = {"resolution": None if resolution is None else float(resolution), "method": method,
                 "skeletons": bool(skeletons), **{k: write_options[k] for k in sorted(write_options)}}
     dirs = output_dirs(paths, out)
+    _refuse_inputs_as_outputs(paths, dirs, write_options)
     plan = _plan(paths, dirs, settings, overwrite)
     many = len(paths) > 1
     rows = [dict(earlier, map=str(p), output=str(d), status=SKIPPED) if what == "skip"
