@@ -255,7 +255,8 @@ def test_resume_after_a_kill(tmp_path):
     script = tmp_path / "killer.py"
     script.write_text(_KILLER)
     args = [sys.executable, str(script), "3", "segment", *map(str, maps), "-o", str(out)]
-    p = subprocess.run(args, capture_output=True, text=True, timeout=300)
+    env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[1]))  # this checkout's topomap
+    p = subprocess.run(args, capture_output=True, text=True, timeout=300, env=env)
     assert p.returncode == -signal.SIGKILL, p.stderr
     # killed while writing the third map: the first two complete, no half-written file under a final name
     third = out / "plan"
@@ -399,3 +400,46 @@ def test_keep_freed_memory_shares_the_pages_between_threads():
     default, kept, one = faults("default", "thread"), faults("keep", "thread"), faults("keep")
     assert kept * 4 < default, (kept, default)
     assert kept < 1.5 * one, (kept, one)
+
+
+def test_summary_floats_are_rounded(tmp_path):
+    rows = [{"map": "a.png", "output": "o/a", "status": "ok", "rooms": 2, "doors": 1, "fragments": 0,
+             "room_area_m2": 154.39500000000004, "fragment_area_m2": 0.1 + 0.2, "seconds": 1.5, "error": ""}]
+    batch._write_summary(rows, tmp_path / "summary.csv")
+    text = (tmp_path / "summary.csv").read_text()
+    assert "154.395," in text and ",0.3," in text and "00000" not in text
+    assert read_summary(tmp_path / "summary.csv")[0]["room_area_m2"] == 154.395
+
+
+def test_output_dirs_stay_inside_out(tmp_path):
+    out = tmp_path / "out"
+    dirs = output_dirs(["m/...png", "m/..png", "m/b.png"], out)
+    assert dirs == [out / "__", out / "_", out / "b"]
+    for d in dirs:
+        assert d.resolve().parent == out.resolve()
+
+
+def test_rerun_after_the_previous_graph_changed_runs_again(tmp_path):
+    p = png(tmp_path, "a.png", T.gray(T.two_rooms().array))
+    assert invoke("segment", p, "-o", tmp_path / "o1").exit_code == 0
+    prev = tmp_path / "prev.graphml"
+    prev.write_bytes((tmp_path / "o1" / "rooms.graphml").read_bytes())
+    assert invoke("segment", p, "-o", tmp_path / "o2", "--previous", prev).exit_code == 0
+    assert "up to date" in invoke("segment", p, "-o", tmp_path / "o2", "--previous", prev).stdout
+    prev.write_bytes(prev.read_bytes() + b"\n")  # changed
+    r = invoke("segment", p, "-o", tmp_path / "o2", "--previous", prev)
+    assert r.exit_code == 0 and "up to date" not in r.stdout
+    (tmp_path / "o2" / "changes.json").unlink()
+    r = invoke("segment", p, "-o", tmp_path / "o2", "--previous", prev)
+    assert "up to date" not in r.stdout and (tmp_path / "o2" / "changes.json").exists()
+
+
+def test_an_input_is_never_an_output(tmp_path):
+    m = ros_map(tmp_path / "labels", T.two_rooms())  # labels.yaml + labels.pgm, -o their folder
+    before = m.read_bytes()
+    r = invoke("segment", m, "-o", tmp_path)
+    assert r.exit_code == 1 and "is an input of this run" in r.stderr and m.read_bytes() == before
+    p = png(tmp_path, "a.png", T.gray(T.two_rooms().array))
+    with pytest.raises(ParameterError, match="--bag .*is an input of this run"):
+        segment_many([p], tmp_path / "o", write_options={"bag": str(p)})
+    assert not (tmp_path / "o").exists()

@@ -712,16 +712,17 @@ def test_stale_temporaries_of_killed_runs_removed(tmp_path):
 
     dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True,
                           text=True).stdout.strip()
-    stale = tmp_path / f".labels.png.p{dead}.k2j3h4g5.tmp"
-    live = tmp_path / f".rooms.json.p{os.getppid()}.a1b2c3d4.tmp"  # a running process (our parent)
-    old_style = tmp_path / ".overlay.png.zz9x8c7v.tmp"
-    other = tmp_path / ".notes.tmp"
-    for f in (stale, live, old_style, other):
+    stale = tmp_path / f".labels.png.topomap-p{dead}.k2j3h4g5.tmp"
+    live = tmp_path / f".rooms.json.topomap-p{os.getppid()}.a1b2c3d4.tmp"  # a running process (our parent)
+    # the user's own files, whatever their names look like, old ones too
+    users = [tmp_path / n for n in (".notes.tmp", ".notes.txt.download.tmp", f".draft.p{dead}.autosave.tmp",
+                                    ".overlay.png.zz9x8c7v.tmp")]
+    for f in (stale, live, *users):
         f.write_text("x")
-    os.utime(old_style, (0, 0))  # older than an hour
+        os.utime(f, (0, 0))  # old
     with atomic_write(tmp_path / "out.txt", "w") as fh:
         fh.write("ok")
-    assert sorted(f.name for f in tmp_path.iterdir()) == sorted([live.name, other.name, "out.txt"])
+    assert sorted(f.name for f in tmp_path.iterdir()) == sorted([live.name, *(f.name for f in users), "out.txt"])
 
 
 def test_cli_refuses_empty_or_file_output(tmp_path):

@@ -56,6 +56,7 @@ import csv
 import io as _io
 import json
 import logging
+import math
 import os
 import sys
 import time
@@ -105,6 +106,12 @@ _STAGES = ("start", "import", "warmup", "load", "previous", "preprocess", "walls
 # Output folders
 # --------------------------------------------------------------------------
 
+def _safe_part(name: str) -> str:
+    """A folder name for one part of a map's path: a name that is empty or only dots (the stem of
+    ``...png`` is ``..``) would leave ``out``; its dots become underscores (``..`` -> ``__``)."""
+    return name if name.strip(".") else "_" * max(len(name), 1)
+
+
 def output_dirs(paths: Sequence, out) -> list:
     """The output folder of every map of a batch (the rule of the module docstring).
 
@@ -137,7 +144,7 @@ def output_dirs(paths: Sequence, out) -> list:
         seen[a] = p
     base = Path(os.path.commonpath([str(a.parent) for a in absolute]))
     rel = [a.relative_to(base) for a in absolute]
-    stems = [r.parent / r.stem if r.suffix else r for r in rel]
+    stems = [Path(*r.parent.parts, _safe_part(r.stem if r.suffix else r.name)) for r in rel]
     count = Counter(stems)
     dirs = [out / (s if count[s] == 1 else s.parent / f"{s.name}_{r.suffix[1:]}") for s, r in zip(stems, rel)]
     clash = Counter(dirs)
@@ -210,6 +217,31 @@ def _up_to_date(rec: dict, settings: dict, folder: Path) -> bool:
     return all(_stat(folder / name) == v for name, v in files.items())
 
 
+def _same_file(a, b) -> bool:
+    if os.path.realpath(a) == os.path.realpath(b):
+        return True
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return False
+
+
+def _refuse_inputs_as_outputs(paths, dirs, write_options):
+    """ParameterError when an output file of the run (a map's files, changes.json, summary.csv, the
+    --bag) would be one of its input files (a map, the image its YAML names, the --previous graph)."""
+    inputs = [f for p in paths for f in _input_files(Path(p))]
+    if write_options.get("previous") is not None:
+        inputs.append(Path(os.path.abspath(write_options["previous"])))
+    outs = [(d / n, None) for d in dirs for n in (*OUTPUT_NAMES, RECORD, "changes.json")]
+    if write_options.get("bag") is not None:
+        outs.append((Path(write_options["bag"]), "--bag"))
+    for o, what in outs:
+        for i in inputs:
+            if _same_file(o, i):
+                raise ParameterError(f"{what + ' ' if what else ''}{o}: is an input of this run ({i}); "
+                                     "it would be replaced: choose another output")
+
+
 def _plan(paths, dirs, settings, overwrite):
     """Per map ``"run"`` or ``"skip"`` (with the earlier row); raises on a folder this run must not write."""
     plan, refused = [], []
@@ -265,6 +297,14 @@ def _run_one(task: dict) -> dict:
     previous = claimed = None
     try:
         inputs = _fingerprint(Path(task["path"]))
+        extra_out = []
+        for key in ("previous", "bag"):  # the --previous graph is an input, the --bag an output
+            given = task["write_options"].get(key)
+            if given is not None:
+                if key == "previous":
+                    inputs[os.path.abspath(given)] = _stat(given)
+                else:
+                    extra_out.append(os.path.abspath(given))
         record = {"topomap": _version(), "input": task["input"], "inputs": inputs, "settings": s}
         folder.mkdir(parents=True, exist_ok=True)
         # writing the record removes the temporaries a killed run left here (io.atomic_write)
@@ -282,7 +322,8 @@ def _run_one(task: dict) -> dict:
                    fragment_area_m2=float(seg.fragment_area))
         row["seconds"] = time.perf_counter() - t0
         row.update({f"t_{k}": float(v) for k, v in seg.timings.items()})
-        files = {n: _stat(folder / n) for n in OUTPUT_NAMES if (folder / n).exists()}
+        files = {n: _stat(folder / n) for n in (*OUTPUT_NAMES, "changes.json") if (folder / n).exists()}
+        files.update({f: _stat(f) for f in extra_out})
         _write_record(folder, dict(record, status=COMPLETE, files=files, row=row))
         row["error"] = ""
         row["traceback"] = ""
@@ -391,13 +432,21 @@ def _columns(rows) -> list:
     return [*SUMMARY_COLUMNS, *stages, "error"]
 
 
+def _cell(v):
+    """A summary cell: floats rounded to 12 significant digits (``154.395``, not the
+    ``154.39500000000004`` a sum of cell areas gives), written as the repr of the rounded value."""
+    if type(v) is float and math.isfinite(v):
+        return repr(float(f"{v:.12g}"))
+    return v
+
+
 def _write_summary(rows, path: Path):
     from .io import atomic_write
 
     buf = _io.StringIO()
     w = csv.DictWriter(buf, fieldnames=_columns(rows), restval="", extrasaction="ignore", lineterminator="\n")
     w.writeheader()
-    w.writerows(rows)
+    w.writerows([{k: _cell(v) for k, v in r.items()} for r in rows])
     with atomic_write(path, "w") as fh:
         fh.write(buf.getvalue())
 
@@ -505,6 +554,7 @@ def segment_many(paths: Sequence, out, *, jobs: int = 1, scheduler=None, overwri
     settings = {"resolution": None if resolution is None else float(resolution), "method": method,
                 "skeletons": bool(skeletons), **{k: write_options[k] for k in sorted(write_options)}}
     dirs = output_dirs(paths, out)
+    _refuse_inputs_as_outputs(paths, dirs, write_options)
     plan = _plan(paths, dirs, settings, overwrite)
     many = len(paths) > 1
     rows = [dict(earlier, map=str(p), output=str(d), status=SKIPPED) if what == "skip"

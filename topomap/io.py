@@ -896,10 +896,9 @@ def yaml_text(meta: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
-#: Temporary files :func:`atomic_write` makes: ``.NAME.pPID.RANDOM.tmp``.
-_TMP_RE = re.compile(r"^\..+\.p(\d+)\.[A-Za-z0-9_]+\.tmp$")
-#: Temporaries of the earlier naming (``.NAME.RANDOM.tmp``, no PID) older than this many seconds are stale.
-_OLD_TMP_AGE = 3600.0
+#: Temporary files :func:`atomic_write` makes: ``.NAME.topomap-pPID.RANDOM.tmp`` (the ``topomap-`` marker:
+#: a user's own ``.draft.p4000000.autosave.tmp`` is not ours).
+_TMP_RE = re.compile(r"^\..+\.topomap-p(\d+)\.[A-Za-z0-9_]{8}\.tmp$")
 
 
 def _pid_alive(pid: int) -> bool:
@@ -915,23 +914,20 @@ def _pid_alive(pid: int) -> bool:
 def remove_stale_temporaries(folder) -> int:
     """Remove the temporary files killed runs of :func:`atomic_write` left in ``folder``.
 
-    A temporary is ours when its name is ``.NAME.pPID.RANDOM.tmp``; it is
-    stale when process ``PID`` no longer runs (files of the earlier naming,
-    without a PID, when older than an hour). Other files are never touched.
+    A temporary is ours when its name is ``.NAME.topomap-pPID.RANDOM.tmp``;
+    it is stale when process ``PID`` no longer runs. Other files (a user's
+    own ``.notes.txt.download.tmp``) are never touched.
 
     Returns
     -------
     int
         How many files were removed.
     """
-    import time
-
     removed = 0
     try:
         entries = list(os.scandir(folder))
     except OSError:
         return 0
-    now = time.time()
     for e in entries:
         name = e.name
         if not (name.startswith(".") and name.endswith(".tmp")):
@@ -940,11 +936,7 @@ def remove_stale_temporaries(folder) -> int:
         try:
             if not e.is_file(follow_symlinks=False):
                 continue
-            if m is not None:
-                stale = int(m.group(1)) != os.getpid() and not _pid_alive(int(m.group(1)))
-            else:
-                stale = re.match(r"^\..+\.[A-Za-z0-9_]{8}\.tmp$", name) is not None and \
-                    now - e.stat(follow_symlinks=False).st_mtime > _OLD_TMP_AGE
+            stale = m is not None and int(m.group(1)) != os.getpid() and not _pid_alive(int(m.group(1)))
             if stale:
                 os.unlink(e.path)
                 removed += 1
@@ -980,7 +972,7 @@ def atomic_write(path, mode: Optional[str] = "wb"):
     or a file object open in ``mode``. The file gets the permissions of the
     file it replaces, or the umask's default for a new one.
 
-    The temporary is named ``.NAME.pPID.RANDOM.tmp``; temporaries that killed
+    The temporary is named ``.NAME.topomap-pPID.RANDOM.tmp``; temporaries that killed
     runs left in the folder are removed first (:func:`remove_stale_temporaries`).
     Errors name ``path``, never the temporary: a failed write (a full disk)
     is a :class:`~topomap.errors.MapFileError`. Text modes write UTF-8, file
@@ -993,7 +985,7 @@ def atomic_write(path, mode: Optional[str] = "wb"):
         raise MapFileError(_msg(path.parent, f"cannot create the output folder: {exc.strerror or exc}")) from None
     remove_stale_temporaries(path.parent)
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.p{os.getpid()}.", suffix=".tmp", dir=path.parent)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.topomap-p{os.getpid()}.", suffix=".tmp", dir=path.parent)
     except OSError as exc:
         raise MapFileError(_msg(path, f"cannot write: {exc.strerror or exc}")) from None
     os.close(fd)
