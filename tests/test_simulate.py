@@ -138,3 +138,28 @@ def test_bad_arguments(plan):
         simulate_scan(plan, options={"range_max": 5})
     with pytest.raises(ParameterError, match="FloorPlan"):
         simulate_scan(plan.walls)
+
+
+def test_only_doors_of_dead_end_rooms_are_closed():
+    from _floorplans import big_home
+
+    plan = big_home(2, 2)  # two corridors joined by a door, two rooms off each
+    r = simulate_scan(plan, options=ScanOptions(**{**CLEAN, "closed_doors": 1.0}), seed=2)
+    joins = [i for i, d in enumerate(plan.doors) if min(d.rooms) > 0 and
+             sum(min(e.rooms) > 0 and set(e.rooms) & set(d.rooms) != set() for e in plan.doors) > 1
+             and all(len({x for e in plan.doors if k in e.rooms for x in e.rooms} - {k}) > 1 for k in d.rooms)]
+    assert joins, "the plan has a door between two corridors"
+    assert not set(joins) & set(r.closed_doors)
+    assert len(r.closed_doors) == len(plan.doors) - len(joins)
+    corridors = {k for d in (plan.doors[i] for i in joins) for k in d.rooms}
+    assert corridors <= set(r.visited)  # the robot still walks both corridors
+
+
+def test_the_robot_maps_the_largest_part_of_a_home_in_pieces():
+    from topomap.simulate import _largest_part
+
+    adj = {1: {2}, 2: {1}, 3: {4}, 4: {3, 5}, 5: {4}}  # two parts no door joins: {1, 2} and {3, 4, 5}
+    area = np.array([0, 50, 50, 10, 10, 10])
+    assert _largest_part(adj, area) == {1, 2}
+    area = np.array([0, 5, 5, 10, 10, 0])  # room 5 has no robot space: left out
+    assert _largest_part(adj, area) == {3, 4}

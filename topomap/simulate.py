@@ -174,8 +174,11 @@ class ScanOptions(_Options):
         placed inside the rooms away from the doors: 0.05 (a 12 m² bedroom
         gets about one piece beyond its plan's own objects).
     closed_doors : float
-        Share of the doors that are closed, in [0, 1]: 0.1. A closed door
-        is a wall to the laser and to the robot.
+        Share of the doors that are closed, in [0, 1]: 0.1, drawn among the
+        doors of dead-end rooms only (a bedroom, a bathroom, a closet off
+        the robot's way; a door on its way between rooms would have been
+        opened for the mapping run). A closed door is a wall to the laser
+        and to the robot, and the room behind it stays unknown.
     people_per_metre : float
         People the robot meets per metre of its path: 0.02 (one every 50 m).
         Each stands near the path while the robot passes and leaves a speck
@@ -512,7 +515,8 @@ def build_world(plan: FloorPlan, options: Optional[ScanOptions] = None, rng=None
     -------
     World
         Doors closed: ``round(closed_doors * len(plan.doors))`` of them, at
-        random; each is drawn as a leaf 3 cells (at least 0.1 m) thick
+        random among the doors :func:`_closable_doors` allows (at most
+        all of those); each is drawn as a leaf 3 cells (at least 0.1 m) thick
         along its segment. Furniture: the plan's object boxes (whole boxes)
         with ``plan_furniture``, and random pieces at ``furniture_density``
         per m² of room. Glass: windows of ``window_width`` on the facade.
@@ -523,8 +527,9 @@ def build_world(plan: FloorPlan, options: Optional[ScanOptions] = None, rng=None
     res = plan.resolution
     blocked = np.zeros(plan.shape, bool)
     n_doors = len(plan.doors)
-    n_closed = int(round(options.closed_doors * n_doors))
-    closed = tuple(sorted(int(i) for i in rng.choice(n_doors, size=n_closed, replace=False))) \
+    closable = _closable_doors(plan)
+    n_closed = min(int(round(options.closed_doors * n_doors)), len(closable))
+    closed = tuple(sorted(int(closable[i]) for i in rng.choice(len(closable), size=n_closed, replace=False))) \
         if n_closed else ()
     leaf = max(1.5 * res, 0.05)
     for i in closed:
@@ -570,6 +575,49 @@ def _room_graph(plan: FloorPlan, closed: tuple) -> dict:
     return adj
 
 
+def _closable_doors(plan: FloorPlan) -> list:
+    """Indices of the doors that may be closed: the doors of dead-end rooms.
+
+    A robot that maps a home passes every door on its way between rooms (a
+    closed one there would be opened, or the map is not of the home); it
+    finds closed the doors of rooms off its way: a bedroom, a bathroom, a
+    closet. So a door may be closed only where one of its two rooms is
+    reached through no other room (one neighbour in the room graph) and has
+    no door to the outside (the robot comes in there).
+    """
+    adj = _room_graph(plan, ())
+    entered = {r for d in plan.doors if 0 in d.rooms for r in d.rooms}
+    out = []
+    for i, d in enumerate(plan.doors):
+        a, b = (int(v) for v in d.rooms)
+        if a <= 0 or b <= 0 or a == b:
+            continue
+        if any(len(adj.get(r, ())) == 1 and r not in entered for r in (a, b)):
+            out.append(i)
+    return out
+
+
+def _largest_part(adj: dict, area: np.ndarray) -> set:
+    """The rooms (labels with ``area > 0``) of the connected part of the room graph ``adj`` with the
+    largest area."""
+    rooms = [r for r in range(1, len(area)) if area[r] > 0]
+    best, best_area, seen = set(), -1, set()
+    for r in rooms:
+        if r in seen:
+            continue
+        part, stack = {r}, [r]
+        while stack:
+            for b in adj.get(stack.pop(), ()):
+                if b not in part and 0 < b < len(area) and area[b] > 0:
+                    part.add(b)
+                    stack.append(b)
+        seen |= part
+        total = int(sum(area[k] for k in part))
+        if total > best_area:
+            best, best_area = part, total
+    return best
+
+
 def _room_order(plan, reach_labels, adj, start, rng) -> list:
     """A depth-first walk over the room graph from ``start`` (neighbours in random order), then
     any reachable room the graph misses."""
@@ -607,7 +655,9 @@ def robot_path(plan: FloorPlan, options: Optional[ScanOptions] = None, rng=None,
 
     The robot moves on the free cells inside the home (doors included)
     farther than ``clearance`` from every wall and obstacle. It starts in a
-    room with a door to the outside (or the room with most neighbours),
+    room with a door to the outside (or the room with most neighbours) of
+    the largest part of the home the room graph joins (a plan may hold two
+    flats, or a stair hall no door joins to the rest: a robot maps one),
     takes the rooms in a depth-first walk over the room-door graph, the
     first ``max(1, round(explore * rooms))`` of those it can reach, and in
     each room visits waypoints (the most open point first, then farthest
@@ -657,14 +707,14 @@ def robot_path(plan: FloorPlan, options: Optional[ScanOptions] = None, rng=None,
     entrance = sorted({max(int(v) for v in d.rooms) for i, d in enumerate(plan.doors)
                        if min(int(v) for v in d.rooms) == 0 and
                        (world is None or i not in world.closed_doors)})
-    entrance = [r for r in entrance if 0 < r <= n_rooms and area[r] > 0]
+    home = _largest_part(adj, area)
+    if not home:
+        return empty
+    entrance = [r for r in entrance if r in home]
     if entrance:
         start = entrance[int(rng.integers(len(entrance)))]
     else:
-        cand = [r for r in range(1, n_rooms + 1) if area[r] > 0]
-        if not cand:
-            return empty
-        start = max(cand, key=lambda r: (len(adj.get(r, ())), area[r], -r))
+        start = max(sorted(home), key=lambda r: (len(adj.get(r, ())), area[r], -r))
     # the rooms the robot can reach from the start room's biggest piece of robot space
     sc = np.bincount(comp[labels == start].ravel())
     piece = int(np.argmax(sc))
