@@ -464,3 +464,13 @@ def test_json_writes_non_finite_numbers_as_null(tmp_path):
     text = p.read_text()
     json.loads(text, parse_constant=lambda c: pytest.fail(f"bare {c} in rooms.json"))
     assert math.isnan(load_json(p).nodes[n]["area"])
+
+
+def test_graphml_of_a_non_utf8_source_name_loads(tmp_path):
+    import networkx as nx
+    from topomap.export import load_graphml, save_graphml
+
+    G = nx.MultiGraph(source=b"caf\xe9\x01.png".decode("utf-8", "surrogateescape"))
+    G.add_node(1, area=1.0)
+    save_graphml(G, tmp_path / "g.graphml")
+    assert load_graphml(tmp_path / "g.graphml").graph["source"] == "caf\\xe9\\x01.png"

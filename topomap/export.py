@@ -668,7 +668,21 @@ _XML_HEAD = ("<?xml version='1.0' encoding='utf-8'?>\n<graphml xmlns=\"http://gr
              ".org/xmlns http://graphml.graphdrawing.org/xmlns/1.0/graphml.xsd\">")
 
 
+#: Characters XML 1.0 cannot hold, not even as a character reference (lone surrogates: the bytes of a
+#: file name that is not UTF-8, as Python decodes it).
+_NOT_XML = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ud800-\udfff\ufffe\uffff]")
+
+
+def _escape_bad(m) -> str:
+    c = ord(m.group())
+    if 0xDC80 <= c <= 0xDCFF:  # a byte of a non-UTF-8 name (surrogateescape): written as \xNN
+        return f"\\x{c - 0xDC00:02x}"
+    return f"\\x{c:02x}" if c < 0x100 else f"\\u{c:04x}"
+
+
 def _xml_text(v: str) -> str:
+    if not (v.isascii() and v.isprintable()):
+        v = _NOT_XML.sub(_escape_bad, v)
     return v.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
 
 
