@@ -61,9 +61,9 @@ def table(rows) -> str:
     for r in rows:
         groups.setdefault((r["method"], r["variant"]), []).append(r)
     order = sorted(groups, key=lambda k: (k[1] != "plan", list(dict.fromkeys(r["method"] for r in rows)).index(k[0])))
-    out = ["| method | variant | cases | P (%) | R (%) | rooms found / true | door P (%) | door R (%) "
-           "| median s / case | failed |",
-           "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
+    out = ["| method | variant | cases | P (%) | R (%) | ceiling P / R (%) | free-cells P / R (%) "
+           "| rooms found / true | door P (%) | door R (%) | median s / case | failed |",
+           "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
     for key in order:
         g = groups[key]
         ok = [r for r in g if not r.get("error")]
@@ -74,6 +74,8 @@ def table(rows) -> str:
         rooms = f"{sum(int(r['n_rooms']) for r in ok)} / {sum(int(r['n_true_rooms']) for r in ok)}" if ok else "–"
         secs = np.median([float(r["runtime_s"]) for r in g]) if g else float("nan")
         out.append(f"| {key[0]} | {key[1]} | {len(ok)} | {_mean_pct(ok, 'precision')} | {_mean_pct(ok, 'recall')} "
+                   f"| {_mean_pct(ok, 'ceiling_precision')} / {_mean_pct(ok, 'ceiling_recall')} "
+                   f"| {_mean_pct(ok, 'precision_free')} / {_mean_pct(ok, 'recall_free')} "
                    f"| {rooms} | {'–' if doorless else _ratio(tp, n_pred)} | {_ratio(tp, n_true)} "
                    f"| {secs:.2f} | {len(g) - len(ok)} |")
     return "\n".join(out) + "\n"

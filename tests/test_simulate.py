@@ -163,3 +163,18 @@ def test_the_robot_maps_the_largest_part_of_a_home_in_pieces():
     assert _largest_part(adj, area) == {1, 2}
     area = np.array([0, 5, 5, 10, 10, 0])  # room 5 has no robot space: left out
     assert _largest_part(adj, area) == {3, 4}
+
+
+def test_drift_is_bounded_however_long_the_path():
+    """The SLAM's residual error stays near drift_xy / drift_yaw on a long path (no random walk
+    that grows with the distance: a 400 m path would otherwise shift walls by metres)."""
+    from topomap.simulate import scan_poses
+    path = np.stack([np.zeros(8001), np.arange(8001.0)], axis=1)  # 400 m at 0.05 m a cell
+    opts = ScanOptions(**{**CLEAN, "drift_xy": 0.03, "drift_yaw": 0.5})
+    true, believed = scan_poses(path, 0.05, opts, np.random.default_rng(3))
+    err_m = np.hypot(*(believed[:, :2] - true[:, :2]).T) * 0.05
+    assert err_m[0] == 0.0
+    assert np.percentile(err_m, 99) < 0.15            # 3.5 sigma of the 2-D error, not metres
+    assert 0.01 < np.sqrt(np.mean(err_m ** 2)) < 0.07  # about sqrt(2) * 0.03
+    yaw = np.degrees(np.abs(believed[:, 2] - true[:, 2]))
+    assert np.percentile(yaw, 99) < 2.0 and yaw.max() > 0.1

@@ -18,8 +18,8 @@ The stages, each a function of its own:
 3. :func:`robot_path`: the robot's path through the rooms it visits, door
    to door, kept ``clearance`` away from every obstacle.
 4. :func:`scan_poses`: poses along the path every ``pose_spacing`` metres,
-   and the poses the SLAM believes (a small random walk of the odometry,
-   the pose drift).
+   and the poses the SLAM believes (a small bounded error of position and
+   heading that wanders along the path, the SLAM's residual drift).
 5. :func:`cast_rays`: one laser scan per pose, ray cast on the grid against
    the world and the people walking by, with range noise and beams that
    return nothing.
@@ -38,7 +38,8 @@ as in real maps); closed doors; furniture seen only where the path lets the
 laser see it (tables only by their legs); people walking by, left in the
 map as specks where no later beam cleared them; rooms the robot never
 entered, unknown except what was seen through their doors; the odometry
-drift of a SLAM that never fully corrects it.
+error a SLAM leaves after scan matching and loop closure (a few
+centimetres, half a degree).
 
 What is not, so the simulated maps are cleaner than real ones: beams are
 rays of zero width on the grid (no beam divergence, no mixed pixels at
@@ -158,14 +159,20 @@ class ScanOptions(_Options):
     window_width : float
         Width of one window, m: 1.2 m (a two-leaf window).
     drift_xy : float
-        Odometry error of the SLAM's pose per square root of the distance
-        travelled, m / sqrt(m), along x and along y: 0.01 (a random walk of
-        about 0.1 m over a 100 m path: what remains after a SLAM's scan
-        matching).
+        The SLAM's residual position error, m (standard deviation along x
+        and along y): 0.03. What remains after scan matching and loop
+        closure: a wall seen twice from poses far apart on the path comes
+        out doubled or thickened by a few centimetres, never shifted by a
+        room. The error is bounded (it reverts to zero over
+        ``drift_length``), not a random walk that grows with the path: a
+        SLAM closes its loops, dead reckoning does not.
     drift_yaw : float
-        Heading error per square root of the distance travelled, degrees /
-        sqrt(m): 0.1 (about 1 deg over 100 m, so walls seen from far apart
-        poses come out doubled and slightly bent).
+        The SLAM's residual heading error, degrees (standard deviation):
+        0.5 (a wall 5 m away moves by about 4 cm: slightly bent walls).
+    drift_length : float
+        Path length over which the error changes, m: 5.0 (about a room: the
+        scans of one room agree with each other better than with the scans
+        of a room visited much later).
     plan_furniture : bool
         Draw the plan's object boxes (fixtures, furniture) as obstacles:
         True (a home is furnished).
@@ -207,8 +214,9 @@ class ScanOptions(_Options):
     free_thresh: float = _opt(FREE_THRESH, "fraction")
     glass_share: float = _opt(0.15, "fraction")
     window_width: float = _opt(1.2, "length")
-    drift_xy: float = _opt(0.01, "ratio")
-    drift_yaw: float = _opt(0.1, "ratio")
+    drift_xy: float = _opt(0.03, "length")
+    drift_yaw: float = _opt(0.5, "ratio")
+    drift_length: float = _opt(5.0, "length")
     plan_furniture: bool = _opt(True, "bool")
     furniture_density: float = _opt(0.05, "ratio")
     closed_doors: float = _opt(0.1, "fraction")
@@ -219,7 +227,7 @@ class ScanOptions(_Options):
     def __post_init__(self):
         super().__post_init__()
         for name in ("range_max", "angle_step", "pose_spacing", "room_coverage", "window_width",
-                     "person_width"):
+                     "person_width", "drift_length"):
             if getattr(self, name) <= 0:
                 raise ParameterError(f"{name} must be > 0, got {getattr(self, name)!r}")
         if self.field_of_view <= 0 or self.field_of_view > 360:
@@ -770,10 +778,11 @@ def scan_poses(path: np.ndarray, resolution: float, options: Optional[ScanOption
         Pixel ``(row, col, heading)``: the cell centre of each scan and the
         heading (radians, counter-clockwise from the grid's +x, i.e. the
         image's columns). One pose every ``pose_spacing`` metres of the
-        path (and at its two ends). ``believed`` adds the drift: the
-        odometry increments rotated by an accumulated heading error (a
-        random walk of ``drift_yaw`` deg / sqrt(m)) plus a position random
-        walk of ``drift_xy`` m / sqrt(m); positions rounded to cells.
+        path (and at its two ends). ``believed`` adds the SLAM's residual
+        error: position and heading errors that wander along the path as an
+        Ornstein-Uhlenbeck process (standard deviations ``drift_xy`` m and
+        ``drift_yaw`` degrees, correlation length ``drift_length`` m),
+        starting at zero where the map starts; positions rounded to cells.
     """
     options = options or ScanOptions()
     rng = rng if rng is not None else np.random.default_rng(0)
@@ -796,17 +805,30 @@ def scan_poses(path: np.ndarray, resolution: float, options: Optional[ScanOption
     heading = np.arctan2(-dr, dc)
     true = np.stack([np.rint(rows), np.rint(cols), heading], axis=1)
     step = np.diff(at, prepend=0.0)  # metres since the previous pose
-    sq = np.sqrt(step)
-    e_yaw = np.cumsum(rng.normal(0.0, 1.0, len(at)) * sq) * math.radians(options.drift_yaw)
-    e_xy = np.cumsum(rng.normal(0.0, 1.0, (len(at), 2)) * sq[:, None], axis=0) * (options.drift_xy / resolution)
-    d = np.diff(np.stack([rows, cols], axis=1), axis=0, prepend=[[rows[0], cols[0]]])
-    c, s_ = np.cos(e_yaw), np.sin(e_yaw)
-    # rotate the increments by the heading error, counter-clockwise in the grid (rows point down)
-    inc_r = c * d[:, 0] - s_ * d[:, 1]
-    inc_c = s_ * d[:, 0] + c * d[:, 1]
-    br = rows[0] + np.cumsum(inc_r) + e_xy[:, 0]
-    bc = cols[0] + np.cumsum(inc_c) + e_xy[:, 1]
-    believed = np.stack([np.rint(br), np.rint(bc), heading + e_yaw], axis=1)
+    noise = rng.normal(0.0, 1.0, (len(at), 3))
+    err = _wander(noise, step, options.drift_length)
+    e_yaw = err[:, 2] * math.radians(options.drift_yaw)
+    e_xy = err[:, :2] * (options.drift_xy / resolution)
+    believed = np.stack([np.rint(rows + e_xy[:, 0]), np.rint(cols + e_xy[:, 1]), heading + e_yaw], axis=1)
+    return true, believed
+
+
+def _wander(noise: np.ndarray, step: np.ndarray, length: float) -> np.ndarray:
+    """A unit-variance Ornstein-Uhlenbeck process along the path, zero at its start.
+
+    ``noise`` (K, C) standard normal draws, ``step`` (K,) metres since the previous sample,
+    ``length`` the correlation length in metres: x_k = a x_{k-1} + sqrt(1 - a^2) n_k with
+    a = exp(-step_k / length), so the error stays bounded (standard deviation 1 far from the
+    start) however long the path.
+    """
+    a = np.exp(-np.asarray(step, float) / length)
+    b = np.sqrt(1.0 - a * a)
+    out = np.zeros_like(noise, dtype=float)
+    x = np.zeros(noise.shape[1])
+    for k in range(len(a)):
+        x = a[k] * x + b[k] * noise[k]
+        out[k] = x
+    return out
     return true, believed
 
 
