@@ -4,6 +4,7 @@
     python benchmarks/quick_eval.py '{"rise": 0.2}'         # options as JSON
     python benchmarks/quick_eval.py '{}' real --jobs 2      # only the real maps ("ipa": only the plans)
     python benchmarks/quick_eval.py '{}' --out rows.json    # per-map rows too
+    python benchmarks/quick_eval.py '{}' plan,scan --corpus CORPUS --every 4   # a simulated corpus, every 4th case
 
 Every map is loaded as ``topomap segment`` loads it (``BenchmarkMap.load``:
 the real maps through their YAML, the plans as images at 0.05 m/px),
@@ -25,7 +26,7 @@ from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
-from topomap.datasets import benchmark_dir, load_benchmark, load_labelled, real_maps_dir
+from topomap.datasets import benchmark_dir, load_benchmark, load_labelled, load_simulated, real_maps_dir
 from topomap.evaluation import evaluate
 from topomap.segmentation import segment
 
@@ -36,6 +37,8 @@ GROUPS = [
     ("bremen_cartesium_full", lambda r: r["map"] == "bremen_cartesium_full"),
     ("ipa unfurnished", lambda r: r["variant"] == "unfurnished"),
     ("ipa furnished", lambda r: r["variant"] == "furnished"),
+    ("simulated plans", lambda r: r["variant"] == "plan"),
+    ("simulated scans", lambda r: r["variant"] == "scan"),
 ]
 
 
@@ -49,7 +52,8 @@ def score(task):
                   resolution=grid.resolution, door_map_gray=bm.unfurnished_gray, scored=grid.free,
                   gt_rooms=bm.gt_rooms)
     return {"map": bm.name, "variant": bm.variant, "precision": float(ev["precision"]),
-            "recall": float(ev["recall"]), "rooms": int(seg.n_rooms), "true_rooms": int(ev.get("n_true_rooms", 0)),
+            "recall": float(ev["recall"]), "precision_free": float(ev["precision_free"]),
+            "recall_free": float(ev["recall_free"]), "ceiling_recall": float(ev["ceiling_recall"]), "rooms": int(seg.n_rooms), "true_rooms": int(ev.get("n_true_rooms", 0)),
             "fragments": int(seg.n_fragments), "seconds": seconds}
 
 
@@ -59,6 +63,8 @@ def main(argv=None) -> int:
     ap.add_argument("which", nargs="?", default="real,ipa", help="real, ipa or real,ipa")
     ap.add_argument("--real", default=None, help="labelled real maps (default: real_maps_dir())")
     ap.add_argument("--ipa", default=None, help="ipa_room_segmentation maps (default: benchmark_dir())")
+    ap.add_argument("--corpus", default=None, help="a simulated corpus (topomap simulate's output), for plan / scan")
+    ap.add_argument("--every", type=int, default=1, help="of the corpus, every N-th case (sorted by name)")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--out", default=None, help="write the per-map rows to this JSON file")
     a = ap.parse_args(argv)
@@ -69,17 +75,24 @@ def main(argv=None) -> int:
     if "ipa" in a.which:
         for v in ("unfurnished", "furnished"):
             tasks += [(bm, options) for bm in load_benchmark(a.ipa or benchmark_dir(), variant=v)]
+    for v in ("plan", "scan"):
+        if v in a.which.split(","):
+            cases = load_simulated(a.corpus, variant=v)
+            tasks += [(bm, options) for bm in sorted(cases, key=lambda b: b.name)[::a.every]]
     with ProcessPoolExecutor(a.jobs) as ex:
         rows = list(ex.map(score, tasks))
     if a.out:
         with open(a.out, "w") as fh:
             json.dump(rows, fh, indent=1)
-    print("| maps | P / R (original protocol) | rooms found / true |\n| --- | --- | ---: |")
+    print("| maps | P / R (original protocol) | ceiling R | P / R (free-cells) | rooms found / true |\n"
+          "| --- | --- | ---: | --- | ---: |")
     for name, sel in GROUPS:
         r = [x for x in rows if sel(x)]
         if r:
             p, rec = 100 * np.mean([x["precision"] for x in r]), 100 * np.mean([x["recall"] for x in r])
-            print(f"| {name} | {p:.1f} / {rec:.1f} | {sum(x['rooms'] for x in r)} / {sum(x['true_rooms'] for x in r)} |")
+            pf, rf = 100 * np.mean([x["precision_free"] for x in r]), 100 * np.mean([x["recall_free"] for x in r])
+            cr = 100 * np.mean([x["ceiling_recall"] for x in r])
+            print(f"| {name} | {p:.1f} / {rec:.1f} | {cr:.1f} | {pf:.1f} / {rf:.1f} | {sum(x['rooms'] for x in r)} / {sum(x['true_rooms'] for x in r)} |")
     print(f"median {np.median([x['seconds'] for x in rows]):.3f} s per map (load + segment, {a.jobs} processes)")
     return 0
 

@@ -82,7 +82,7 @@ SUMMARY = "summary.csv"
 OUTPUT_NAMES = tuple(_export.OUTPUT_FILES.values())
 #: First columns of ``summary.csv`` (``t_<stage>`` columns and ``error`` follow).
 SUMMARY_COLUMNS = ("map", "output", "status", "rooms", "doors", "fragments", "room_area_m2",
-                   "fragment_area_m2", "seconds")
+                   "fragment_area_m2", "outside_area_m2", "seconds")
 #: Values of the ``status`` column: segmented now; up to date from an earlier
 #: run; bad input or a failed write (exit code 1); an unexpected internal error
 #: (exit code 3); not run because the batch was interrupted.
@@ -319,7 +319,7 @@ def _run_one(task: dict) -> dict:
         res2 = seg.grid.resolution ** 2
         row.update(rooms=seg.n_rooms, doors=len(seg.doors), fragments=seg.n_fragments,
                    room_area_m2=float((seg.room_labels > 0).sum()) * res2,
-                   fragment_area_m2=float(seg.fragment_area))
+                   fragment_area_m2=float(seg.fragment_area), outside_area_m2=float(seg.outside_area))
         row["seconds"] = time.perf_counter() - t0
         row.update({f"t_{k}": float(v) for k, v in seg.timings.items()})
         files = {n: _stat(folder / n) for n in (*OUTPUT_NAMES, "changes.json") if (folder / n).exists()}
@@ -458,7 +458,7 @@ def read_summary(path) -> list:
             return None
         if k in ("rooms", "doors", "fragments"):
             return int(v)
-        if k in ("room_area_m2", "fragment_area_m2", "seconds") or k.startswith("t_"):
+        if k in ("room_area_m2", "fragment_area_m2", "outside_area_m2", "seconds") or k.startswith("t_"):
             return float(v)
         return v
 

@@ -238,6 +238,8 @@ def _summary(row) -> str:
     nf = row.get("fragments") or 0
     if nf:
         text += f", {_count(nf, 'fragment')} ({row['fragment_area_m2']:.4g} m²)"
+    if row.get("outside_area_m2"):
+        text += f", outside the building {row['outside_area_m2']:.4g} m²"
     return text
 
 

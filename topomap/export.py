@@ -547,6 +547,7 @@ def _door_distances(v):
 #: Types of the graph attributes (converter per attribute name).
 GRAPH_TYPES = {"resolution": float, "origin": _float_tuple, "method": _opt(str), "threshold": _opt(float),
                "map": _opt(str), "shape": _int_tuple, "n_fragments": int, "fragment_area": float,
+               "outside_area": float,
                "travel_distances": _opt(str)}
 #: Types of the room (node) attributes.
 NODE_TYPES = {"area": float, "cells": int, "x": float, "y": float, "row": float, "col": float,

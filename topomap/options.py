@@ -391,6 +391,25 @@ class TopomapOptions(_Options):
         what the map shows there. On the exploration sequences of the
         benchmark, 0.25 / 0.5 / 1.0 / 2.0 m² keep 91 / 94 / 95 / 96 % of the
         rooms' IDs, with a room F1 of 92 / 94 / 93 / 92 %. 0 turns this off.
+    outside_enclosure : float
+        A room whose cells are, on average, bounded by an obstacle in fewer
+        than this share of the eight directions around them is *outside*
+        (:mod:`topomap.outside`): 0.3. A room is bounded by walls or
+        furniture nearly all round (a cell near its open door still sees
+        walls in 5 to 8 directions); the free space a laser saw through a
+        window or an open outer door fans out beyond the facade and ends in
+        the unexplored world in most directions (0 to 2 of 8). An outside
+        region is taken out of the rooms with its doors (a region of kind
+        outside, reported apart from the rooms and fragments), so the room
+        graph never joins two rooms through it. 0 turns this off.
+    open_unknown_area : float
+        Unknown regions inside free space smaller than this (m²) are
+        obstacles seen in part (a chair, a box, clutter), not the unexplored
+        world, for ``outside_enclosure``: 1.0 m², the smallest room.
+    enclosure_window : float
+        Side (m) of the window over which ``outside_enclosure``'s counts are
+        averaged: 0.5 m. A scanned wall has gaps a single ray slips through;
+        half a metre is wider than those and narrower than a door.
     """
 
     erosion_radius: float = _opt(0.05, "length")
@@ -434,6 +453,9 @@ class TopomapOptions(_Options):
     wall_thickness: float = _opt(0.5, "length")
     prior_post_shift: float = _opt(0.15, "length")
     prior_changed_area: float = _opt(1.0, "area")
+    outside_enclosure: float = _opt(0.3, "fraction")
+    open_unknown_area: float = _opt(1.0, "area")
+    enclosure_window: float = _opt(0.5, "length")
 
     def scanned(self, straight: float) -> bool:
         """Whether a map whose wall faces lie on straight lines at a share of

@@ -290,7 +290,8 @@ def room_graph(seg) -> nx.MultiGraph:
     n = int(labels.max()) if labels.size else 0  # the largest room ID (IDs may have gaps)
     G = nx.MultiGraph(resolution=grid.resolution, origin=tuple(grid.origin), method=seg.method,
                       threshold=seg.threshold, map=grid.name, shape=tuple(labels.shape),
-                      n_fragments=int(seg.n_fragments), fragment_area=float(seg.fragment_area))
+                      n_fragments=int(seg.n_fragments), fragment_area=float(seg.fragment_area),
+                      outside_area=float(getattr(seg, "outside_area", 0.0)))
     if n == 0:
         return G
     # cell counts, row / column sums and boxes per room and the outlines: one pass over the labels

@@ -132,7 +132,8 @@ class Segmentation:
         Label per cell, on every free cell, ``0`` elsewhere: rooms are
         ``1..n_rooms``; the labels after them (``n_rooms + 1 ..``) are
         fragments, free regions too small to be a room (scan specks, rays
-        through walls), which are not in the room graph.
+        through walls) and, last, the regions outside the building
+        (:attr:`outside`), which are not in the room graph.
     doors : list of Door
         Doors between two different rooms (see :class:`topomap.doors.Door`).
     method : str
@@ -159,6 +160,12 @@ class Segmentation:
     room_count : int or None
         Number of rooms when fragments follow them in ``labels`` (see
         :attr:`n_rooms`); None: every label is a room.
+    outside : tuple of int
+        The labels (after the rooms, among the fragments' labels) of the
+        regions *outside* the building: free space a laser saw beyond the
+        facade, through a window or an open outer door
+        (``TopomapOptions.outside_enclosure``). Neither rooms nor in the
+        room graph; :attr:`outside_area` is their area.
     """
 
     grid: OccupancyGrid
@@ -174,6 +181,7 @@ class Segmentation:
     options: object = None
     intermediates: Optional[Intermediates] = field(default=None, repr=False)
     room_count: Optional[int] = None
+    outside: tuple = ()
     _room_graph: object = field(default=None, repr=False)
 
     @property
@@ -191,7 +199,8 @@ class Segmentation:
     @property
     def n_fragments(self) -> int:
         """Number of fragments: the labels above :attr:`top_room_id` (free
-        regions too small to be a room, see ``TopomapOptions.min_room_area``)."""
+        regions too small to be a room, see ``TopomapOptions.min_room_area``,
+        and the regions outside the building, :attr:`outside`)."""
         top = int(self.labels.max()) if self.labels.size else 0
         return max(top - self.top_room_id, 0)
 
@@ -206,6 +215,13 @@ class Segmentation:
     def fragment_area(self) -> float:
         """Total area of the fragments, m²."""
         return float((self.labels > self.top_room_id).sum()) * self.grid.resolution ** 2
+
+    @property
+    def outside_area(self) -> float:
+        """Total area of the regions outside the building (:attr:`outside`), m²."""
+        if not self.outside:
+            return 0.0
+        return float(np.isin(self.labels, self.outside).sum()) * self.grid.resolution ** 2
 
     @property
     def room_graph(self):
@@ -813,6 +829,17 @@ class _Walls:
         return [(P[i], Q[i]) for i in np.flatnonzero(keep)]
 
 
+def _drop_outside(grid: OccupancyGrid, labels, doors, n_rooms: int, opts: TopomapOptions):
+    """Stage "outside": the rooms a laser saw beyond the facade taken out of the rooms
+    (:mod:`topomap.outside`)."""
+    from . import outside as O
+
+    encl = O.enclosure(grid.free, grid.occupied, grid.resolution, open_area=opts.open_unknown_area,
+                       window=opts.enclosure_window)
+    is_out = O.outside_regions(labels, n_rooms, encl, threshold=8 * opts.outside_enclosure)
+    return O.drop_outside(labels, doors, n_rooms, is_out)
+
+
 def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, *, prior=None,
                     **kwargs) -> Segmentation:
     """Segment ``grid`` with topomap's default method.
@@ -957,12 +984,17 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
         min_cells = int(np.ceil(opts.min_room_area / res ** 2 - 1e-9))
         wide = d_free >= 0.5 * opts.wall_gap / res - 1e-6 if opts.wall_gap > 0 else None
         labels, door_objs, n_rooms = cut_rooms(rooms_grid, segs, space=space, min_room_cells=min_cells, wide=wide)
+    outside = ()
+    if opts.outside_enclosure > 0 and n_rooms:
+        with T("outside"):
+            labels, door_objs, n_rooms, outside = _drop_outside(rooms_grid, labels, door_objs, n_rooms, opts)
     im = Intermediates(free_mask=f, occupied_mask=occ, clearance=d_free, occupied_clearance=d_occ,
                        clutter=clutter, skeleton_factor=factor, closed_gaps=closed, wall_lines=wl.fine_lines(),
                        straight_share=straight)
     seg = Segmentation(grid=rooms_grid, labels=labels, doors=door_objs, method="topomap",
                        params=opts.as_params(), threshold=thr_px * res, free_graph=Gf, occupied_graph=Go,
-                       candidates=cands, timings=T.t, options=opts, intermediates=im, room_count=n_rooms)
+                       candidates=cands, timings=T.t, options=opts, intermediates=im, room_count=n_rooms,
+                       outside=outside)
     if box is not None:
         seg = uncrop(seg, full, box)
     log.info("%s: %d rooms, %d fragments, %d doors, threshold %.3f m (%d candidates)", full.name, seg.n_rooms,

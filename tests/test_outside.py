@@ -1,0 +1,125 @@
+"""The outside of the building (topomap.outside): free space a laser saw beyond the facade."""
+
+import numpy as np
+import pytest
+
+import topomap
+from topomap import outside as O
+from topomap.io import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
+
+
+def _facade_map():
+    """Two rooms side by side (a 0.9 m door between them), each with a 1.2 m window in the outer
+    wall; the rays through the windows fan out 4.5 m beyond the facade and the two fans meet."""
+    c = np.full((220, 300), UNKNOWN, np.int8)
+    c[20:122, 20:282] = OCCUPIED
+    c[22:120, 22:280] = FREE
+    c[22:120, 149:152] = OCCUPIED
+    c[60:78, 149:152] = FREE
+    rr, cc = np.mgrid[0:220, 0:300]
+    fans = np.zeros(c.shape, bool)
+    for c0 in (60, 210):
+        c[120:122, c0:c0 + 24] = FREE
+        fans |= (rr >= 122) & (rr < 212) & (np.abs(cc - (c0 + 12)) <= 12 + (rr - 122) * 0.9) & (c == UNKNOWN)
+    c[fans] = FREE
+    return OccupancyGrid(c, 0.05), fans
+
+
+def test_fans_beyond_the_facade_are_outside_and_join_no_rooms():
+    grid, fans = _facade_map()
+    seg = topomap.segment(grid)
+    assert seg.n_rooms == 2
+    assert [d.rooms for d in seg.doors] == [(1, 2)]           # only the door between the rooms
+    assert len(seg.outside) >= 1
+    out = np.isin(seg.labels, seg.outside)
+    assert out[fans].mean() > 0.95                              # the fans are outside ...
+    assert not out[:120].any()                                  # ... and nothing inside the facade
+    assert (seg.labels[grid.free] > 0).all()                    # every free cell still labelled
+    assert seg.outside_area == pytest.approx(out.sum() * 0.05 ** 2)
+    G = seg.room_graph
+    assert sorted(G.nodes) == [1, 2] and G.graph["outside_area"] == pytest.approx(seg.outside_area)
+
+
+def test_without_the_stage_the_fans_join_the_rooms():
+    grid, _ = _facade_map()
+    seg = topomap.segment(grid, outside_enclosure=0)
+    assert seg.outside == () and seg.outside_area == 0.0
+    assert seg.n_rooms == 3 and len(seg.doors) == 3             # the fans a room joined to both
+
+
+def test_a_room_half_explored_or_with_clutter_is_no_outside():
+    c = np.full((140, 140), UNKNOWN, np.int8)
+    c[20:102, 20:102] = OCCUPIED
+    c[22:100, 22:100] = FREE
+    c[22:100, 99:102] = FREE                                    # one side never seen: free meets unknown
+    c[40:44, 40:46] = UNKNOWN                                   # a box seen in part
+    c[70:73, 60:62] = UNKNOWN
+    seg = topomap.segment(OccupancyGrid(c, 0.05))
+    assert seg.n_rooms == 1 and seg.outside == ()
+
+
+def test_enclosure_counts_directions_that_end_at_obstacles():
+    c = np.full((60, 60), UNKNOWN, np.int8)
+    c[10:50, 10:50] = OCCUPIED
+    c[12:48, 12:48] = FREE
+    free, occ = c == FREE, c == OCCUPIED
+    e = O.enclosure(free, occ, 0.05, open_area=1.0, window=0.25, cell=0.05)
+    assert np.allclose(e[free], 8)                              # a closed room: walls every way
+    c[12:48, 48:60] = FREE                                      # its east wall gone: free to the map's edge
+    free, occ = c == FREE, c == OCCUPIED
+    e = O.enclosure(free, occ, 0.05, open_area=1.0, window=0.05, cell=0.05)
+    assert e[30, 20] == 7                                       # only due east reaches the map's edge
+    assert e[30, 55] <= 5                                       # out there, E, NE and SE do
+
+
+def test_open_unknown_is_large_or_at_the_edge():
+    c = np.full((80, 80), FREE, np.int8)
+    c[30:33, 30:33] = UNKNOWN                                   # 0.0225 m²: clutter
+    c[50:80, 0:10] = UNKNOWN                                    # at the map's edge
+    c[5:30, 50:75] = UNKNOWN                                    # 1.56 m² inside: unexplored
+    opn = O.open_unknown(c == FREE, c == OCCUPIED, 0.05, min_area=1.0)
+    assert not opn[30:33, 30:33].any() and opn[50:80, 0:10].all() and opn[5:30, 50:75].all()
+
+
+def test_drop_outside_renumbers_rooms_fragments_and_doors():
+    from topomap.doors import Door
+
+    labels = np.array([[1, 1, 2, 2, 3, 3, 4, 5]], np.int32)     # rooms 1-3, fragments 4, 5
+    doors = [Door(0, (0, 1), (0, 2), rooms=(1, 2)), Door(1, (0, 3), (0, 4), rooms=(2, 3)),
+             Door(2, (0, 1), (0, 4), rooms=(1, 3))]
+    is_out = np.array([False, False, True, False])
+    new, kept, n, outside = O.drop_outside(labels, doors, 3, is_out)
+    assert new.tolist() == [[1, 1, 5, 5, 2, 2, 3, 4]] and n == 2 and outside == (5,)
+    assert [(d.id, d.rooms) for d in kept] == [(0, (1, 2))]    # the doors of the outside room dropped
+
+
+def _first_hit_by_walking(free, hit, d):
+    H, W = free.shape
+    out = np.zeros((H, W), bool)
+    for r in range(H):
+        for c in range(W):
+            i, j = r, c
+            while 0 <= i < H and 0 <= j < W and free[i, j]:
+                i, j = i + d[0], j + d[1]
+            out[r, c] = 0 <= i < H and 0 <= j < W and bool(hit[i, j])
+    return out
+
+
+@pytest.mark.parametrize("shape", [(7, 11), (11, 7), (9, 9)])
+def test_first_hit_matches_walking_each_ray(shape):
+    rng = np.random.default_rng(sum(shape))
+    state = rng.choice(3, size=shape, p=[0.7, 0.2, 0.1])     # free, hit, open
+    free, hit = state == 0, state == 1
+    for d in O.DIRECTIONS:
+        assert np.array_equal(O._first_hit(free, hit, d), _first_hit_by_walking(free, hit, d)), d
+
+
+def test_blocks_reduce_like_the_definition():
+    rng = np.random.default_rng(5)
+    m = rng.random((13, 10)) < 0.6
+    for k in (2, 3):
+        pad = np.zeros((-(-13 // k) * k, -(-10 // k) * k), bool)
+        pad[:13, :10] = m
+        blocks = pad.reshape(pad.shape[0] // k, k, pad.shape[1] // k, k)
+        assert np.array_equal(O._blocks(m, k, np.logical_and), blocks.all(axis=(1, 3)))
+        assert np.array_equal(O._blocks(m, k, np.logical_or), blocks.any(axis=(1, 3)))

@@ -1,0 +1,218 @@
+"""The outside of the building: free space a laser saw beyond the facade.
+
+A laser SLAM map holds free space that belongs to no room: rays that passed
+a window or an open outer door fan out beyond the facade, and the free
+space they leave is bounded by nothing the laser hit. A room is bounded by
+walls (or furniture) in almost every direction; such a fan in few. This
+module measures that, cell by cell, and names the regions of the
+segmentation that are outside.
+
+The measure, :func:`enclosure`: from each free cell, look along the eight
+grid directions (the axes and the diagonals) to the first cell that is not
+free. Where that cell is an obstacle (occupied, or a small patch of unknown
+inside free space: clutter seen in part) the direction is *enclosed*; where
+it is the open unknown (unknown cells of a large region, or the map's edge),
+it is not. The count, 0 to 8, is averaged over a small window of free
+cells, since a scanned wall has gaps a single ray slips through.
+
+:func:`outside_regions` marks the rooms whose cells are, on average,
+enclosed in fewer than ``TopomapOptions.outside_enclosure`` of the eight
+directions; :func:`drop_outside` takes them out of the rooms (they become
+regions of kind "outside", after the fragments) with their doors, so the
+room graph never joins two rooms through the space outside.
+
+Each of the eight directions costs one pass over the map: time and memory
+grow linearly with the map's area.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._fast import label_stats
+
+__all__ = ["DIRECTIONS", "open_unknown", "enclosure", "outside_regions", "drop_outside"]
+
+#: The eight grid directions ``(d_row, d_col)`` :func:`enclosure` looks along.
+DIRECTIONS = ((0, 1), (0, -1), (1, 0), (-1, 0), (1, 1), (1, -1), (-1, 1), (-1, -1))
+
+
+def open_unknown(free: np.ndarray, occupied: np.ndarray, resolution: float, *, min_area: float) -> np.ndarray:
+    """Unknown cells of the open unknown: of a region of at least ``min_area`` m² or at the map's edge.
+
+    Parameters
+    ----------
+    free, occupied : (M, N) ndarray of bool
+    resolution : float
+        Metres per cell.
+    min_area : float
+        m²: smaller unknown regions inside free space are clutter seen in
+        part (a chair, a box), not the unexplored world.
+
+    Returns
+    -------
+    (M, N) ndarray of bool
+    """
+    unknown = ~free & ~occupied
+    n, lab, stats, _ = label_stats(unknown, connectivity=8)
+    H, W = unknown.shape
+    x, y, w, h, area = stats.T
+    keep = (area * resolution ** 2 >= min_area) | (x == 0) | (y == 0) | (x + w == W) | (y + h == H)
+    keep[0] = False
+    return keep[lab]
+
+
+def _first_hit(free: np.ndarray, hit: np.ndarray, direction) -> np.ndarray:
+    """Per cell: is the first cell that is not free, looking along ``direction`` from the cell
+    itself, a ``hit`` cell (False where it is the map's edge).
+
+    Row by row, each row from the one before it along the direction (shifted by a column on a
+    diagonal): a pass of small vector operations, linear in the map's area. Along the rows
+    themselves, the same on the transposed map.
+    """
+    dr, dc = direction
+    if dr == 0:
+        return _first_hit(np.ascontiguousarray(free.T), np.ascontiguousarray(hit.T), (dc, 0)).T
+    H, W = free.shape
+    out = np.empty((H, W), bool)
+    prev = np.zeros(W, bool)
+    ahead = np.zeros(W, bool)
+    for r in (range(H - 1, -1, -1) if dr > 0 else range(H)):
+        if dc > 0:
+            ahead[:-1] = prev[1:]
+        elif dc < 0:
+            ahead[1:] = prev[:-1]
+        else:
+            ahead = prev
+        prev = np.where(free[r], ahead, hit[r])
+        out[r] = prev
+    return out
+
+
+def enclosure(free: np.ndarray, occupied: np.ndarray, resolution: float, *, open_area: float,
+              window: float, cell: float = 0.1) -> np.ndarray:
+    """How many of the eight directions from each free cell end at an obstacle.
+
+    Parameters
+    ----------
+    free, occupied : (M, N) ndarray of bool
+    resolution : float
+        Metres per cell.
+    open_area : float
+        m², see :func:`open_unknown`.
+    window : float
+        Side of the square window the counts are averaged over, m.
+    cell : float
+        The counts are taken on blocks of about this size (m; a block is
+        free where all its cells are, an obstacle where any is): 0.1 m, finer
+        than any door, and a quarter of the work of 0.05 m cells.
+
+    Returns
+    -------
+    (M, N) ndarray of float32
+        The mean count (0 to 8) over the free blocks of the window around
+        each free cell; 0 on the other cells. The obstacles are grown by one
+        cell first (a ray slips diagonally between the dots of a scanned
+        wall); a block with any obstacle cell is an obstacle.
+    """
+    import cv2
+
+    free = np.asarray(free, bool)
+    H, W = free.shape
+    hit = ~free & ~open_unknown(free, occupied, resolution, min_area=open_area)
+    hit = cv2.dilate(hit.view(np.uint8), np.ones((3, 3), np.uint8)).view(bool)
+    k = max(1, int(round(cell / resolution)))
+    inner, hit = _blocks(free & ~hit, k, np.logical_and), _blocks(hit, k, np.logical_or)
+    count = np.zeros(inner.shape, np.float32)
+    for d in DIRECTIONS:
+        count += _first_hit(inner, hit, d)
+    count[~inner] = 0
+    w = max(1, int(round(window / (resolution * k)))) | 1
+    num = cv2.boxFilter(count, -1, (w, w), normalize=False, borderType=cv2.BORDER_CONSTANT)
+    den = cv2.boxFilter(inner.astype(np.float32), -1, (w, w), normalize=False, borderType=cv2.BORDER_CONSTANT)
+    mean = np.where(den > 0.5, num / np.maximum(den, 1e-6), 8.0).astype(np.float32)  # no open block near: enclosed
+    if k > 1:
+        mean = np.repeat(np.repeat(mean, k, axis=0), k, axis=1)[:H, :W]
+    return np.where(free, mean, 0).astype(np.float32)
+
+
+def _blocks(mask: np.ndarray, k: int, reduce) -> np.ndarray:
+    """``mask`` reduced over ``k`` x ``k`` blocks by ``reduce`` (``np.logical_and`` or
+    ``np.logical_or``; the map padded with False)."""
+    if k == 1:
+        return mask
+    H, W = mask.shape
+    pad = np.zeros((-(-H // k) * k, -(-W // k) * k), bool)
+    pad[:H, :W] = mask
+    out = pad[0::k, 0::k].copy()
+    for i in range(k):
+        for j in range(k):
+            if i or j:
+                reduce(out, pad[i::k, j::k], out=out)
+    return out
+
+
+def outside_regions(labels: np.ndarray, n_rooms: int, encl: np.ndarray, *, threshold: float) -> np.ndarray:
+    """Which rooms are outside: the mean :func:`enclosure` of their cells below ``threshold``.
+
+    Parameters
+    ----------
+    labels : (M, N) ndarray of int
+        Rooms ``1..n_rooms`` (fragments after them are not judged).
+    n_rooms : int
+    encl : (M, N) ndarray of float
+        :func:`enclosure`.
+    threshold : float
+        Directions out of 8.
+
+    Returns
+    -------
+    (n_rooms + 1,) ndarray of bool
+        True for the rooms outside (index 0 unused, False).
+    """
+    lab = np.asarray(labels)
+    m = (lab > 0) & (lab <= n_rooms)
+    cells = np.bincount(lab[m], minlength=n_rooms + 1)
+    total = np.bincount(lab[m], weights=encl[m], minlength=n_rooms + 1)
+    out = (cells > 0) & (total < threshold * cells)
+    out[0] = False
+    return out[:n_rooms + 1]
+
+
+def drop_outside(labels: np.ndarray, doors: list, n_rooms: int, is_out: np.ndarray):
+    """Rooms marked ``is_out`` taken out of the rooms, with their doors.
+
+    Returns
+    -------
+    labels : (M, N) ndarray of int32
+        The kept rooms ``1..n_kept`` (in their order), then the fragments
+        (in their order), then the outside regions.
+    doors : list of Door
+        The doors between two kept rooms, renumbered, their ``rooms`` in
+        the new labels.
+    n_kept : int
+    outside : tuple of int
+        The labels of the outside regions.
+    """
+    top = int(labels.max()) if labels.size else 0
+    if not is_out.any():
+        return labels, doors, n_rooms, ()
+    lut = np.zeros(top + 1, np.int32)
+    keep = np.flatnonzero(~is_out[1:n_rooms + 1]) + 1
+    out = np.flatnonzero(is_out[1:n_rooms + 1]) + 1
+    n_kept = len(keep)
+    lut[keep] = np.arange(1, n_kept + 1, dtype=np.int32)
+    frag = np.arange(n_rooms + 1, top + 1)
+    lut[frag] = np.arange(n_kept + 1, n_kept + 1 + len(frag), dtype=np.int32)
+    first_out = n_kept + 1 + len(frag)
+    lut[out] = np.arange(first_out, first_out + len(out), dtype=np.int32)
+    new = lut[labels]
+    kept_doors = []
+    for d in doors:
+        a, b = d.rooms
+        if is_out[a] or is_out[b]:
+            continue
+        d.rooms = (int(lut[a]), int(lut[b]))
+        d.id = len(kept_doors)
+        kept_doors.append(d)
+    return new, kept_doors, n_kept, tuple(range(first_out, first_out + len(out)))
