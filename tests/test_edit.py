@@ -313,7 +313,7 @@ def test_load_segmentation_reads_back_what_segment_wrote(out_dir, base):
 def test_load_segmentation_without_the_map(out_dir, caplog):
     (out_dir.parent / "map.pgm").unlink()
     seg = E.load_segmentation(out_dir)
-    assert "taken as the free space" in caplog.text
+    assert "map.yaml cannot be read" in caplog.text and "taken as the free space" in caplog.text
     assert np.array_equal(seg.grid.free, seg.labels > 0)
 
 
@@ -437,11 +437,13 @@ def _bigger(a, res):
     return OccupancyGrid(cells, res, (g.origin[0] - 8 * res, g.origin[1], 0.0))
 
 
-def test_previous_keeps_names_marks_and_merges(out_dir, base, tmp_path):
+def test_previous_keeps_names_marks_merges_and_splits(out_dir, base, tmp_path):
     c = _corridor(base)
-    office = next(d.rooms[0] if d.rooms[1] == c else d.rooms[1] for d in base.doors)
+    office = next(d.rooms[0] if d.rooms[1] == c else d.rooms[1] for d in base.doors if d.midpoint[0] > 6)
     other = sorted(set(_ids(base)) - {c, office})[0]
-    assert _run("edit", out_dir, "--merge", c, office, "--name", c, "hall", "--no-go", other).exit_code == 0
+    y = [float(base.grid.pixel_to_world(r, 0)[1]) for r in (75, 118)]
+    assert _run("edit", out_dir, "--split", c, 4.0, y[0], 4.0, y[1], "--name", 5, "west",
+                "--merge", c, office, "--name", c, "hall", "--no-go", other).exit_code == 0
     a, res = _array()
     save_map(_bigger(a, res), tmp_path / "new")
     r = _run("segment", tmp_path / "new.yaml", "-o", tmp_path / "next", "--previous", out_dir / "rooms.graphml")
@@ -449,6 +451,8 @@ def test_previous_keeps_names_marks_and_merges(out_dir, base, tmp_path):
     G = load_graph(tmp_path / "next" / "rooms.graphml")
     assert G.nodes[c]["name"] == "hall" and G.nodes[other]["no_go"] is True
     assert E.merged_ids(G.nodes[c]["merged"]) == sorted([c, office]) and office not in G
+    # the split's door is a door of the previous graph: the door prior cuts it again (default method)
+    assert G.nodes[5]["name"] == "west" and G.has_edge(c, 5) and G.number_of_nodes() == 4
     assert json.loads((tmp_path / "next" / "changes.json").read_text())["split"] == {}
 
 

@@ -598,33 +598,33 @@ def keep_merges(previous, seg, *, min_overlap: float):
 # Output folders
 # --------------------------------------------------------------------------
 
-def _grid_of(folder: Path, record: dict, labels: np.ndarray, res: float, origin, source: str):
-    """The map the folder's rooms were cut from: the run record's map when it is still the same file and
-    agrees with the labels; else a map of the labels' cells (free: the rooms and fragments), with a warning."""
+def _grid_of(folder: Path, record: dict, labels: np.ndarray, res: float, origin, graph_map):
+    """The map the folder's rooms were cut from, in the labels' frame (``res``, ``origin``): the file the run
+    record names when it is unchanged since the run, else the file the room graph names (``graph_map``), when
+    its free cells are the labelled cells; else a map of the labels' cells (free: the rooms and fragments),
+    with a warning."""
     from .batch import _fingerprint
+    from .errors import first_line
     from .io import FREE, OCCUPIED, OccupancyGrid, load_map
 
-    path = record.get("input")
-    why = "not named in the run record"
+    path, why = record.get("input"), "named neither in the run record nor in rooms.graphml"
+    settings = record.get("settings") or {}
+    if path and _fingerprint(Path(path)) != (record.get("inputs") or {}):
+        path, why = None, f"{record.get('input')} changed or is missing since the run"
+    if not path and graph_map and Path(graph_map).exists():
+        path, settings = graph_map, {}
     if path:
-        settings = record.get("settings") or {}
-        recorded = record.get("inputs") or {}
         try:
-            if _fingerprint(Path(path)) != recorded:
-                why = "changed or missing since the run"
-            else:
-                grid = load_map(path, resolution=settings.get("resolution"), topic=settings.get("topic"),
-                                time=settings.get("at"))
-                if grid.shape != labels.shape or not np.array_equal(grid.free, labels > 0):
-                    why = "not the map of these labels"
-                else:
-                    return grid
+            grid = load_map(path, resolution=res, origin=origin, topic=settings.get("topic"), time=settings.get("at"))
+            if grid.shape == labels.shape and np.array_equal(grid.free, labels > 0):
+                return grid
+            why = f"{path} is not the map of these labels"
         except Exception as exc:  # noqa: BLE001 - any reason the map cannot be used: the labels' map below
-            why = f"unreadable ({exc})"
-    log.warning("%s: the map %s is %s: the rooms' cells are taken as the free space (overlay.png shows no "
-                "unknown space)", folder, path or "", why)
+            why = f"{path} cannot be read ({first_line(exc)})"
+    log.warning("%s: the map: %s; the rooms' cells are taken as the free space (overlay.png shows the rest as "
+                "walls)", folder, why)
     cells = np.where(labels > 0, FREE, OCCUPIED).astype(np.int8)
-    return OccupancyGrid(cells, res, origin, source=source)
+    return OccupancyGrid(cells, res, origin, source=str(graph_map or folder))
 
 
 def load_segmentation(out_dir):
@@ -701,8 +701,7 @@ def load_segmentation(out_dir):
             raise GraphFormatError(f"{folder / 'rooms.graphml'}: door {u}-{v} has no {exc} (not a graph topomap "
                                    "segment wrote)") from None
     record = _read_record(folder) or {}
-    source = str(G.graph.get("map") or folder)
-    grid = _grid_of(folder, record, labels, res, origin, source)
+    grid = _grid_of(folder, record, labels, res, origin, G.graph.get("map"))
     computed = set(NODE_TYPES)
     attrs = {}
     for n, d in G.nodes(data=True):
