@@ -471,7 +471,8 @@ def _edit_text(kind, args) -> str:
         r, x1, y1, x2, y2 = args
         return f"split {r} {x1:g} {y1:g} {x2:g} {y2:g}"
     if kind == "name":
-        return f"name {args[0]} {args[1]!r}"
+        name = args[1]
+        return f"name {args[0]} {name[:40] + '...' if isinstance(name, str) and len(name) > 40 else name!r}"
     return " ".join([kind.replace("_", "-"), *map(str, args)])
 
 
