@@ -171,8 +171,7 @@ def _merged_cells(rooms: np.ndarray, doors: list, a: int, b: int):
         if set(d.rooms) == {a, b}:
             continue
         if b in d.rooms:
-            r = tuple(sorted(a if x == b else x for x in d.rooms))
-            d = dataclasses.replace(d, rooms=r, extra=dict(d.extra))
+            d = dataclasses.replace(d, rooms=tuple(sorted(a if x == b else x for x in d.rooms)))
         out.append(d)
     return np.where(rooms == b, a, rooms), out
 
@@ -210,7 +209,7 @@ def merge(seg, a: int, b: int):
     L = seg.room_labels
     if not any(set(d.rooms) == {a, b} for d in seg.doors) and not _touch(L, a, b):
         raise _fail(seg, f"rooms {a} and {b} share no door and do not touch: only rooms side by side merge")
-    rooms, doors = _merged_cells(L, seg.doors, a, b)
+    rooms, doors = _merged_cells(L, _copied(seg.doors), a, b)
     attrs = _user_attributes(seg)
     A, B = attrs.get(a, {}), attrs.pop(b, {})
     new = {**B, **A}
@@ -573,7 +572,7 @@ def keep_merges(previous, seg, *, min_overlap: float):
     lab = L[rr, cc]
     top = int(L.max(initial=0))
     known = np.bincount(lab[prev > 0], minlength=top + 1)
-    rooms, doors, joined = L, list(seg.doors), []
+    rooms, doors, joined = L, _copied(seg.doors), []
     for i in sorted(merged):
         inside = np.bincount(lab[prev == i], minlength=top + 1)
         group = {int(j) for j in np.flatnonzero(inside) if j > 0 and inside[j] >= min_overlap * known[j]}
