@@ -661,5 +661,75 @@ def export_cmd(source, target):
     click.echo(f"{source} -> {target}: {_count(G.number_of_nodes(), 'room')}, {_count(G.number_of_edges(), 'door')}")
 
 
+class _EditCommand(click.Command):
+    """A command that keeps the order its options were given in (``ctx.meta["topomap.edit.order"]``:
+    one parameter name per occurrence), for edits applied in the order typed."""
+
+    def make_parser(self, ctx):
+        parser = super().make_parser(ctx)
+        parse = parser.parse_args
+
+        def parse_args(args):
+            opts, rest, order = parse(args=args)
+            ctx.meta["topomap.edit.order"] = [p.name for p in order]
+            return opts, rest, order
+
+        parser.parse_args = parse_args
+        return parser
+
+
+@main.command("edit", cls=_EditCommand)
+@click.argument("outdir", metavar="OUT_DIR", type=click.Path(path_type=Path))
+@click.option("--merge", "merges", multiple=True, type=(int, int), metavar="A B",
+              help="Merge room B into room A (they must share a door or touch); repeatable.")
+@click.option("--split", "splits", multiple=True, type=(int, float, float, float, float), metavar="ROOM X1 Y1 X2 Y2",
+              help="Split ROOM along the line from (X1, Y1) to (X2, Y2), map-frame metres, drawn from wall to "
+                   "wall; it becomes a door. Repeatable.")
+@click.option("--name", "names", multiple=True, type=(int, str), metavar="ROOM NAME",
+              help="Name ROOM (quote a name with spaces); repeatable.")
+@click.option("--no-go", "no_gos", multiple=True, type=int, metavar="ROOM",
+              help="Mark ROOM as a room a robot must not enter; repeatable.")
+def edit_cmd(outdir, merges, splits, names, no_gos):
+    """Merge, split, name and mark rooms in OUT_DIR, the output folder of `topomap segment`.
+
+    The edits apply in the order given (room IDs are those after the edits
+    before). Every output in OUT_DIR is rewritten to agree (labels, room
+    graph files, overlay), all files or none; a bad edit changes no file.
+    The edits are added to the run record (topomap_run.json), and the room
+    graph keeps names, no-go marks and merges for `topomap segment NEW_MAP
+    --previous OUT_DIR/rooms.graphml`.
+    """
+    from .edit import edit_outputs
+
+    given = {"merges": [("merge", *v) for v in merges], "splits": [("split", *v) for v in splits],
+             "names": [("name", *v) for v in names], "no_gos": [("no_go", v) for v in no_gos]}
+    if not any(given.values()):
+        raise click.UsageError("nothing to edit: give --merge, --split, --name or --no-go")
+    order = click.get_current_context().meta.get("topomap.edit.order") or list(given)
+    edits, taken = [], {k: 0 for k in given}
+    for name in order:  # each option's values in the order typed, interleaved as typed
+        if name in given and taken[name] < len(given[name]):
+            edits.append(given[name][taken[name]])
+            taken[name] += 1
+    edits += [e for k, v in given.items() for e in v[taken[k]:]]
+    try:
+        seg, records = edit_outputs(outdir, edits)
+    except Exception as exc:  # noqa: BLE001
+        sys.exit(_fail(exc, _naming(outdir, exc)))
+    done = []
+    for r in records:
+        if r["edit"] == "merge":
+            done.append(f"merged {r['rooms'][1]} into {r['rooms'][0]}")
+        elif r["edit"] == "split":
+            done.append(f"split {r['room']} (new room {r['new_room']})")
+        elif r["edit"] == "name":
+            done.append(f"named {r['room']} {r['name']!r}")
+        else:
+            done.append(f"{r['room']} no-go")
+    row = {"rooms": seg.n_rooms, "doors": len(seg.doors), "fragments": seg.n_fragments,
+           "fragment_area_m2": seg.fragment_area}
+    click.echo(f"{outdir}: {'; '.join(done)} -> {_summary(row)}")
+
+
 if __name__ == "__main__":
     main()

@@ -21,6 +21,7 @@ __all__ = [
     "GraphFormatError",
     "BenchmarkNotFoundError",
     "PlanningError",
+    "EditError",
     "NotInRoomError",
     "NoPathError",
     "BagError",
@@ -95,3 +96,8 @@ class OutputExistsError(TopomapError, FileExistsError):
 
 class MissingDependencyError(TopomapError, ImportError):
     """An optional dependency a feature needs is not installed (the message says which extra to install)."""
+
+
+class EditError(TopomapError, ValueError):
+    """An edit of the rooms cannot be made: an unknown room ID, a bad name, a split line
+    outside the map or one that does not cut the room in two (see :mod:`topomap.edit`)."""

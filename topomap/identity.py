@@ -359,6 +359,10 @@ def match_rooms(previous, seg: Segmentation, *, min_overlap: float = DEFAULT_MIN
     if not isinstance(seg, Segmentation):
         raise ParameterError(f"match_rooms() needs a Segmentation, got {type(seg).__name__}")
     prev = _Previous(previous)
+    if any("merged" in a for a in prev.attrs.values()):  # rooms a user merged stay merged (topomap.edit)
+        from .edit import keep_merges
+
+        seg = keep_merges(prev, seg, min_overlap=min_overlap)
     grid = seg.grid
     res2 = grid.resolution ** 2
     L = seg.room_labels
