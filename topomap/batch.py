@@ -23,6 +23,13 @@ Refusal
     run record (results topomap did not write, or of unknown origin), is
     never written into: the whole batch stops before any map runs
     (:class:`~topomap.errors.OutputExistsError`) unless ``overwrite=True``.
+One batch at a time
+    A batch holds a lock on ``out`` (the file ``out/.topomap.lock``, locked
+    with ``fcntl.flock``) from before it looks at the folders until its
+    summary is written: a second batch into the same ``out`` meanwhile is
+    refused at once (:class:`~topomap.errors.OutputExistsError`, nothing
+    written). The lock goes with the process (a killed batch leaves no lock
+    held); the file is removed when the batch ends.
 Resume
     A map whose folder has a complete run record for the same input, the
     same options and version, unchanged input files and unchanged output
@@ -62,11 +69,17 @@ import sys
 import time
 import traceback
 from collections import Counter
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Optional, Sequence
 
+try:
+    import fcntl
+except ImportError:  # not a POSIX system: an O_EXCL lock file instead
+    fcntl = None
+
 from . import export as _export
-from .errors import MissingDependencyError, OutputExistsError, ParameterError, TopomapError, first_line
+from .errors import MapFileError, MissingDependencyError, OutputExistsError, ParameterError, TopomapError, first_line
 
 __all__ = ["segment_many", "output_dirs", "read_summary", "RECORD", "SUMMARY", "SUMMARY_COLUMNS",
            "OUTPUT_NAMES", "STATUSES", "OK", "SKIPPED", "FAILED", "ERROR", "PENDING", "INCOMPLETE", "COMPLETE",
@@ -78,6 +91,8 @@ log = logging.getLogger("topomap.batch")
 RECORD = "topomap_run.json"
 #: Name of the batch summary table in ``out``.
 SUMMARY = "summary.csv"
+#: Name of the lock file a running batch holds in ``out``.
+LOCK = ".topomap.lock"
 #: Output files a map's folder may hold (what ``topomap segment`` writes).
 OUTPUT_NAMES = tuple(_export.OUTPUT_FILES.values())
 #: First columns of ``summary.csv`` (``t_<stage>`` columns and ``error`` follow).
@@ -149,9 +164,69 @@ def output_dirs(paths: Sequence, out) -> list:
     dirs = [out / (s if count[s] == 1 else s.parent / f"{s.name}_{r.suffix[1:]}") for s, r in zip(stems, rel)]
     clash = Counter(dirs)
     for p, d in zip(paths, dirs):
-        if d == out / SUMMARY or clash[d] > 1:
+        if d in (out / SUMMARY, out / LOCK) or clash[d] > 1:
             raise ParameterError(f"{p}: its output folder {d} is taken (rename the map)")
     return dirs
+
+
+# --------------------------------------------------------------------------
+# One batch at a time
+# --------------------------------------------------------------------------
+
+@contextmanager
+def _output_lock(out: Path):
+    """Hold the lock of the output folder ``out`` (created if missing) while the block runs.
+
+    OutputExistsError at once when another process holds it. The lock is
+    ``fcntl.flock`` on ``out/LOCK`` (released by the system when the process
+    dies); the file is removed at the end, and ``out`` too when this created
+    it and it is left empty.
+    """
+    from .io import _msg
+
+    created = not out.exists()
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise MapFileError(_msg(out, f"cannot create the output folder: {exc.strerror or exc}")) from None
+    path = out / LOCK
+    busy = OutputExistsError(f"{out}: another topomap run is writing into this folder (it holds {LOCK}); "
+                             "nothing was written; wait for it to end, or use another output folder")
+    while True:
+        try:
+            fd = os.open(path, os.O_RDWR | os.O_CREAT | (0 if fcntl else os.O_EXCL), 0o644)
+        except FileExistsError:  # no flock on this system: the file itself is the lock
+            raise busy from None
+        except OSError as exc:
+            raise MapFileError(_msg(path, f"cannot create the lock file: {exc.strerror or exc}")) from None
+        if fcntl is None:
+            break
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            os.close(fd)
+            raise busy from None
+        try:  # the file locked is still the one at the path (not one an ending batch just removed)
+            st, now = os.fstat(fd), os.stat(path)
+            if (st.st_dev, st.st_ino) == (now.st_dev, now.st_ino):
+                break
+        except FileNotFoundError:
+            pass
+        os.close(fd)
+    try:
+        os.write(fd, f"{os.getpid()}\n".encode())
+        yield
+    finally:
+        try:
+            os.unlink(path)
+        except OSError:
+            pass
+        os.close(fd)
+        if created:
+            try:
+                out.rmdir()  # only if empty
+            except OSError:
+                pass
 
 
 # --------------------------------------------------------------------------
@@ -555,6 +630,12 @@ def segment_many(paths: Sequence, out, *, jobs: int = 1, scheduler=None, overwri
                 "skeletons": bool(skeletons), **{k: write_options[k] for k in sorted(write_options)}}
     dirs = output_dirs(paths, out)
     _refuse_inputs_as_outputs(paths, dirs, write_options)
+    with _output_lock(out):
+        return _run_batch(paths, out, dirs, settings, overwrite, jobs, scheduler, write_options, progress)
+
+
+def _run_batch(paths, out, dirs, settings, overwrite, jobs, scheduler, write_options, progress) -> list:
+    """The batch of :func:`segment_many` once it holds the lock of ``out``."""
     plan = _plan(paths, dirs, settings, overwrite)
     many = len(paths) > 1
     rows = [dict(earlier, map=str(p), output=str(d), status=SKIPPED) if what == "skip"
