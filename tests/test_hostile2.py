@@ -80,3 +80,54 @@ def test_two_batches_into_one_folder_the_second_is_refused(tmp_path):
     assert not (out / ".topomap.lock").exists()  # the lock goes with the batch
     res = _run("segment", *maps, "-o", out)  # the folder is free again: up to date
     assert res.exit_code == 0 and "3 of them up to date" in res.output, res.output
+
+
+# --------------------------------------------------------------------------
+# A map's outputs, the --bag included, land together or not at all
+# --------------------------------------------------------------------------
+
+def _tree(folder):
+    """Every file of ``folder``: its bytes, and its size and time (the run record: its bytes only)."""
+    return {p.name: (p.read_bytes(), None if p.name == "topomap_run.json" else (p.stat().st_size, p.stat().st_mtime_ns))
+            for p in folder.iterdir()}
+
+
+def test_a_bag_that_fails_writes_no_other_output(tmp_path):
+    pytest.importorskip("rosbags")
+    from topomap.batch import FAILED, OK, SKIPPED, segment_many
+
+    (m,) = _maps(tmp_path, ["a"])
+    out = tmp_path / "out"
+    blocked = tmp_path / "taken.mcap"
+    blocked.mkdir()  # the bag's name is a folder now: writing the bag fails
+    (row,) = segment_many([m], out, write_options={"bag": str(blocked)})
+    assert row["status"] == FAILED and "taken.mcap" in row["error"]
+    assert not out.exists()  # no output without its bag, no run record missing beside outputs
+    good = tmp_path / "good.mcap"
+    (row,) = segment_many([m], out, write_options={"bag": str(good)})  # the folder is not refused
+    assert row["status"] == OK and good.is_file()
+    earlier, bag_bytes = _tree(out), good.read_bytes()
+    # a rerun whose bag fails leaves the earlier outputs, the bag and the run record as they were
+    (row,) = segment_many([m], out, overwrite=True, write_options={"bag": str(blocked)})
+    assert row["status"] == FAILED
+    assert _tree(out) == earlier and good.read_bytes() == bag_bytes
+    (row,) = segment_many([m], out, write_options={"bag": str(good)})
+    assert row["status"] == SKIPPED
+
+
+def test_outputs_that_fail_write_no_bag(tmp_path, monkeypatch):
+    pytest.importorskip("rosbags")
+    from topomap import export
+    from topomap.batch import FAILED, segment_many
+
+    (m,) = _maps(tmp_path, ["a"])
+
+    def broken(*args, **kwargs):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(export, "save_geojson", broken)
+    bag = tmp_path / "a.mcap"
+    (row,) = segment_many([m], tmp_path / "out", write_options={"bag": str(bag)})
+    assert row["status"] == FAILED and "rooms.geojson" in row["error"], row["error"]
+    assert not bag.exists() and not (tmp_path / "out").exists()
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []  # no temporary left

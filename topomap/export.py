@@ -47,7 +47,7 @@ import numpy as np
 import networkx as nx
 
 from .errors import GraphFormatError, first_line
-from .io import atomic_write  # noqa: F401  (re-exported: topomap.export.atomic_write)
+from .io import _renamed, atomic_write  # noqa: F401  (atomic_write re-exported: topomap.export.atomic_write)
 
 __all__ = ["atomic_write", "save_labels", "label_png_bytes", "file_labels", "MAX_FILE_LABEL", "save_graphml", "save_json", "to_graphml_graph",
            "node_link", "write_outputs", "save_bytes", "geometry_wkt", "restore_types", "load_graphml", "load_json",
@@ -1391,11 +1391,14 @@ def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None, geojs
             tmp = {k: stack.enter_context(atomic_write(outdir / f, None)) for k, f in names.items()}
             for k in names:
                 t = time.perf_counter()
-                if k in to_file:  # into the temporary file itself (renamed into place at the end)
-                    with open(tmp[k], "wb") as fh:
-                        writers[k](fh)
-                else:
-                    writers[k](tmp[k])
+                try:
+                    if k in to_file:  # into the temporary file itself (renamed into place at the end)
+                        with open(tmp[k], "wb") as fh:
+                            writers[k](fh)
+                    else:
+                        writers[k](tmp[k])
+                except OSError as exc:  # named after its own file (not the last temporary of the stack)
+                    raise (_renamed(exc, tmp[k], outdir / names[k]) or exc) from None
                 if timings is not None:
                     timings[f"write_{k}"] = time.perf_counter() - t
     finally:

@@ -31,6 +31,7 @@ import os
 import shutil
 import tempfile
 from dataclasses import dataclass
+from contextlib import contextmanager
 from functools import lru_cache
 from pathlib import Path
 from typing import Optional
@@ -780,6 +781,22 @@ def write_bag(seg, path, *, frame_id: Optional[str] = None, stamp: Optional[int]
     MissingDependencyError
         ``rosbags`` is not installed.
     """
+    with staged_bag(seg, path, frame_id=frame_id, stamp=stamp, log_time=log_time) as p:
+        pass
+    return p
+
+
+@contextmanager
+def staged_bag(seg, path, *, frame_id: Optional[str] = None, stamp: Optional[int] = None,
+               log_time: Optional[int] = None):
+    """Write the bag of :func:`write_bag` to a temporary beside ``path``; rename it into place when the
+    ``with`` block ends without an error, else remove it.
+
+    So a bag and other outputs land together or not at all: write the bag
+    first (its errors come before anything else is written), the other
+    files inside the block. Yields the final path; the errors are those of
+    :func:`write_bag` (an error of the block itself passes through unchanged).
+    """
     import time as _time
 
     p = Path(os.fspath(path))
@@ -798,30 +815,35 @@ def write_bag(seg, path, *, frame_id: Optional[str] = None, stamp: Optional[int]
     except OSError as exc:
         raise MapFileError(f"{p}: cannot write bag: {exc.strerror or exc}") from None
     try:
-        if kind == "ros1":
-            out = tmpdir / p.name
-            with Writer1(out) as w:
-                for topic, typ, msg in msgs:
-                    conn = w.add_connection(topic, typ, typestore=ts, latching=1)
-                    w.write(conn, when, ts.serialize_ros1(msg, typ))
-        else:
-            from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
+        try:
+            if kind == "ros1":
+                out = tmpdir / p.name
+                with Writer1(out) as w:
+                    for topic, typ, msg in msgs:
+                        conn = w.add_connection(topic, typ, typestore=ts, latching=1)
+                        w.write(conn, when, ts.serialize_ros1(msg, typ))
+            else:
+                from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, \
+                    QosTime
 
-            zero = QosTime(0, 0)
-            qos = Qos(QosHistory.KEEP_LAST, 1, QosReliability.RELIABLE, QosDurability.TRANSIENT_LOCAL, zero, zero,
-                      QosLiveliness.AUTOMATIC, zero, False)
-            bagdir = tmpdir / (p.stem if kind == "mcap" else p.name)
-            plugin = StoragePlugin.MCAP if kind == "mcap" else StoragePlugin.SQLITE3
-            with Writer2(bagdir, version=8, storage_plugin=plugin) as w:  # 8: QoS as older distros read it
-                for topic, typ, msg in msgs:
-                    conn = w.add_connection(topic, typ, typestore=ts, offered_qos_profiles=[qos])
-                    w.write(conn, when, ts.serialize_cdr(msg, typ))
-            out = bagdir / f"{bagdir.name}.mcap" if kind == "mcap" else bagdir
-        os.replace(out, p)
-    except TopomapError:
-        raise
-    except OSError as exc:
-        raise MapFileError(f"{p}: cannot write bag: {exc.strerror or exc}") from None
+                zero = QosTime(0, 0)
+                qos = Qos(QosHistory.KEEP_LAST, 1, QosReliability.RELIABLE, QosDurability.TRANSIENT_LOCAL, zero,
+                          zero, QosLiveliness.AUTOMATIC, zero, False)
+                bagdir = tmpdir / (p.stem if kind == "mcap" else p.name)
+                plugin = StoragePlugin.MCAP if kind == "mcap" else StoragePlugin.SQLITE3
+                with Writer2(bagdir, version=8, storage_plugin=plugin) as w:  # 8: QoS as older distros read it
+                    for topic, typ, msg in msgs:
+                        conn = w.add_connection(topic, typ, typestore=ts, offered_qos_profiles=[qos])
+                        w.write(conn, when, ts.serialize_cdr(msg, typ))
+                out = bagdir / f"{bagdir.name}.mcap" if kind == "mcap" else bagdir
+        except TopomapError:
+            raise
+        except OSError as exc:
+            raise MapFileError(f"{p}: cannot write bag: {exc.strerror or exc}") from None
+        yield p  # the caller's other outputs; an error there removes the bag unwritten
+        try:
+            os.replace(out, p)
+        except OSError as exc:
+            raise MapFileError(f"{p}: cannot write bag: {exc.strerror or exc}") from None
     finally:
         shutil.rmtree(tmpdir, ignore_errors=True)
-    return p
