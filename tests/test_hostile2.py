@@ -131,3 +131,103 @@ def test_outputs_that_fail_write_no_bag(tmp_path, monkeypatch):
     assert row["status"] == FAILED and "rooms.geojson" in row["error"], row["error"]
     assert not bag.exists() and not (tmp_path / "out").exists()
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []  # no temporary left
+
+
+# --------------------------------------------------------------------------
+# --previous and tour graphs: room IDs bounded, the frame bounded by the map being segmented
+# --------------------------------------------------------------------------
+
+def _graph_file(tmp_path, name="g.json", edit=None):
+    """rooms.json of the two-room map (``topomap segment``), its node-link data edited by ``edit``."""
+    out = tmp_path / "g_out"
+    if not (out / "rooms.json").exists():
+        res = _run("segment", io.save_map(_two_rooms(), tmp_path / "g"), "-o", out)
+        assert res.exit_code == 0, res.output
+    data = json.loads((out / "rooms.json").read_text())
+    if edit is not None:
+        edit(data)
+    path = tmp_path / name
+    path.write_text(json.dumps(data))
+    return path
+
+
+def _renumber(data, old, new):
+    for n in data["nodes"]:
+        if n["id"] == old:
+            n["id"] = new
+    for e in data["edges"]:
+        for k in ("source", "target"):
+            if e[k] == old:
+                e[k] = new
+
+
+@pytest.mark.parametrize("bad", [1.5, -5, 0, 1e15, 100_000_000, True])
+def test_previous_and_tour_graph_room_ids_are_refused_in_one_line(tmp_path, bad):
+    g = _graph_file(tmp_path, edit=lambda d: _renumber(d, 1, bad))
+    m = io.save_map(_two_rooms(), tmp_path / "m")
+    line = _one_error_line(_run("segment", m, "-o", tmp_path / "out", "--previous", g), g)
+    assert "room ID" in line and repr(bad) in line, line
+    assert not (tmp_path / "out").exists()
+    line = _one_error_line(_run("tour", g, "--from", 1, 1), g)
+    assert "room ID" in line, line
+
+
+@pytest.mark.parametrize("bad", [2147483647, 65536, -1, "x"])
+def test_previous_next_room_id_is_bounded(tmp_path, bad):
+    g = _graph_file(tmp_path, edit=lambda d: d["graph"].__setitem__("next_room_id", bad))
+    m = io.save_map(_two_rooms(), tmp_path / "m")
+    line = _one_error_line(_run("segment", m, "-o", tmp_path / "out", "--previous", g), g)
+    assert "next_room_id" in line, line
+
+
+def test_previous_graph_with_the_largest_ids_still_matches(tmp_path):
+    """IDs up to the bound work, and cost nothing of their size: a new room gets next_room_id."""
+    from topomap.export import MAX_ROOM_ID
+
+    def edit(d):
+        _renumber(d, 2, MAX_ROOM_ID - 1)
+        d["nodes"] = [n for n in d["nodes"] if n["id"] != MAX_ROOM_ID - 1]  # that room is new again
+        d["edges"] = []
+        d["graph"]["next_room_id"] = MAX_ROOM_ID
+
+    g = _graph_file(tmp_path, edit=edit)
+    m = io.save_map(_two_rooms(), tmp_path / "m")
+    res = _run("segment", m, "-o", tmp_path / "out", "--previous", g)
+    assert res.exit_code == 0, res.output
+    ids = sorted(n["id"] for n in json.loads((tmp_path / "out" / "rooms.json").read_text())["nodes"])
+    assert ids == [1, MAX_ROOM_ID]
+
+
+def test_previous_graph_claiming_a_huge_frame_costs_the_map_size(tmp_path):
+    """40 room polygons over a 7000 x 7000 frame (a few KB): rasterised only where the map is."""
+    import shapely
+    from topomap.export import load_graph
+    from topomap.identity import _Previous
+
+    def edit(d):
+        d["graph"]["shape"] = [7000, 7000]
+        wkt = shapely.box(0, 0, 350, 350).wkt
+        for n in d["nodes"]:
+            n["polygon"] = wkt
+        for i in range(3, 41):
+            d["nodes"].append(dict(d["nodes"][0], id=i))
+
+    g = _graph_file(tmp_path, edit=edit)
+    assert g.stat().st_size < 20_000
+    grid = io.from_array(_two_rooms(), resolution=0.05)
+    prev = _Previous(load_graph(g), within=grid)
+    assert prev.labels.size <= 64 * 104  # the map's 60 x 100 cells and a margin, not 49 M
+    m = io.save_map(_two_rooms(), tmp_path / "m")
+    res = _run("segment", m, "-o", tmp_path / "out", "--previous", g)
+    assert res.exit_code == 0, res.output
+
+
+def test_previous_graph_of_a_much_finer_frame_is_refused(tmp_path):
+    def edit(d):
+        d["graph"]["resolution"] = 0.001  # 50 x finer than the map: 2,500 x its cells where they overlap
+        d["graph"]["shape"] = [7000, 7000]
+
+    g = _graph_file(tmp_path, edit=edit)
+    m = io.save_map(_two_rooms(), tmp_path / "m")
+    line = _one_error_line(_run("segment", m, "-o", tmp_path / "out", "--previous", g), g)
+    assert "more than 16 times" in line, line

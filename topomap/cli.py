@@ -190,10 +190,7 @@ def _segment_one(path, outdir, resolution, method, skeletons, topic=None, at=Non
     from . import io
     from .segmentation import segment
 
-    if isinstance(previous, (str, Path)):
-        from .export import load_graph
-
-        previous = load_graph(previous)
+    # a --previous path goes to segment() as it is: its messages then name the file
     t0 = time.perf_counter()
     grid = io.load_map(path, resolution=resolution, topic=topic, time=at)
     t1 = time.perf_counter()

@@ -47,7 +47,7 @@ import numpy as np
 import networkx as nx
 
 from .errors import GraphFormatError, first_line
-from .io import _renamed, atomic_write  # noqa: F401  (atomic_write re-exported: topomap.export.atomic_write)
+from .io import _one_line, _renamed, atomic_write  # noqa: F401  (atomic_write re-exported: topomap.export.atomic_write)
 
 __all__ = ["atomic_write", "save_labels", "label_png_bytes", "file_labels", "MAX_FILE_LABEL", "save_graphml", "save_json", "to_graphml_graph",
            "node_link", "write_outputs", "save_bytes", "geometry_wkt", "restore_types", "load_graphml", "load_json",
@@ -77,6 +77,31 @@ def save_labels(labels, path) -> Path:
 
 #: Largest label a label file holds (16 bits).
 MAX_FILE_LABEL = 65535
+#: Largest room ID: the label files hold room IDs up to 65534 with the fragments' label after them. A room
+#: graph read from a file (a ``--previous`` or a ``plan`` / ``tour`` graph) must have whole-number room IDs
+#: in 1..MAX_ROOM_ID and a ``next_room_id`` of at most MAX_ROOM_ID + 1, so what is built from its IDs is
+#: bounded by the number of its rooms.
+MAX_ROOM_ID = MAX_FILE_LABEL - 1
+
+
+def check_room_ids(G, name) -> None:
+    """GraphFormatError naming ``name`` unless every room ID of ``G`` is an ``int`` in 1..:data:`MAX_ROOM_ID`
+    and its ``next_room_id`` (when it has one) an integer in 1..MAX_ROOM_ID + 1."""
+    import numbers
+
+    def whole(v, top):
+        return isinstance(v, numbers.Integral) and not isinstance(v, bool) and 1 <= int(v) <= top
+
+    for r in G.nodes:
+        if not whole(r, MAX_ROOM_ID):
+            raise _bad(name, f"room ID {_one_line(repr(r))[:40]} is not a whole number from 1 to {MAX_ROOM_ID} "
+                             "(room IDs are the labels of the 16-bit label files)")
+    nxt = G.graph.get("next_room_id")
+    if nxt not in (None, ""):
+        if isinstance(nxt, str) and nxt.strip().isdigit():
+            nxt = int(nxt)
+        if not whole(nxt, MAX_ROOM_ID + 1):
+            raise _bad(name, f"next_room_id {_one_line(repr(nxt))[:40]} is not a whole number from 1 to {MAX_ROOM_ID + 1}")
 
 
 def file_labels(seg, name: str = "<labels>", kind: str = "PNG") -> np.ndarray:
@@ -787,6 +812,7 @@ def _check_frame(G: nx.MultiGraph, path) -> nx.MultiGraph:
     from . import io
     from .errors import MapTooLargeError
 
+    check_room_ids(G, path)
     shape = G.graph.get("shape")
     if shape is None:
         return G
