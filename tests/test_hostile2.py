@@ -231,3 +231,80 @@ def test_previous_graph_of_a_much_finer_frame_is_refused(tmp_path):
     m = io.save_map(_two_rooms(), tmp_path / "m")
     line = _one_error_line(_run("segment", m, "-o", tmp_path / "out", "--previous", g), g)
     assert "more than 16 times" in line, line
+
+
+# --------------------------------------------------------------------------
+# The map size limit: the memory the job takes against the memory the machine has
+# --------------------------------------------------------------------------
+
+def test_the_size_limit_follows_the_memory(monkeypatch):
+    from topomap.errors import MapTooLargeError, ParameterError
+
+    assert io.MAX_CELLS is None  # no fixed limit by default
+    monkeypatch.delenv("TOPOMAP_MAX_CELLS", raising=False)
+    # the decision: 150 bytes per cell + 250 MB (measured worst case) against the memory available
+    assert io.cells_for_memory(24e9) == int((24e9 - 250e6) // 150)
+    monkeypatch.setattr(io, "available_memory", lambda: 22_000_000_000)  # this 24 GB machine, idle
+    io._check_size("warehouse.png", 8000, 8000)  # 400 m at 5 cm: 64 M cells, about 9.9 GB: accepted
+    monkeypatch.setattr(io, "available_memory", lambda: 8_000_000_000)
+    with pytest.raises(MapTooLargeError, match=r"^warehouse.png: image is 8000 x 8000 px = 64,000,000 cells, more "
+                                               r"than the 51,666,666 cells the free memory allows \(8.0 GB"):
+        io._check_size("warehouse.png", 8000, 8000)
+    monkeypatch.setattr(io, "_MEMORY_SHARERS", 2)  # two maps at once share it
+    assert io.cell_limit()[0] == io.cells_for_memory(4e9)
+    monkeypatch.setattr(io, "_MEMORY_SHARERS", 1)
+    monkeypatch.setattr(io, "available_memory", lambda: None)  # unreadable: the 8 GiB assumption
+    assert io.cell_limit()[0] == io.FALLBACK_MAX_CELLS
+    # the overrides: the environment, then topomap.io.MAX_CELLS
+    monkeypatch.setenv("TOPOMAP_MAX_CELLS", "100")
+    with pytest.raises(MapTooLargeError, match=r"<array>: map is 11 x 10 cells = 110, more than TOPOMAP_MAX_CELLS = 100"):
+        io.from_array(np.ones((10, 11), bool))
+    monkeypatch.setenv("TOPOMAP_MAX_CELLS", "64e6")
+    assert io.cell_limit()[0] == 64_000_000
+    monkeypatch.setattr(io, "MAX_CELLS", 5)
+    assert io.cell_limit() == (5, "topomap.io.MAX_CELLS = 5")
+    monkeypatch.setattr(io, "MAX_CELLS", None)
+    for bad in ("lots", "-3", "1.5", "inf"):
+        monkeypatch.setenv("TOPOMAP_MAX_CELLS", bad)
+        with pytest.raises(ParameterError, match="TOPOMAP_MAX_CELLS must be a whole number"):
+            io.cell_limit()
+
+
+def test_available_memory_is_read():
+    avail = io.available_memory()
+    if not Path("/proc/meminfo").exists():
+        pytest.skip("no /proc/meminfo")
+    assert isinstance(avail, int) and 0 < avail < 1 << 50
+
+
+def test_the_size_limit_env_reaches_the_command(tmp_path):
+    m = io.save_map(_two_rooms(), tmp_path / "m")
+    env = dict(os.environ, PYTHONPATH=str(ROOT), TOPOMAP_MAX_CELLS="5999")
+    res = subprocess.run([sys.executable, "-m", "topomap.cli", "segment", str(m), "-o", str(tmp_path / "out")],
+                         capture_output=True, text=True, env=env, cwd=tmp_path)
+    assert res.returncode == 1 and "TOPOMAP_MAX_CELLS = 5,999" in res.stderr, res.stderr
+    assert len(res.stderr.splitlines()) == 1
+
+
+# --------------------------------------------------------------------------
+# --jobs: never more processes than maps or CPU cores
+# --------------------------------------------------------------------------
+
+def test_jobs_are_capped_by_the_maps_and_the_cores(tmp_path, monkeypatch):
+    import concurrent.futures as cf
+
+    from topomap.batch import segment_many, worker_count
+
+    started = []
+
+    class Pool(cf.ThreadPoolExecutor):  # records how many workers a batch asks for; runs them as threads
+        def __init__(self, max_workers=None, initializer=None, initargs=()):
+            started.append(max_workers)
+            super().__init__(max_workers=max_workers)
+
+    monkeypatch.setattr(cf, "ProcessPoolExecutor", Pool)
+    monkeypatch.setattr(os, "cpu_count", lambda: 8)
+    rows = segment_many(_maps(tmp_path), tmp_path / "out", jobs=24)
+    assert [r["status"] for r in rows] == ["ok"] * 3
+    assert started == [3]
+    assert worker_count(24, 100) == 8 and worker_count(1, 0) == 1

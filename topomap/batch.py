@@ -417,13 +417,21 @@ def _run_one(task: dict) -> dict:
 # Executors
 # --------------------------------------------------------------------------
 
-def _pool_init():
+def worker_count(jobs: int, tasks: int) -> int:
+    """The local processes to start for ``tasks`` tasks asked to run on ``jobs``: at most one per task
+    and one per CPU core (``--jobs 24`` for 3 maps starts 3 processes, on 2 cores 2)."""
+    return max(1, min(int(jobs), int(tasks), os.cpu_count() or 1))
+
+
+def _pool_init(jobs: int = 1):
     # local workers ignore Ctrl-C; the parent stops them
     import signal
 
+    from . import io
     from ._fast import keep_freed_memory, one_thread
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    io._MEMORY_SHARERS = jobs  # the maps running at once share the memory the size limit is taken from
     keep_freed_memory()  # each worker runs many maps
     one_thread()  # one worker per core: a map's work on a second thread would compete with the others
 
@@ -468,13 +476,17 @@ def _execute(tasks, jobs, scheduler):
             if own:
                 client.close()
         return
-    if jobs == 1:
+    n = worker_count(jobs, len(tasks))
+    if n < jobs:
+        log.info("--jobs %d: %d local processes (%d maps to run, %d CPU cores)", jobs, n, len(tasks),
+                 os.cpu_count() or 1)
+    if n == 1:
         for i, t in enumerate(tasks):
             yield i, _run_one(t)
         return
     from concurrent.futures import ProcessPoolExecutor, as_completed
 
-    with ProcessPoolExecutor(max_workers=jobs, initializer=_pool_init) as ex:
+    with ProcessPoolExecutor(max_workers=n, initializer=_pool_init, initargs=(n,)) as ex:
         futures = {ex.submit(_run_one, t): i for i, t in enumerate(tasks)}
         try:
             yield from _collect(as_completed(futures), futures.get, tasks)
@@ -567,7 +579,8 @@ def segment_many(paths: Sequence, out, *, jobs: int = 1, scheduler=None, overwri
         Output folder: one map's files go straight into it; several maps get
         a folder each (:func:`output_dirs`) and ``out/summary.csv``.
     jobs : int, optional
-        Local worker processes (default 1: this process).
+        Local worker processes (default 1: this process); at most one per
+        map to run and one per CPU core are started (:func:`worker_count`).
     scheduler : str or distributed.Client, optional
         Run on this Dask distributed cluster instead (a scheduler address
         like ``"tcp://10.0.0.5:8786"``, or a client); ``jobs`` must then be 1.

@@ -808,7 +808,7 @@ def _read_json(path: Path):
 
 
 def _check_frame(G: nx.MultiGraph, path) -> nx.MultiGraph:
-    """``G`` if the map size its ``shape`` claims is within :data:`topomap.io.MAX_CELLS`, else MapTooLargeError."""
+    """``G`` if the map size its ``shape`` claims is within :func:`topomap.io.cell_limit`, else MapTooLargeError."""
     from . import io
     from .errors import MapTooLargeError
 
@@ -819,9 +819,10 @@ def _check_frame(G: nx.MultiGraph, path) -> nx.MultiGraph:
     if len(shape) != 2 or min(shape) < 0:
         raise _bad(path, f"graph attribute 'shape' must be [rows, cols], got {list(shape)[:4]!r}")
     rows, cols = (int(v) for v in shape)
-    if rows * cols > io.MAX_CELLS:
+    limit, why = io.cell_limit()
+    if rows * cols > limit:
         raise MapTooLargeError(f"{path}: the graph claims a map of {cols:,} x {rows:,} cells = {rows * cols:,}, "
-                               f"more than topomap.io.MAX_CELLS = {io.MAX_CELLS:,}")
+                               f"more than {why}")
     return G
 
 
@@ -1142,7 +1143,7 @@ def load_graph(path) -> nx.MultiGraph:
     GraphFormatError
         Unknown extension, or the file is not a room graph (the message names the file).
     MapTooLargeError
-        The graph's ``shape`` claims a map of more than :data:`topomap.io.MAX_CELLS` cells.
+        The graph's ``shape`` claims a map of more than :func:`topomap.io.cell_limit` cells.
     """
     from .errors import TopomapError
 

@@ -37,6 +37,11 @@ __all__ = [
     "OCCUPIED",
     "UNKNOWN",
     "MAX_CELLS",
+    "JOB_BYTES_PER_CELL",
+    "JOB_BASE_BYTES",
+    "cell_limit",
+    "cells_for_memory",
+    "available_memory",
     "MIN_RESOLUTION",
     "MAX_RESOLUTION",
     "USUAL_RESOLUTION",
@@ -65,11 +70,28 @@ FREE = 0
 OCCUPIED = 100
 UNKNOWN = -1
 
-#: Largest map accepted, in cells (rows * cols). Checked from the image
-#: header before any pixel is decoded; larger maps raise
+#: Largest map accepted, in cells (rows * cols), when set; None (the default)
+#: bounds a map by the memory its job will take against the memory the
+#: machine has available (:func:`max_cells`). Checked from the image header
+#: before any pixel is decoded; larger maps raise
 #: :class:`~topomap.errors.MapTooLargeError`. Read at call time, so it can be
-#: changed (``topomap.io.MAX_CELLS = ...``).
-MAX_CELLS = 55_000_000
+#: changed (``topomap.io.MAX_CELLS = ...``); the environment variable
+#: ``TOPOMAP_MAX_CELLS`` sets it too (for the command line).
+MAX_CELLS = None
+#: Memory the whole job of a map (``topomap segment``: loading, segmentation,
+#: room graph, travel distances, overlay, every file) takes at most: this
+#: many bytes per cell, plus :data:`JOB_BASE_BYTES` (measured on maps built
+#: to break it, ``benchmarks/adversarial.py``; the worst shape, a corridor
+#: three cells wide, takes 140 bytes per cell, most maps 33 to 62).
+JOB_BYTES_PER_CELL = 150
+#: The interpreter, the libraries and their caches (a 1-cell map's job peaks at about 125 MB).
+JOB_BASE_BYTES = 250_000_000
+#: The limit when the available memory cannot be read: (8 GiB - 250 MB) / 150 B.
+FALLBACK_MAX_CELLS = 55_000_000
+#: The limit is never below this many cells (a 1000 x 1000 map), however little memory is free.
+MIN_MAX_CELLS = 1_000_000
+#: How many maps share the machine's memory at once (the local workers of a batch set it).
+_MEMORY_SHARERS = 1
 
 #: Smallest and largest cell size accepted, metres per cell (1 mm and 10 m).
 #: The methods' options are lengths in metres, so their kernels grow as
@@ -120,6 +142,78 @@ def _msg(name, text) -> str:
     return _one_line(f"{name}: {text}")
 
 
+def available_memory() -> Optional[int]:
+    """Bytes of memory this process can still take: ``MemAvailable`` of ``/proc/meminfo``, capped by
+    the cgroup's (container's) ``memory.max`` less its use; else free physical pages
+    (``os.sysconf``); None when neither can be read."""
+    avail = None
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    avail = int(line.split()[1]) * 1024
+                    break
+    except (OSError, ValueError, IndexError):
+        pass
+    if avail is None:
+        try:
+            avail = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+        except (AttributeError, ValueError, OSError):
+            return None
+    try:  # cgroup v2: a container's own limit
+        with open("/sys/fs/cgroup/memory.max") as fh:
+            top = fh.read().strip()
+        if top != "max":
+            with open("/sys/fs/cgroup/memory.current") as fh:
+                used = int(fh.read().strip())
+            avail = min(avail, max(int(top) - used, 0))
+    except (OSError, ValueError):
+        pass
+    return avail
+
+
+def cells_for_memory(nbytes: float) -> int:
+    """The largest map (cells) whose job fits ``nbytes`` of memory: ``(nbytes - JOB_BASE_BYTES) /
+    JOB_BYTES_PER_CELL``, at least :data:`MIN_MAX_CELLS`."""
+    return max(int((nbytes - JOB_BASE_BYTES) // JOB_BYTES_PER_CELL), MIN_MAX_CELLS)
+
+
+def cell_limit() -> tuple:
+    """``(cells, why)``: the largest map accepted now, and the words an error gives for it.
+
+    :data:`MAX_CELLS` when set, else the environment variable
+    ``TOPOMAP_MAX_CELLS``, else the memory available (:func:`available_memory`,
+    shared by the maps a batch runs at once) through :func:`cells_for_memory`
+    (:data:`FALLBACK_MAX_CELLS` when it cannot be read).
+
+    Raises
+    ------
+    ParameterError
+        ``TOPOMAP_MAX_CELLS`` is not a whole number > 0.
+    """
+    if MAX_CELLS is not None:
+        return int(MAX_CELLS), f"topomap.io.MAX_CELLS = {int(MAX_CELLS):,}"
+    env = os.environ.get("TOPOMAP_MAX_CELLS", "").strip()
+    if env:
+        try:
+            v = float(env.replace("_", "").replace(",", ""))
+        except ValueError:
+            v = float("nan")
+        if not (v.is_integer() and v >= 1):
+            raise ParameterError(f"TOPOMAP_MAX_CELLS must be a whole number of cells > 0, got {env!r}")
+        return int(v), f"TOPOMAP_MAX_CELLS = {int(v):,}"
+    avail = available_memory()
+    if avail is None:
+        return FALLBACK_MAX_CELLS, (f"the {FALLBACK_MAX_CELLS:,} cells topomap assumes when it cannot read the "
+                                    f"free memory (set TOPOMAP_MAX_CELLS to change)")
+    share = avail / max(int(_MEMORY_SHARERS), 1)
+    n = cells_for_memory(share)
+    jobs = f" for each of {_MEMORY_SHARERS} maps at once" if _MEMORY_SHARERS > 1 else ""
+    return n, (f"the {n:,} cells the free memory allows ({share / 1e9:.1f} GB{jobs}, at "
+               f"{JOB_BYTES_PER_CELL} bytes per cell + {JOB_BASE_BYTES / 1e6:.0f} MB; set TOPOMAP_MAX_CELLS "
+               f"to change)")
+
+
 @dataclass(frozen=True, eq=False)
 class OccupancyGrid:
     """A three-state occupancy grid with its metric frame.
@@ -155,9 +249,10 @@ class OccupancyGrid:
             raise MapError(f"{name}: grid must be 2-D, got ndim={cells.ndim}")
         if cells.shape[0] == 0 or cells.shape[1] == 0:
             raise MapError(f"{name}: grid is empty (shape {cells.shape})")
-        if cells.size > MAX_CELLS:
+        limit, why = cell_limit()
+        if cells.size > limit:
             raise MapTooLargeError(_msg(name, f"map is {cells.shape[1]} x {cells.shape[0]} cells = {cells.size:,}, "
-                                              f"more than topomap.io.MAX_CELLS = {MAX_CELLS:,}"))
+                                              f"more than {why}"))
         try:
             res = float(self.resolution)
         except (TypeError, ValueError):
@@ -482,11 +577,9 @@ def from_array(array, *, resolution: float = DEFAULT_RESOLUTION, origin=(0.0, 0.
 # --------------------------------------------------------------------------
 
 def _check_size(name, rows, cols):
-    limit = MAX_CELLS
+    limit, why = cell_limit()
     if int(rows) * int(cols) > limit:
-        raise MapTooLargeError(_msg(
-            name, f"image is {cols} x {rows} px = {rows * cols:,} cells, more than "
-                  f"topomap.io.MAX_CELLS = {limit:,}"))
+        raise MapTooLargeError(_msg(name, f"image is {cols} x {rows} px = {rows * cols:,} cells, more than {why}"))
 
 
 def _to_gray(name, img):
@@ -586,10 +679,10 @@ def _open_decode(path: Path, name: str, lift_pillow_limit: bool = False):
 def _read_image(path: Path, name: str):
     """Read any Pillow image as ``(gray uint8 (M, N), transparent or None)``.
 
-    The size limit is :data:`MAX_CELLS`, checked from the header. Pillow's
+    The size limit is :func:`cell_limit`, checked from the header. Pillow's
     own decompression-bomb check is silenced (warning) or turned into
-    :class:`MapTooLargeError` (error) when the image also exceeds
-    ``MAX_CELLS``; an image within ``MAX_CELLS`` is decoded regardless.
+    :class:`MapTooLargeError` (error) when the image also exceeds the
+    limit; an image within it is decoded regardless.
     """
     from PIL import Image, UnidentifiedImageError
 
@@ -602,10 +695,10 @@ def _read_image(path: Path, name: str):
             except Image.DecompressionBombError as exc:
                 m = re.search(r"\((\d+) pixels\)", str(exc))
                 count = int(m.group(1)) if m else None
-                if count is None or count > MAX_CELLS:
+                limit, why = cell_limit()
+                if count is None or count > limit:
                     size = f"{count:,} cells" if count is not None else "too many cells"
-                    raise MapTooLargeError(_msg(
-                        name, f"image is {size}, more than topomap.io.MAX_CELLS = {MAX_CELLS:,}")) from None
+                    raise MapTooLargeError(_msg(name, f"image is {size}, more than {why}")) from None
                 return _open_decode(path, name, lift_pillow_limit=True)
         except (MapError, MapFileError):
             raise
@@ -736,7 +829,7 @@ def load_map(path, *, resolution=None, origin=None, negate=None, occupied_thresh
     MapFileError
         A directory or unreadable file.
     MapTooLargeError
-        More than :data:`MAX_CELLS` cells (checked from the image header).
+        More than :func:`cell_limit` cells (checked from the image header).
     MapError
         Empty, corrupt, truncated or unreadable content; bad YAML.
     ParameterError

@@ -227,7 +227,7 @@ def occupancy_cells(data, width: int, height: int, *, free_thresh: float = SAVER
     MapError
         Empty, or not ``width * height`` values.
     MapTooLargeError
-        More than :data:`topomap.io.MAX_CELLS` cells.
+        More than :func:`topomap.io.cell_limit` cells.
     """
     from . import io
 
@@ -235,8 +235,9 @@ def occupancy_cells(data, width: int, height: int, *, free_thresh: float = SAVER
     w, h = int(width), int(height)
     if w <= 0 or h <= 0:
         raise MapError(f"{name}: the map is empty ({w} x {h} cells)")
-    if w * h > io.MAX_CELLS:
-        raise MapTooLargeError(f"{name}: map is {w * h:,} cells, more than topomap.io.MAX_CELLS = {io.MAX_CELLS:,}")
+    limit, why = io.cell_limit()
+    if w * h > limit:
+        raise MapTooLargeError(f"{name}: map is {w:,} x {h:,} cells = {w * h:,}, more than {why}")
     if isinstance(data, (bytes, bytearray, memoryview)):
         v = np.frombuffer(data, np.int8)
     else:
