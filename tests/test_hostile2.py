@@ -308,3 +308,95 @@ def test_jobs_are_capped_by_the_maps_and_the_cores(tmp_path, monkeypatch):
     assert [r["status"] for r in rows] == ["ok"] * 3
     assert started == [3]
     assert worker_count(24, 100) == 8 and worker_count(1, 0) == 1
+
+
+# --------------------------------------------------------------------------
+# Bags: the map's size from the message header before decoding; compressed bags bounded
+# --------------------------------------------------------------------------
+
+def _occ(ts, width, height, frame="map", fill=0):
+    import math
+
+    T = ts.types
+    time = T["builtin_interfaces/msg/Time"](sec=1, nanosec=0)
+    hdr = dict(stamp=time, frame_id=frame)
+    if "seq" in {f for f, _ in ts.fielddefs["std_msgs/msg/Header"][1]}:
+        hdr["seq"] = 0
+    pose = T["geometry_msgs/msg/Pose"](position=T["geometry_msgs/msg/Point"](x=0.0, y=0.0, z=0.0),
+                                       orientation=T["geometry_msgs/msg/Quaternion"](0.0, 0.0, 0.0, math.cos(0)))
+    info = T["nav_msgs/msg/MapMetaData"](map_load_time=time, resolution=0.05, width=width, height=height,
+                                         origin=pose)
+    return T["nav_msgs/msg/OccupancyGrid"](header=T["std_msgs/msg/Header"](**hdr), info=info,
+                                           data=np.full(width * height, fill, np.int8))
+
+
+def _bag(path, width, height, *, storage="mcap", compression=None):
+    from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    w = Writer(path, version=9, storage_plugin=StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3)
+    if compression is not None:
+        w.set_compression(getattr(CompressionMode, compression), CompressionFormat.ZSTD)
+    with w:
+        conn = w.add_connection("/map", "nav_msgs/msg/OccupancyGrid", typestore=ts)
+        w.write(conn, 10**9, ts.serialize_cdr(_occ(ts, width, height), "nav_msgs/msg/OccupancyGrid"))
+    return path
+
+
+def test_map_size_is_read_from_the_message_header():
+    pytest.importorskip("rosbags")
+    from rosbags.typesys import Stores, get_typestore
+
+    from topomap.ros import _map_size
+
+    ts2, ts1 = get_typestore(Stores.ROS2_HUMBLE), get_typestore(Stores.ROS1_NOETIC)
+    for frame in ("", "m", "ma", "map", "mapx", "a_longer_frame_name"):
+        raw2 = bytes(ts2.serialize_cdr(_occ(ts2, 7, 3, frame), "nav_msgs/msg/OccupancyGrid"))
+        raw1 = bytes(ts1.serialize_ros1(_occ(ts1, 7, 3, frame), "nav_msgs/msg/OccupancyGrid"))
+        assert _map_size(raw2, True) == (7, 3) and _map_size(raw1, False) == (7, 3)
+    assert _map_size(b"\x00\x01", True) is None
+
+
+def test_bag_map_over_the_cell_bound_is_refused_before_decoding(tmp_path, monkeypatch):
+    pytest.importorskip("rosbags")
+    from rosbags.highlevel import AnyReader
+
+    from topomap.errors import MapTooLargeError
+
+    bag = _bag(tmp_path / "big", 200, 150)
+
+    def decode(*args, **kwargs):
+        raise AssertionError("decoded")
+
+    monkeypatch.setattr(AnyReader, "deserialize", decode)
+    monkeypatch.setattr(io, "MAX_CELLS", 10_000)
+    with pytest.raises(MapTooLargeError, match=r"big: map is 200 x 150 cells = 30,000, more than "
+                                               r"topomap.io.MAX_CELLS = 10,000"):
+        io.load_map(bag)
+
+
+@pytest.mark.parametrize("storage, compression", [("mcap", "STORAGE"), ("sqlite3", "FILE"), ("sqlite3", "MESSAGE"),
+                                                  ("mcap", "FILE")])
+def test_compressed_bag_that_expands_hugely_is_refused(tmp_path, monkeypatch, storage, compression):
+    pytest.importorskip("rosbags")
+    import tempfile
+
+    from topomap import ros
+    from topomap.errors import BagError
+
+    bag = _bag(tmp_path / "bomb", 2000, 2000, storage=storage, compression=compression)  # 4 MB of zeros
+    packed = sum(f.stat().st_size for f in bag.iterdir())
+    assert packed < 100_000
+    grid = io.load_map(bag)  # within the default bound: read
+    assert grid.shape == (2000, 2000)
+    scratch = tmp_path / "tmp"
+    scratch.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(scratch))
+    monkeypatch.setattr(ros, "MIN_EXPANSION_BYTES", 1 << 20)  # so that 4 MB is "huge" here
+    monkeypatch.setattr(ros, "MAX_EXPANSION", 10)
+    with pytest.raises(BagError, match=r"bomb: .*expands to more than 1,048,576 bytes .*refused before decompressing"):
+        io.load_map(bag)
+    assert list(scratch.iterdir()) == []  # nothing decompressed into the temporary folder
+    res = _run("segment", bag, "-o", tmp_path / "out")
+    _one_error_line(res, bag)
