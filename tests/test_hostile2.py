@@ -400,3 +400,43 @@ def test_compressed_bag_that_expands_hugely_is_refused(tmp_path, monkeypatch, st
     assert list(scratch.iterdir()) == []  # nothing decompressed into the temporary folder
     res = _run("segment", bag, "-o", tmp_path / "out")
     _one_error_line(res, bag)
+
+
+# --------------------------------------------------------------------------
+# Messages name the file at fault, and show no internals
+# --------------------------------------------------------------------------
+
+@pytest.mark.parametrize("key, value, words", [
+    ("resolution", 0, "resolution must be > 0"),
+    ("resolution", 1e300, "resolution must be between"),
+    ("origin", "[NaN, 0, 0]", "origin must be finite"),
+    ("shape", [0, 0], "two whole numbers >= 1"),
+    ("shape", [1.5, 2], "1.5 is not a whole number"),
+])
+def test_a_bad_previous_graph_frame_is_blamed_on_the_graph(tmp_path, key, value, words):
+    g = _graph_file(tmp_path, edit=lambda d: d["graph"].__setitem__(key, value))
+    m = io.save_map(_two_rooms(), tmp_path / "m")
+    for res in (_run("segment", m, "-o", tmp_path / "out", "--previous", g), _run("tour", g, "--from", 1, 1)):
+        line = _one_error_line(res, g)
+        assert words in line and "<array>" not in line and "m.yaml" not in line, line
+
+
+def test_a_previous_room_outside_its_frame_is_no_internal_error(tmp_path):
+    def edit(d):  # room 1's outline far outside the map frame the graph claims
+        d["nodes"][0]["polygon"] = "POLYGON ((1000 1000, 1001 1000, 1001 1001, 1000 1001, 1000 1000))"
+
+    g = _graph_file(tmp_path, edit=edit)
+    m = io.save_map(_two_rooms(), tmp_path / "m")
+    res = _run("segment", m, "-o", tmp_path / "out", "--previous", g)  # was: "m.yaml: negative dimensions ..."
+    assert res.exit_code == 0, res.output
+    assert "1 kept, 1 new, 1 vanished" in res.output
+
+
+def test_an_output_folder_that_is_a_file_is_named_as_such(tmp_path):
+    maps = _maps(tmp_path, ["a", "b"])
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "a").write_text("my notes\n")
+    line = _one_error_line(_run("segment", *maps, "-o", out), out / "a")
+    assert "exists and is not a folder" in line and "unreadable run record" not in line, line
+    assert sorted(p.name for p in out.iterdir()) == ["a"] and (out / "a").read_text() == "my notes\n"

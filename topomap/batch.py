@@ -321,6 +321,10 @@ def _plan(paths, dirs, settings, overwrite):
     """Per map ``"run"`` or ``"skip"`` (with the earlier row); raises on a folder this run must not write."""
     plan, refused = [], []
     for p, d in zip(paths, dirs):
+        if os.path.lexists(d) and not d.is_dir():
+            refused.append(f"{d} exists and is not a folder (the results of {p} go into a folder of that name)")
+            plan.append(("run", None))
+            continue
         rec = _read_record(d)
         mine = str(Path(os.path.abspath(p)))
         if rec is None:

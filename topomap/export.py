@@ -545,12 +545,18 @@ def _float_tuple(v):
     return tuple(float(x) for x in _json(v))
 
 
+def _whole(x) -> int:
+    """``x`` as an int; ValueError for a fraction (1.5 is not read as 1), a bool or a non-number."""
+    if isinstance(x, bool) or (isinstance(x, float) and not x.is_integer()):
+        raise ValueError(f"{x!r} is not a whole number")
+    return int(x)
+
+
 def _int_tuple(v):
-    return tuple(int(x) for x in _json(v))
+    return tuple(_whole(x) for x in _json(v))
 
 
-def _int_pair(v):
-    return tuple(int(x) for x in _json(v))
+_int_pair = _int_tuple
 
 
 def _geometry(v):
@@ -809,15 +815,23 @@ def _read_json(path: Path):
 
 def _check_frame(G: nx.MultiGraph, path) -> nx.MultiGraph:
     """``G`` if the map size its ``shape`` claims is within :func:`topomap.io.cell_limit`, else MapTooLargeError."""
+    import numbers
+
     from . import io
     from .errors import MapTooLargeError
 
     check_room_ids(G, path)
+    # the map frame, checked here so that its errors name the file (not the '<array>' of a grid built from it)
+    if G.graph.get("resolution") is not None:
+        io._as_resolution(f"{path}: graph attribute", G.graph["resolution"])
+    if G.graph.get("origin") is not None:
+        io._as_origin(f"{path}: graph attribute", G.graph["origin"])
     shape = G.graph.get("shape")
     if shape is None:
         return G
-    if len(shape) != 2 or min(shape) < 0:
-        raise _bad(path, f"graph attribute 'shape' must be [rows, cols], got {list(shape)[:4]!r}")
+    if len(shape) != 2 or not all(isinstance(v, numbers.Integral) and v >= 1 for v in shape):
+        raise _bad(path, f"graph attribute 'shape' must be [rows, cols], two whole numbers >= 1, "
+                         f"got {_one_line(repr(list(shape)[:4]))[:60]}")
     rows, cols = (int(v) for v in shape)
     limit, why = io.cell_limit()
     if rows * cols > limit:
