@@ -440,3 +440,44 @@ def test_an_output_folder_that_is_a_file_is_named_as_such(tmp_path):
     line = _one_error_line(_run("segment", *maps, "-o", out), out / "a")
     assert "exists and is not a folder" in line and "unreadable run record" not in line, line
     assert sorted(p.name for p in out.iterdir()) == ["a"] and (out / "a").read_text() == "my notes\n"
+
+
+# --------------------------------------------------------------------------
+# A YAML whose free_thresh reads map_saver's unknown gray 205 as free: one warning
+# --------------------------------------------------------------------------
+
+def _saver_map(tmp_path, free_thresh, unknown=True):
+    """A map_saver image (254 free, 0 walls, 205 unknown around) and a YAML with ``free_thresh``."""
+    from PIL import Image
+
+    g = np.full((80, 120), 205 if unknown else 0, np.uint8)
+    g[10:70, 10:110] = 0
+    g[12:68, 12:108] = 254
+    g[12:68, 59:61] = 0
+    g[35:45, 59:61] = 254
+    Image.fromarray(g).save(tmp_path / "depot.pgm")
+    (tmp_path / "depot.yaml").write_text(f"image: depot.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n"
+                                         f"negate: 0\noccupied_thresh: 0.65\nfree_thresh: {free_thresh}\n")
+    return tmp_path / "depot.yaml"
+
+
+def test_unknown_gray_read_as_free_is_warned(tmp_path, caplog):
+    y = _saver_map(tmp_path, 0.25)  # Nav2's depot.yaml
+    with caplog.at_level("WARNING", logger="topomap"):
+        grid = io.load_map(y)
+    assert (grid.cells == io.FREE).sum() > 80 * 120 - 60 * 100  # the unknown ring is read as free (map_server's rule)
+    msgs = [r.getMessage() for r in caplog.records if "gray 205" in r.getMessage()]
+    assert len(msgs) == 1 and msgs[0].startswith(str(y)) and "free_thresh 0.25" in msgs[0], msgs
+    assert "at most 0.195" in msgs[0]
+    res = subprocess.run([sys.executable, "-m", "topomap.cli", "segment", str(y), "-o", str(tmp_path / "out")],
+                         capture_output=True, text=True, env=dict(os.environ, PYTHONPATH=str(ROOT)), cwd=tmp_path)
+    warned = [ln for ln in res.stderr.splitlines() if "gray 205" in ln]  # the command line shows it, once
+    assert res.returncode == 0 and len(warned) == 1 and warned[0].startswith("WARNING"), res.stderr
+
+
+@pytest.mark.parametrize("free_thresh, unknown", [(0.196, True), (0.25, False)])
+def test_no_warning_when_205_is_unknown_or_absent(tmp_path, caplog, free_thresh, unknown):
+    y = _saver_map(tmp_path, free_thresh, unknown)
+    with caplog.at_level("WARNING", logger="topomap"):
+        io.load_map(y)
+    assert not [r for r in caplog.records if "gray 205" in r.getMessage()]

@@ -935,11 +935,37 @@ def load_map(path, *, resolution=None, origin=None, negate=None, occupied_thresh
     if is_yaml or any(v is not None for v in (occupied_thresh, free_thresh, mode)):
         cells = classify_gray(gray, negate=neg, occupied_thresh=occ, free_thresh=free,
                               mode=mod, transparent=transparent)
+        _warn_unknown_read_free(name, gray, cells, free, where_f, neg)
     else:
         cells = classify_plan(gray, negate=neg, transparent=transparent)
     grid = OccupancyGrid(cells, res, org, name, gray=gray)
     _warn_free_area(name, np.count_nonzero(cells == FREE) * res * res)
     return grid
+
+
+#: :func:`load_map` warns when at least this share of the free cells (and :data:`UNKNOWN_FREE_MIN_CELLS`
+#: cells) have exactly map_saver's unknown gray (205) and the thresholds read them as free.
+UNKNOWN_FREE_SHARE = 0.01
+UNKNOWN_FREE_MIN_CELLS = 100
+
+
+def _warn_unknown_read_free(name, gray, cells, free_thresh, where, negate=False):
+    """One warning when the thresholds make map_saver's unknown gray 205 free and many cells have it
+    (Nav2's ``free_thresh: 0.25`` reads 205, p = 0.196, as free: the unknown outside becomes rooms)."""
+    g = GRAY_UNKNOWN
+    at = np.flatnonzero(gray.ravel() == g)
+    if at.size < UNKNOWN_FREE_MIN_CELLS:
+        return
+    n = int(np.count_nonzero(cells.ravel()[at] == FREE))
+    n_free = int(np.count_nonzero(cells == FREE))
+    if n < max(UNKNOWN_FREE_MIN_CELLS, UNKNOWN_FREE_SHARE * n_free):
+        return
+    pv = (255 - (255 - g if negate else g)) / 255
+    src = "" if where == name else f" (from {where})"
+    log.warning("%s", _msg(name, f"{n:,} cells ({100 * n / n_free:.0f} % of the free space) have gray {g}, "
+                                 f"map_saver's unknown, and free_thresh {free_thresh:g}{src} reads them as free "
+                                 f"(p = {pv:.3f}); if they are unknown, set free_thresh to at most "
+                                 f"{pv - 0.001:.3f} (map_server's default is {FREE_THRESH})"))
 
 
 #: Free area (m²) outside which :func:`load_map` warns: less than a small room, more than any building.
