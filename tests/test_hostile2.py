@@ -481,3 +481,46 @@ def test_no_warning_when_205_is_unknown_or_absent(tmp_path, caplog, free_thresh,
     with caplog.at_level("WARNING", logger="topomap"):
         io.load_map(y)
     assert not [r for r in caplog.records if "gray 205" in r.getMessage()]
+
+
+# --------------------------------------------------------------------------
+# map.pgm beside the map.yaml that names it: read through the YAML
+# --------------------------------------------------------------------------
+
+def _graph_resolution(out):
+    return json.loads((out / "rooms.json").read_text())["graph"]["resolution"]
+
+
+def test_an_image_beside_its_yaml_is_read_through_it(tmp_path, caplog):
+    y = io.save_map(_two_rooms(), tmp_path / "map", resolution=0.1, origin=(2.0, 3.0, 0.0))
+    pgm = tmp_path / "map.pgm"
+    with caplog.at_level("INFO", logger="topomap"):
+        res = _run("segment", pgm, "-o", tmp_path / "out")
+    assert res.exit_code == 0, res.output
+    assert _graph_resolution(tmp_path / "out") == 0.1  # the YAML's, not the bare image's 0.05
+    assert _run("segment", y, "-o", tmp_path / "via_yaml").exit_code == 0
+    a, b = (json.loads((tmp_path / d / "rooms.json").read_text()) for d in ("out", "via_yaml"))
+    assert a == b  # the same rooms, doors and frame (the map it names is the YAML)
+    said = [r.getMessage() for r in caplog.records if "read through" in r.getMessage()]
+    assert len(said) == 1 and said[0].startswith(f"{pgm}: read through map.yaml"), said
+    # --resolution: the image alone, at that resolution, without a word
+    caplog.clear()
+    with caplog.at_level("INFO", logger="topomap"):
+        assert _run("segment", pgm, "-o", tmp_path / "alone", "--resolution", 0.05).exit_code == 0
+    assert _graph_resolution(tmp_path / "alone") == 0.05
+    assert not [r for r in caplog.records if "read through" in r.getMessage() or "beside it" in r.getMessage()]
+    # the YAML is an input of the run: changing it runs the map again
+    y.write_text(y.read_text().replace("resolution: 0.1", "resolution: 0.08"))
+    res = _run("segment", pgm, "-o", tmp_path / "out")
+    assert res.exit_code == 0 and "skipped" not in res.output and _graph_resolution(tmp_path / "out") == 0.08
+
+
+def test_an_image_beside_a_yaml_of_another_image_is_warned(tmp_path, caplog):
+    io.save_map(_two_rooms(), tmp_path / "other", resolution=0.1)
+    io.save_map(_two_rooms(), tmp_path / "map", resolution=0.1)
+    (tmp_path / "map.yaml").write_text((tmp_path / "other.yaml").read_text())  # names other.pgm
+    with caplog.at_level("WARNING", logger="topomap"):
+        res = _run("segment", tmp_path / "map.pgm", "-o", tmp_path / "out")
+    assert res.exit_code == 0 and _graph_resolution(tmp_path / "out") == 0.05
+    said = [r.getMessage() for r in caplog.records if "beside it" in r.getMessage()]
+    assert len(said) == 1 and "names another image ('other.pgm')" in said[0] and "at 0.05 m per cell" in said[0]

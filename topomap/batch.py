@@ -242,8 +242,13 @@ def _stat(path) -> Optional[list]:
 
 
 def _input_files(path: Path) -> list:
-    """The map file and, for a YAML, the image it names (absolute paths)."""
+    """The map file and, for a YAML, the image it names; for an image, a YAML beside it of the same stem
+    (read or not: see :func:`topomap.io.yaml_beside`) (absolute paths)."""
     files = [Path(os.path.abspath(path))]
+    if path.suffix.lower() not in (".yaml", ".yml"):
+        for suffix in (".yaml", ".yml"):
+            if path.with_suffix(suffix).is_file():
+                files.append(Path(os.path.abspath(path.with_suffix(suffix))))
     if path.suffix.lower() in (".yaml", ".yml"):
         try:
             import yaml

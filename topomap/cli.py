@@ -192,7 +192,16 @@ def _segment_one(path, outdir, resolution, method, skeletons, topic=None, at=Non
 
     # a --previous path goes to segment() as it is: its messages then name the file
     t0 = time.perf_counter()
-    grid = io.load_map(path, resolution=resolution, topic=topic, time=at)
+    source = path
+    if resolution is None:  # map.pgm beside the map.yaml that names it: read through the YAML
+        beside, why = io.yaml_beside(path)
+        if beside is not None:
+            log.info("%s: read through %s beside it (its resolution, origin and thresholds); give --resolution "
+                     "to read the image alone", path, beside.name)
+            source = beside
+        elif why is not None:
+            log.warning("%s: %s at %g m per cell", path, why, io.DEFAULT_RESOLUTION)
+    grid = io.load_map(source, resolution=resolution, topic=topic, time=at)
     t1 = time.perf_counter()
     seg = segment(grid, method=method, previous=previous)
     seg.room_graph  # built here so its time is its own stage (timings["room_graph"])

@@ -63,6 +63,7 @@ __all__ = [
     "from_array",
     "load_map",
     "remove_stale_temporaries",
+    "yaml_beside",
     "save_map",
 ]
 
@@ -777,6 +778,42 @@ def _read_yaml(path: Path, name: str) -> dict:
         raise MapError(_msg(name, f"map YAML must be a mapping (key: value), got {type(meta).__name__}"))
     _check_yaml_keys(name, meta)
     return meta
+
+
+def yaml_beside(path) -> tuple:
+    """The map_server YAML of the same stem beside image ``path`` (``map.pgm`` -> ``map.yaml``), for
+    ``topomap segment map.pgm`` without ``--resolution``.
+
+    Returns
+    -------
+    (pathlib.Path or None, str or None)
+        ``(yaml, None)`` when ``map.yaml`` (or ``.yml``) names this very image: read the map through
+        it; ``(None, why)`` when such a YAML exists but names another image or cannot be read (the
+        image is read alone; ``why`` says so); ``(None, None)`` when there is none (or ``path`` is a
+        YAML or a bag).
+    """
+    from .errors import TopomapError
+
+    p = Path(os.fspath(path))
+    if p.suffix.lower() in _YAML_SUFFIXES or p.suffix.lower() in (".bag", ".mcap", ".db3") or not p.is_file():
+        return None, None
+    for suffix in _YAML_SUFFIXES:
+        y = p.with_suffix(suffix)
+        if y == p or not y.is_file():
+            continue
+        try:
+            image = _read_yaml(y, str(y)).get("image")
+        except (TopomapError, OSError) as exc:
+            return None, f"{y.name} beside it cannot be read ({_one_line(exc)}); the image is read alone"
+        if isinstance(image, str) and image.strip() and "\x00" not in image:
+            target = Path(image) if Path(image).is_absolute() else y.parent / image
+            try:
+                if target.exists() and os.path.samefile(target, p):
+                    return y, None
+            except OSError:
+                pass
+        return None, f"{y.name} beside it names another image ({_one_line(repr(image))[:60]}); the image is read alone"
+    return None, None
 
 
 def load_map(path, *, resolution=None, origin=None, negate=None, occupied_thresh=None,
