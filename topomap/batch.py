@@ -23,6 +23,13 @@ Refusal
     run record (results topomap did not write, or of unknown origin), is
     never written into: the whole batch stops before any map runs
     (:class:`~topomap.errors.OutputExistsError`) unless ``overwrite=True``.
+One batch at a time
+    A batch holds a lock on ``out`` (the file ``out/.topomap.lock``, locked
+    with ``fcntl.flock``) from before it looks at the folders until its
+    summary is written: a second batch into the same ``out`` meanwhile is
+    refused at once (:class:`~topomap.errors.OutputExistsError`, nothing
+    written). The lock goes with the process (a killed batch leaves no lock
+    held); the file is removed when the batch ends.
 Resume
     A map whose folder has a complete run record for the same input, the
     same options and version, unchanged input files and unchanged output
@@ -62,11 +69,17 @@ import sys
 import time
 import traceback
 from collections import Counter
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Optional, Sequence
 
+try:
+    import fcntl
+except ImportError:  # not a POSIX system: an O_EXCL lock file instead
+    fcntl = None
+
 from . import export as _export
-from .errors import MissingDependencyError, OutputExistsError, ParameterError, TopomapError, first_line
+from .errors import MapFileError, MissingDependencyError, OutputExistsError, ParameterError, TopomapError, first_line
 
 __all__ = ["segment_many", "output_dirs", "read_summary", "RECORD", "SUMMARY", "SUMMARY_COLUMNS",
            "OUTPUT_NAMES", "STATUSES", "OK", "SKIPPED", "FAILED", "ERROR", "PENDING", "INCOMPLETE", "COMPLETE",
@@ -78,6 +91,8 @@ log = logging.getLogger("topomap.batch")
 RECORD = "topomap_run.json"
 #: Name of the batch summary table in ``out``.
 SUMMARY = "summary.csv"
+#: Name of the lock file a running batch holds in ``out``.
+LOCK = ".topomap.lock"
 #: Output files a map's folder may hold (what ``topomap segment`` writes).
 OUTPUT_NAMES = tuple(_export.OUTPUT_FILES.values())
 #: First columns of ``summary.csv`` (``t_<stage>`` columns and ``error`` follow).
@@ -149,9 +164,69 @@ def output_dirs(paths: Sequence, out) -> list:
     dirs = [out / (s if count[s] == 1 else s.parent / f"{s.name}_{r.suffix[1:]}") for s, r in zip(stems, rel)]
     clash = Counter(dirs)
     for p, d in zip(paths, dirs):
-        if d == out / SUMMARY or clash[d] > 1:
+        if d in (out / SUMMARY, out / LOCK) or clash[d] > 1:
             raise ParameterError(f"{p}: its output folder {d} is taken (rename the map)")
     return dirs
+
+
+# --------------------------------------------------------------------------
+# One batch at a time
+# --------------------------------------------------------------------------
+
+@contextmanager
+def _output_lock(out: Path):
+    """Hold the lock of the output folder ``out`` (created if missing) while the block runs.
+
+    OutputExistsError at once when another process holds it. The lock is
+    ``fcntl.flock`` on ``out/LOCK`` (released by the system when the process
+    dies); the file is removed at the end, and ``out`` too when this created
+    it and it is left empty.
+    """
+    from .io import _msg
+
+    created = not out.exists()
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise MapFileError(_msg(out, f"cannot create the output folder: {exc.strerror or exc}")) from None
+    path = out / LOCK
+    busy = OutputExistsError(f"{out}: another topomap run is writing into this folder (it holds {LOCK}); "
+                             "nothing was written; wait for it to end, or use another output folder")
+    while True:
+        try:
+            fd = os.open(path, os.O_RDWR | os.O_CREAT | (0 if fcntl else os.O_EXCL), 0o644)
+        except FileExistsError:  # no flock on this system: the file itself is the lock
+            raise busy from None
+        except OSError as exc:
+            raise MapFileError(_msg(path, f"cannot create the lock file: {exc.strerror or exc}")) from None
+        if fcntl is None:
+            break
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            os.close(fd)
+            raise busy from None
+        try:  # the file locked is still the one at the path (not one an ending batch just removed)
+            st, now = os.fstat(fd), os.stat(path)
+            if (st.st_dev, st.st_ino) == (now.st_dev, now.st_ino):
+                break
+        except FileNotFoundError:
+            pass
+        os.close(fd)
+    try:
+        os.write(fd, f"{os.getpid()}\n".encode())
+        yield
+    finally:
+        try:
+            os.unlink(path)
+        except OSError:
+            pass
+        os.close(fd)
+        if created:
+            try:
+                out.rmdir()  # only if empty
+            except OSError:
+                pass
 
 
 # --------------------------------------------------------------------------
@@ -167,8 +242,13 @@ def _stat(path) -> Optional[list]:
 
 
 def _input_files(path: Path) -> list:
-    """The map file and, for a YAML, the image it names (absolute paths)."""
+    """The map file and, for a YAML, the image it names; for an image, a YAML beside it of the same stem
+    (read or not: see :func:`topomap.io.yaml_beside`) (absolute paths)."""
     files = [Path(os.path.abspath(path))]
+    if path.suffix.lower() not in (".yaml", ".yml"):
+        for suffix in (".yaml", ".yml"):
+            if path.with_suffix(suffix).is_file():
+                files.append(Path(os.path.abspath(path.with_suffix(suffix))))
     if path.suffix.lower() in (".yaml", ".yml"):
         try:
             import yaml
@@ -246,6 +326,10 @@ def _plan(paths, dirs, settings, overwrite):
     """Per map ``"run"`` or ``"skip"`` (with the earlier row); raises on a folder this run must not write."""
     plan, refused = [], []
     for p, d in zip(paths, dirs):
+        if os.path.lexists(d) and not d.is_dir():
+            refused.append(f"{d} exists and is not a folder (the results of {p} go into a folder of that name)")
+            plan.append(("run", None))
+            continue
         rec = _read_record(d)
         mine = str(Path(os.path.abspath(p)))
         if rec is None:
@@ -342,13 +426,21 @@ def _run_one(task: dict) -> dict:
 # Executors
 # --------------------------------------------------------------------------
 
-def _pool_init():
+def worker_count(jobs: int, tasks: int) -> int:
+    """The local processes to start for ``tasks`` tasks asked to run on ``jobs``: at most one per task
+    and one per CPU core (``--jobs 24`` for 3 maps starts 3 processes, on 2 cores 2)."""
+    return max(1, min(int(jobs), int(tasks), os.cpu_count() or 1))
+
+
+def _pool_init(jobs: int = 1):
     # local workers ignore Ctrl-C; the parent stops them
     import signal
 
+    from . import io
     from ._fast import keep_freed_memory, one_thread
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    io._MEMORY_SHARERS = jobs  # the maps running at once share the memory the size limit is taken from
     keep_freed_memory()  # each worker runs many maps
     one_thread()  # one worker per core: a map's work on a second thread would compete with the others
 
@@ -393,13 +485,17 @@ def _execute(tasks, jobs, scheduler):
             if own:
                 client.close()
         return
-    if jobs == 1:
+    n = worker_count(jobs, len(tasks))
+    if n < jobs:
+        log.info("--jobs %d: %d local processes (%d maps to run, %d CPU cores)", jobs, n, len(tasks),
+                 os.cpu_count() or 1)
+    if n == 1:
         for i, t in enumerate(tasks):
             yield i, _run_one(t)
         return
     from concurrent.futures import ProcessPoolExecutor, as_completed
 
-    with ProcessPoolExecutor(max_workers=jobs, initializer=_pool_init) as ex:
+    with ProcessPoolExecutor(max_workers=n, initializer=_pool_init, initargs=(n,)) as ex:
         futures = {ex.submit(_run_one, t): i for i, t in enumerate(tasks)}
         try:
             yield from _collect(as_completed(futures), futures.get, tasks)
@@ -492,7 +588,8 @@ def segment_many(paths: Sequence, out, *, jobs: int = 1, scheduler=None, overwri
         Output folder: one map's files go straight into it; several maps get
         a folder each (:func:`output_dirs`) and ``out/summary.csv``.
     jobs : int, optional
-        Local worker processes (default 1: this process).
+        Local worker processes (default 1: this process); at most one per
+        map to run and one per CPU core are started (:func:`worker_count`).
     scheduler : str or distributed.Client, optional
         Run on this Dask distributed cluster instead (a scheduler address
         like ``"tcp://10.0.0.5:8786"``, or a client); ``jobs`` must then be 1.
@@ -555,6 +652,12 @@ def segment_many(paths: Sequence, out, *, jobs: int = 1, scheduler=None, overwri
                 "skeletons": bool(skeletons), **{k: write_options[k] for k in sorted(write_options)}}
     dirs = output_dirs(paths, out)
     _refuse_inputs_as_outputs(paths, dirs, write_options)
+    with _output_lock(out):
+        return _run_batch(paths, out, dirs, settings, overwrite, jobs, scheduler, write_options, progress)
+
+
+def _run_batch(paths, out, dirs, settings, overwrite, jobs, scheduler, write_options, progress) -> list:
+    """The batch of :func:`segment_many` once it holds the lock of ``out``."""
     plan = _plan(paths, dirs, settings, overwrite)
     many = len(paths) > 1
     rows = [dict(earlier, map=str(p), output=str(d), status=SKIPPED) if what == "skip"

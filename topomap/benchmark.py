@@ -282,11 +282,14 @@ def _ordered(row: dict) -> dict:
     return head
 
 
-def _pool_init():
+def _pool_init(jobs: int = 1):
     # workers ignore Ctrl-C; the parent cancels them
     import signal
 
+    from . import io
+
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    io._MEMORY_SHARERS = jobs  # the maps running at once share the memory the size limit is taken from
 
 
 def _pool_task(bm, method, jobs):
@@ -308,6 +311,9 @@ def _execute(tasks, jobs, progress) -> dict:
     """Run ``(variant, map, method)`` tasks; ``{(method, variant, name): row}``."""
     results = {}
     total = len(tasks)
+    from .batch import worker_count
+
+    jobs = worker_count(jobs, len(tasks))
     if jobs == 1:
         for m in dict.fromkeys(t[2] for t in tasks):
             _warm_up(m)
@@ -319,7 +325,7 @@ def _execute(tasks, jobs, progress) -> dict:
         return results
     from concurrent.futures import ProcessPoolExecutor, as_completed
 
-    with ProcessPoolExecutor(max_workers=jobs, initializer=_pool_init) as ex:
+    with ProcessPoolExecutor(max_workers=jobs, initializer=_pool_init, initargs=(jobs,)) as ex:
         futs = {ex.submit(_pool_task, bm, m, jobs): (m, v, bm.name) for v, bm, m in tasks}
         try:
             for i, fut in enumerate(as_completed(futs)):

@@ -190,26 +190,39 @@ def _segment_one(path, outdir, resolution, method, skeletons, topic=None, at=Non
     from . import io
     from .segmentation import segment
 
-    if isinstance(previous, (str, Path)):
-        from .export import load_graph
-
-        previous = load_graph(previous)
+    # a --previous path goes to segment() as it is: its messages then name the file
     t0 = time.perf_counter()
-    grid = io.load_map(path, resolution=resolution, topic=topic, time=at)
+    source = path
+    if resolution is None:  # map.pgm beside the map.yaml that names it: read through the YAML
+        beside, why = io.yaml_beside(path)
+        if beside is not None:
+            log.info("%s: read through %s beside it (its resolution, origin and thresholds); give --resolution "
+                     "to read the image alone", path, beside.name)
+            source = beside
+        elif why is not None:
+            log.warning("%s: %s at %g m per cell", path, why, io.DEFAULT_RESOLUTION)
+    grid = io.load_map(source, resolution=resolution, topic=topic, time=at)
     t1 = time.perf_counter()
     seg = segment(grid, method=method, previous=previous)
     seg.room_graph  # built here so its time is its own stage (timings["room_graph"])
     t2 = time.perf_counter()
-    write_segmentation(seg, outdir, skeletons=skeletons, overlay=overlay, geojson=geojson, timings=seg.timings)
-    if bag is not None:
-        from .ros import write_bag
+    # the map's outputs land together or not at all: the bag and changes.json are written to temporaries
+    # first and renamed into place only after write_segmentation renamed its files (an error anywhere
+    # removes every temporary; the earlier outputs stay as they were)
+    from contextlib import ExitStack
 
-        write_bag(seg, bag)
-    if previous is not None:  # the change record beside the graph (room IDs follow the previous graph)
-        import json
+    with ExitStack() as stack:
+        if bag is not None:
+            from .ros import staged_bag
 
-        with io.atomic_write(Path(outdir) / "changes.json", "w") as fh:
+            stack.enter_context(staged_bag(seg, bag))
+        if previous is not None:  # the change record beside the graph (room IDs follow the previous graph)
+            import json
+
+            fh = stack.enter_context(io.atomic_write(Path(outdir) / "changes.json", "w"))
             json.dump(seg.changes.as_dict(), fh, indent=1)
+        write_segmentation(seg, outdir, skeletons=skeletons, overlay=overlay, geojson=geojson,
+                           timings=seg.timings)
     seg.timings["load"] = t1 - t0
     seg.timings["write"] = time.perf_counter() - t2
     seg.timings["job"] = time.perf_counter() - t0

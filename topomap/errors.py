@@ -51,7 +51,7 @@ class MapFileError(TopomapError, OSError):
 
 
 class MapTooLargeError(MapError):
-    """The map has more cells than :data:`topomap.io.MAX_CELLS`."""
+    """The map has more cells than the limit of :func:`topomap.io.cell_limit` (the memory available)."""
 
 
 class PlanFormatError(MapError):

@@ -47,7 +47,7 @@ import numpy as np
 import networkx as nx
 
 from .errors import GraphFormatError, first_line
-from .io import atomic_write  # noqa: F401  (re-exported: topomap.export.atomic_write)
+from .io import _one_line, _renamed, atomic_write  # noqa: F401  (atomic_write re-exported: topomap.export.atomic_write)
 
 __all__ = ["atomic_write", "save_labels", "label_png_bytes", "file_labels", "MAX_FILE_LABEL", "save_graphml", "save_json", "to_graphml_graph",
            "node_link", "write_outputs", "save_bytes", "geometry_wkt", "restore_types", "load_graphml", "load_json",
@@ -77,6 +77,31 @@ def save_labels(labels, path) -> Path:
 
 #: Largest label a label file holds (16 bits).
 MAX_FILE_LABEL = 65535
+#: Largest room ID: the label files hold room IDs up to 65534 with the fragments' label after them. A room
+#: graph read from a file (a ``--previous`` or a ``plan`` / ``tour`` graph) must have whole-number room IDs
+#: in 1..MAX_ROOM_ID and a ``next_room_id`` of at most MAX_ROOM_ID + 1, so what is built from its IDs is
+#: bounded by the number of its rooms.
+MAX_ROOM_ID = MAX_FILE_LABEL - 1
+
+
+def check_room_ids(G, name) -> None:
+    """GraphFormatError naming ``name`` unless every room ID of ``G`` is an ``int`` in 1..:data:`MAX_ROOM_ID`
+    and its ``next_room_id`` (when it has one) an integer in 1..MAX_ROOM_ID + 1."""
+    import numbers
+
+    def whole(v, top):
+        return isinstance(v, numbers.Integral) and not isinstance(v, bool) and 1 <= int(v) <= top
+
+    for r in G.nodes:
+        if not whole(r, MAX_ROOM_ID):
+            raise _bad(name, f"room ID {_one_line(repr(r))[:40]} is not a whole number from 1 to {MAX_ROOM_ID} "
+                             "(room IDs are the labels of the 16-bit label files)")
+    nxt = G.graph.get("next_room_id")
+    if nxt not in (None, ""):
+        if isinstance(nxt, str) and nxt.strip().isdigit():
+            nxt = int(nxt)
+        if not whole(nxt, MAX_ROOM_ID + 1):
+            raise _bad(name, f"next_room_id {_one_line(repr(nxt))[:40]} is not a whole number from 1 to {MAX_ROOM_ID + 1}")
 
 
 def file_labels(seg, name: str = "<labels>", kind: str = "PNG") -> np.ndarray:
@@ -520,12 +545,18 @@ def _float_tuple(v):
     return tuple(float(x) for x in _json(v))
 
 
+def _whole(x) -> int:
+    """``x`` as an int; ValueError for a fraction (1.5 is not read as 1), a bool or a non-number."""
+    if isinstance(x, bool) or (isinstance(x, float) and not x.is_integer()):
+        raise ValueError(f"{x!r} is not a whole number")
+    return int(x)
+
+
 def _int_tuple(v):
-    return tuple(int(x) for x in _json(v))
+    return tuple(_whole(x) for x in _json(v))
 
 
-def _int_pair(v):
-    return tuple(int(x) for x in _json(v))
+_int_pair = _int_tuple
 
 
 def _geometry(v):
@@ -784,19 +815,29 @@ def _read_json(path: Path):
 
 
 def _check_frame(G: nx.MultiGraph, path) -> nx.MultiGraph:
-    """``G`` if the map size its ``shape`` claims is within :data:`topomap.io.MAX_CELLS`, else MapTooLargeError."""
+    """``G`` if the map size its ``shape`` claims is within :func:`topomap.io.cell_limit`, else MapTooLargeError."""
+    import numbers
+
     from . import io
     from .errors import MapTooLargeError
 
+    check_room_ids(G, path)
+    # the map frame, checked here so that its errors name the file (not the '<array>' of a grid built from it)
+    if G.graph.get("resolution") is not None:
+        io._as_resolution(f"{path}: graph attribute", G.graph["resolution"])
+    if G.graph.get("origin") is not None:
+        io._as_origin(f"{path}: graph attribute", G.graph["origin"])
     shape = G.graph.get("shape")
     if shape is None:
         return G
-    if len(shape) != 2 or min(shape) < 0:
-        raise _bad(path, f"graph attribute 'shape' must be [rows, cols], got {list(shape)[:4]!r}")
+    if len(shape) != 2 or not all(isinstance(v, numbers.Integral) and v >= 1 for v in shape):
+        raise _bad(path, f"graph attribute 'shape' must be [rows, cols], two whole numbers >= 1, "
+                         f"got {_one_line(repr(list(shape)[:4]))[:60]}")
     rows, cols = (int(v) for v in shape)
-    if rows * cols > io.MAX_CELLS:
+    limit, why = io.cell_limit()
+    if rows * cols > limit:
         raise MapTooLargeError(f"{path}: the graph claims a map of {cols:,} x {rows:,} cells = {rows * cols:,}, "
-                               f"more than topomap.io.MAX_CELLS = {io.MAX_CELLS:,}")
+                               f"more than {why}")
     return G
 
 
@@ -1117,7 +1158,7 @@ def load_graph(path) -> nx.MultiGraph:
     GraphFormatError
         Unknown extension, or the file is not a room graph (the message names the file).
     MapTooLargeError
-        The graph's ``shape`` claims a map of more than :data:`topomap.io.MAX_CELLS` cells.
+        The graph's ``shape`` claims a map of more than :func:`topomap.io.cell_limit` cells.
     """
     from .errors import TopomapError
 
@@ -1392,11 +1433,14 @@ def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None, geojs
             tmp = {k: stack.enter_context(atomic_write(outdir / f, None)) for k, f in names.items()}
             for k in names:
                 t = time.perf_counter()
-                if k in to_file:  # into the temporary file itself (renamed into place at the end)
-                    with open(tmp[k], "wb") as fh:
-                        writers[k](fh)
-                else:
-                    writers[k](tmp[k])
+                try:
+                    if k in to_file:  # into the temporary file itself (renamed into place at the end)
+                        with open(tmp[k], "wb") as fh:
+                            writers[k](fh)
+                    else:
+                        writers[k](tmp[k])
+                except OSError as exc:  # named after its own file (not the last temporary of the stack)
+                    raise (_renamed(exc, tmp[k], outdir / names[k]) or exc) from None
                 if timings is not None:
                     timings[f"write_{k}"] = time.perf_counter() - t
     finally:

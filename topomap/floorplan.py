@@ -25,7 +25,7 @@ import numpy as np
 from ._fast import label as _label
 from .errors import MapError, MapFileError, MapTooLargeError, ParameterError, PlanFormatError
 from .geometry import point_segment_distances
-from .io import FREE, MAX_CELLS, OCCUPIED, UNKNOWN, OccupancyGrid, _check_file, _msg, check_resolution, save_map
+from .io import FREE, OCCUPIED, cell_limit, UNKNOWN, OccupancyGrid, _check_file, _msg, check_resolution, save_map
 from .options import _check_area, check_length
 
 __all__ = ["PlanDoor", "FloorPlan", "read_plan", "plan_grid", "ground_truth_problems", "ROOM_KINDS", "STORAGE_KINDS", "FIXTURE_KINDS"]
@@ -511,7 +511,7 @@ def read_plan(path, *, resolution: float = 0.05, wall_thickness: float = WALL_TH
     ParameterError
         A bad option.
     MapTooLargeError
-        The grid would have more than :data:`topomap.io.MAX_CELLS` cells.
+        The grid would have more than :func:`topomap.io.cell_limit` cells.
 
     Notes
     -----
@@ -563,9 +563,9 @@ def _build(name, walls_u, doors_u, boxes_u, *, scale, res, th, margin, max_gap, 
     pad = margin + th / 2 + res
     W = int(math.ceil((ext[0] + 2 * pad) / res))
     H = int(math.ceil((ext[1] + 2 * pad) / res))
-    if H * W > MAX_CELLS:
-        raise MapTooLargeError(_msg(name, f"plan would be {W} x {H} cells = {H * W:,} at {res} m, more than "
-                                          f"topomap.io.MAX_CELLS = {MAX_CELLS:,}"))
+    limit, why = cell_limit()
+    if H * W > limit:
+        raise MapTooLargeError(_msg(name, f"plan would be {W} x {H} cells = {H * W:,} at {res} m, more than {why}"))
 
     def world(seg):
         out = np.empty_like(seg, dtype=float)

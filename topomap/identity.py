@@ -199,19 +199,23 @@ class _Previous:
     """Room IDs, areas (m²), user attributes and ``next_room_id`` of a previous result,
     and a lookup of its room at map-frame points."""
 
-    def __init__(self, previous):
+    def __init__(self, previous, within=None):
         if isinstance(previous, _Previous):
             self.__dict__.update(previous.__dict__)
             return
+        self.offset = (0, 0)  # (row, col) of the previous frame's cell self.labels[0, 0] is
+        path = None
         if isinstance(previous, (str, Path)):
             from .export import load_graph
 
+            path = str(previous)
             previous = load_graph(previous)
         self.name = "previous"
         computed = _computed_node_attributes()
         if isinstance(previous, Segmentation):
             self.seg, self.G = previous, None
             self.name = previous.grid.name
+            self.where = f"previous result {self.name}"
             L = self.labels = previous.room_labels
             self.grid = previous.grid
             cnt = np.bincount(L.ravel())
@@ -229,17 +233,21 @@ class _Previous:
             self.doors = [(tuple(d.xy1), tuple(d.xy2)) for d in previous.doors]
             self.free = previous.grid.free
         elif isinstance(previous, nx.Graph):
+            from .export import check_room_ids
+
             self.seg, self.G = None, previous
             self.name = str(previous.graph.get("map", "previous room graph"))
+            self.where = path or f"previous room graph {self.name}"  # what messages name: the file, if any
+            check_room_ids(previous, self.where)
             ids, self.area, self.attrs = [], {}, {}
             for r, d in previous.nodes(data=True):
                 try:
                     r = int(r)
                 except (TypeError, ValueError):
-                    raise ParameterError(f"previous room graph {self.name}: node {r!r} is not a room ID") from None
+                    raise ParameterError(f"{self.where}: node {r!r} is not a room ID") from None
                 poly = d.get("polygon")
                 if poly is None or not hasattr(poly, "geom_type"):
-                    raise ParameterError(f"previous room graph {self.name}: room {r} has no polygon "
+                    raise ParameterError(f"{self.where}: room {r} has no polygon "
                                          "(build it with topomap.room_graph or load a file topomap segment wrote)")
                 ids.append(r)
                 self.area[r] = float(d.get("area", poly.area))
@@ -247,7 +255,7 @@ class _Previous:
                 if extra:
                     self.attrs[r] = extra
             nxt = previous.graph.get("next_room_id")
-            self.grid, self.labels = _rasterised(previous, ids)
+            self.grid, self.labels, self.offset = _rasterised(previous, ids, within, self.where)
             self.doors = _graph_doors(previous)
             self.free = self.labels > 0  # a room graph knows its rooms' cells, not the map
         else:
@@ -258,7 +266,13 @@ class _Previous:
         try:
             self.next_id = max(int(nxt), top) if nxt not in (None, "") else top
         except (TypeError, ValueError):
-            raise ParameterError(f"previous room graph {self.name}: next_room_id {nxt!r} is not an integer") from None
+            raise ParameterError(f"{self.where}: next_room_id {nxt!r} is not an integer") from None
+        from .export import MAX_ROOM_ID
+
+        if self.ids and (self.ids[0] < 1 or self.ids[-1] > MAX_ROOM_ID) or not 1 <= self.next_id <= MAX_ROOM_ID + 1:
+            raise ParameterError(f"{self.where}: room IDs {self.ids[0] if self.ids else '-'}.."
+                                 f"{self.ids[-1] if self.ids else '-'} and next_room_id {self.next_id} must lie "
+                                 f"in 1..{MAX_ROOM_ID} (next_room_id up to {MAX_ROOM_ID + 1})")
 
     def rooms_at(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """Previous room ID at every map-frame point (0 = none)."""
@@ -272,29 +286,62 @@ class _Previous:
         """``image`` (of the previous map's cells) at every map-frame point (0 / False outside)."""
         out = np.zeros(x.shape, image.dtype)
         r, c = self.grid.world_to_pixel(x, y)
-        r, c = np.rint(r).astype(np.int64), np.rint(c).astype(np.int64)
+        r, c = np.rint(r).astype(np.int64) - self.offset[0], np.rint(c).astype(np.int64) - self.offset[1]
         H, W = image.shape
         ok = (r >= 0) & (r < H) & (c >= 0) & (c < W)
         out[ok] = image[r[ok], c[ok]]
         return out
 
 
-def _rasterised(G, ids):
-    """The map frame of room graph ``G`` and its label image, from the room
-    polygons (which follow cell edges, so this is the label image it was
-    built from; see :mod:`topomap.planning`)."""
+#: A previous room graph is rasterised only where it overlaps the map being segmented; that window may
+#: hold at most this many times the map's cells (plus :data:`PREVIOUS_WINDOW_SLACK`): a graph of a much
+#: finer resolution, or whose frame is bogus, is refused before anything of its size is allocated.
+PREVIOUS_WINDOW_RATIO = 16
+PREVIOUS_WINDOW_SLACK = 1_000_000
+
+
+def _window(ctx, within, name):
+    """The half-open box ``(r0, r1, c0, c1)`` of ``ctx``'s frame that covers grid ``within`` (all of it
+    when ``within`` is None); ParameterError when it holds too many cells for ``within``'s size."""
+    H, W = ctx.shape
+    if within is None:
+        return 0, H, 0, W
+    h, w = within.shape
+    x, y = within.pixel_to_world(np.array([-1, -1, h, h]), np.array([-1, w, -1, w]))
+    rows, cols = ctx.grid.world_to_pixel(np.asarray(x, float), np.asarray(y, float))
+    if not (np.all(np.isfinite(rows)) and np.all(np.isfinite(cols))):
+        return 0, 0, 0, 0
+    r0, r1 = (int(min(max(v, 0), H)) for v in (np.floor(rows.min()) - 1, np.ceil(rows.max()) + 2))
+    c0, c1 = (int(min(max(v, 0), W)) for v in (np.floor(cols.min()) - 1, np.ceil(cols.max()) + 2))
+    cells = max(r1 - r0, 0) * max(c1 - c0, 0)
+    if cells > PREVIOUS_WINDOW_RATIO * h * w + PREVIOUS_WINDOW_SLACK:
+        raise ParameterError(f"{name}: its frame covers the map being segmented "
+                             f"({w} x {h} cells) with {cells:,} cells of its own, more than "
+                             f"{PREVIOUS_WINDOW_RATIO} times as many (another resolution, or a bogus frame)")
+    return r0, max(r1, r0), c0, max(c1, c0)
+
+
+def _rasterised(G, ids, within=None, name="previous room graph"):
+    """The map frame of room graph ``G``, its label image where it overlaps grid ``within`` (all of the
+    frame when None) and the ``(row, col)`` of the image's first cell in the frame, from the room
+    polygons (which follow cell edges, so this is the label image it was built from; see
+    :mod:`topomap.planning`). Time and memory are bounded by ``within``'s size, not the frame's."""
     from .planning import _Ctx
 
     ctx = _Ctx(G)
-    labels = np.zeros(ctx.shape, np.int64)
+    w0, w1, v0, v1 = _window(ctx, within, name)
+    labels = np.zeros((w1 - w0, v1 - v0), np.int32)
     for r in ids:
         box = ctx.room_bbox(r)
         if box is None:
             continue
-        r0, r1, c0, c1 = box
-        win = ctx.window_labels([r], box)
-        labels[r0:r1, c0:c1] = np.where(win > 0, win, labels[r0:r1, c0:c1])
-    return ctx.grid, labels
+        r0, r1, c0, c1 = max(box[0], w0), min(box[1], w1), max(box[2], v0), min(box[3], v1)
+        if r0 >= r1 or c0 >= c1:
+            continue
+        win = ctx.window_labels([r], (r0, r1, c0, c1))
+        part = labels[r0 - w0:r1 - w0, c0 - v0:c1 - v0]
+        part[...] = np.where(win > 0, win, part)
+    return ctx.grid, labels, (w0, v0)
 
 
 # --------------------------------------------------------------------------
@@ -358,7 +405,7 @@ def match_rooms(previous, seg: Segmentation, *, min_overlap: float = DEFAULT_MIN
         raise ParameterError(f"min_room_area must be an area > 0 (m²), got {min_room_area!r}")
     if not isinstance(seg, Segmentation):
         raise ParameterError(f"match_rooms() needs a Segmentation, got {type(seg).__name__}")
-    prev = _Previous(previous)
+    prev = _Previous(previous, within=seg.grid)
     if any("merged" in a for a in prev.attrs.values()):  # rooms a user merged stay merged (topomap.edit)
         from .edit import keep_merges
 
@@ -499,10 +546,15 @@ class DoorPrior:
     previous : Segmentation or networkx.MultiGraph or str or os.PathLike
         As for :func:`match_rooms`. From a room graph, doors are its edges'
         end points and the previous free space is its rooms' cells.
+    within : OccupancyGrid, optional
+        The map being segmented: a previous room graph is rasterised only
+        where it overlaps it (a window of at most
+        :data:`PREVIOUS_WINDOW_RATIO` times its cells), so the cost follows
+        this map's size, not the frame the graph claims.
     """
 
-    def __init__(self, previous):
-        self.previous = _Previous(previous)
+    def __init__(self, previous, *, within=None):
+        self.previous = _Previous(previous, within)
         d = np.asarray(self.previous.doors, float).reshape(-1, 2, 2)
         self.xy1, self.xy2 = d[:, 0], d[:, 1]
 

@@ -37,6 +37,11 @@ __all__ = [
     "OCCUPIED",
     "UNKNOWN",
     "MAX_CELLS",
+    "JOB_BYTES_PER_CELL",
+    "JOB_BASE_BYTES",
+    "cell_limit",
+    "cells_for_memory",
+    "available_memory",
     "MIN_RESOLUTION",
     "MAX_RESOLUTION",
     "USUAL_RESOLUTION",
@@ -58,6 +63,7 @@ __all__ = [
     "from_array",
     "load_map",
     "remove_stale_temporaries",
+    "yaml_beside",
     "save_map",
 ]
 
@@ -65,11 +71,28 @@ FREE = 0
 OCCUPIED = 100
 UNKNOWN = -1
 
-#: Largest map accepted, in cells (rows * cols). Checked from the image
-#: header before any pixel is decoded; larger maps raise
+#: Largest map accepted, in cells (rows * cols), when set; None (the default)
+#: bounds a map by the memory its job will take against the memory the
+#: machine has available (:func:`max_cells`). Checked from the image header
+#: before any pixel is decoded; larger maps raise
 #: :class:`~topomap.errors.MapTooLargeError`. Read at call time, so it can be
-#: changed (``topomap.io.MAX_CELLS = ...``).
-MAX_CELLS = 55_000_000
+#: changed (``topomap.io.MAX_CELLS = ...``); the environment variable
+#: ``TOPOMAP_MAX_CELLS`` sets it too (for the command line).
+MAX_CELLS = None
+#: Memory the whole job of a map (``topomap segment``: loading, segmentation,
+#: room graph, travel distances, overlay, every file) takes at most: this
+#: many bytes per cell, plus :data:`JOB_BASE_BYTES` (measured on maps built
+#: to break it, ``benchmarks/adversarial.py``; the worst shape, a corridor
+#: three cells wide, takes 140 bytes per cell, most maps 33 to 62).
+JOB_BYTES_PER_CELL = 150
+#: The interpreter, the libraries and their caches (a 1-cell map's job peaks at about 125 MB).
+JOB_BASE_BYTES = 250_000_000
+#: The limit when the available memory cannot be read: (8 GiB - 250 MB) / 150 B.
+FALLBACK_MAX_CELLS = 55_000_000
+#: The limit is never below this many cells (a 1000 x 1000 map), however little memory is free.
+MIN_MAX_CELLS = 1_000_000
+#: How many maps share the machine's memory at once (the local workers of a batch set it).
+_MEMORY_SHARERS = 1
 
 #: Smallest and largest cell size accepted, metres per cell (1 mm and 10 m).
 #: The methods' options are lengths in metres, so their kernels grow as
@@ -120,6 +143,78 @@ def _msg(name, text) -> str:
     return _one_line(f"{name}: {text}")
 
 
+def available_memory() -> Optional[int]:
+    """Bytes of memory this process can still take: ``MemAvailable`` of ``/proc/meminfo``, capped by
+    the cgroup's (container's) ``memory.max`` less its use; else free physical pages
+    (``os.sysconf``); None when neither can be read."""
+    avail = None
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    avail = int(line.split()[1]) * 1024
+                    break
+    except (OSError, ValueError, IndexError):
+        pass
+    if avail is None:
+        try:
+            avail = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+        except (AttributeError, ValueError, OSError):
+            return None
+    try:  # cgroup v2: a container's own limit
+        with open("/sys/fs/cgroup/memory.max") as fh:
+            top = fh.read().strip()
+        if top != "max":
+            with open("/sys/fs/cgroup/memory.current") as fh:
+                used = int(fh.read().strip())
+            avail = min(avail, max(int(top) - used, 0))
+    except (OSError, ValueError):
+        pass
+    return avail
+
+
+def cells_for_memory(nbytes: float) -> int:
+    """The largest map (cells) whose job fits ``nbytes`` of memory: ``(nbytes - JOB_BASE_BYTES) /
+    JOB_BYTES_PER_CELL``, at least :data:`MIN_MAX_CELLS`."""
+    return max(int((nbytes - JOB_BASE_BYTES) // JOB_BYTES_PER_CELL), MIN_MAX_CELLS)
+
+
+def cell_limit() -> tuple:
+    """``(cells, why)``: the largest map accepted now, and the words an error gives for it.
+
+    :data:`MAX_CELLS` when set, else the environment variable
+    ``TOPOMAP_MAX_CELLS``, else the memory available (:func:`available_memory`,
+    shared by the maps a batch runs at once) through :func:`cells_for_memory`
+    (:data:`FALLBACK_MAX_CELLS` when it cannot be read).
+
+    Raises
+    ------
+    ParameterError
+        ``TOPOMAP_MAX_CELLS`` is not a whole number > 0.
+    """
+    if MAX_CELLS is not None:
+        return int(MAX_CELLS), f"topomap.io.MAX_CELLS = {int(MAX_CELLS):,}"
+    env = os.environ.get("TOPOMAP_MAX_CELLS", "").strip()
+    if env:
+        try:
+            v = float(env.replace("_", "").replace(",", ""))
+        except ValueError:
+            v = float("nan")
+        if not (v.is_integer() and v >= 1):
+            raise ParameterError(f"TOPOMAP_MAX_CELLS must be a whole number of cells > 0, got {env!r}")
+        return int(v), f"TOPOMAP_MAX_CELLS = {int(v):,}"
+    avail = available_memory()
+    if avail is None:
+        return FALLBACK_MAX_CELLS, (f"the {FALLBACK_MAX_CELLS:,} cells topomap assumes when it cannot read the "
+                                    f"free memory (set TOPOMAP_MAX_CELLS to change)")
+    share = avail / max(int(_MEMORY_SHARERS), 1)
+    n = cells_for_memory(share)
+    jobs = f" for each of {_MEMORY_SHARERS} maps at once" if _MEMORY_SHARERS > 1 else ""
+    return n, (f"the {n:,} cells the free memory allows ({share / 1e9:.1f} GB{jobs}, at "
+               f"{JOB_BYTES_PER_CELL} bytes per cell + {JOB_BASE_BYTES / 1e6:.0f} MB; set TOPOMAP_MAX_CELLS "
+               f"to change)")
+
+
 @dataclass(frozen=True, eq=False)
 class OccupancyGrid:
     """A three-state occupancy grid with its metric frame.
@@ -155,9 +250,10 @@ class OccupancyGrid:
             raise MapError(f"{name}: grid must be 2-D, got ndim={cells.ndim}")
         if cells.shape[0] == 0 or cells.shape[1] == 0:
             raise MapError(f"{name}: grid is empty (shape {cells.shape})")
-        if cells.size > MAX_CELLS:
+        limit, why = cell_limit()
+        if cells.size > limit:
             raise MapTooLargeError(_msg(name, f"map is {cells.shape[1]} x {cells.shape[0]} cells = {cells.size:,}, "
-                                              f"more than topomap.io.MAX_CELLS = {MAX_CELLS:,}"))
+                                              f"more than {why}"))
         try:
             res = float(self.resolution)
         except (TypeError, ValueError):
@@ -482,11 +578,9 @@ def from_array(array, *, resolution: float = DEFAULT_RESOLUTION, origin=(0.0, 0.
 # --------------------------------------------------------------------------
 
 def _check_size(name, rows, cols):
-    limit = MAX_CELLS
+    limit, why = cell_limit()
     if int(rows) * int(cols) > limit:
-        raise MapTooLargeError(_msg(
-            name, f"image is {cols} x {rows} px = {rows * cols:,} cells, more than "
-                  f"topomap.io.MAX_CELLS = {limit:,}"))
+        raise MapTooLargeError(_msg(name, f"image is {cols} x {rows} px = {rows * cols:,} cells, more than {why}"))
 
 
 def _to_gray(name, img):
@@ -586,10 +680,10 @@ def _open_decode(path: Path, name: str, lift_pillow_limit: bool = False):
 def _read_image(path: Path, name: str):
     """Read any Pillow image as ``(gray uint8 (M, N), transparent or None)``.
 
-    The size limit is :data:`MAX_CELLS`, checked from the header. Pillow's
+    The size limit is :func:`cell_limit`, checked from the header. Pillow's
     own decompression-bomb check is silenced (warning) or turned into
-    :class:`MapTooLargeError` (error) when the image also exceeds
-    ``MAX_CELLS``; an image within ``MAX_CELLS`` is decoded regardless.
+    :class:`MapTooLargeError` (error) when the image also exceeds the
+    limit; an image within it is decoded regardless.
     """
     from PIL import Image, UnidentifiedImageError
 
@@ -602,10 +696,10 @@ def _read_image(path: Path, name: str):
             except Image.DecompressionBombError as exc:
                 m = re.search(r"\((\d+) pixels\)", str(exc))
                 count = int(m.group(1)) if m else None
-                if count is None or count > MAX_CELLS:
+                limit, why = cell_limit()
+                if count is None or count > limit:
                     size = f"{count:,} cells" if count is not None else "too many cells"
-                    raise MapTooLargeError(_msg(
-                        name, f"image is {size}, more than topomap.io.MAX_CELLS = {MAX_CELLS:,}")) from None
+                    raise MapTooLargeError(_msg(name, f"image is {size}, more than {why}")) from None
                 return _open_decode(path, name, lift_pillow_limit=True)
         except (MapError, MapFileError):
             raise
@@ -686,6 +780,42 @@ def _read_yaml(path: Path, name: str) -> dict:
     return meta
 
 
+def yaml_beside(path) -> tuple:
+    """The map_server YAML of the same stem beside image ``path`` (``map.pgm`` -> ``map.yaml``), for
+    ``topomap segment map.pgm`` without ``--resolution``.
+
+    Returns
+    -------
+    (pathlib.Path or None, str or None)
+        ``(yaml, None)`` when ``map.yaml`` (or ``.yml``) names this very image: read the map through
+        it; ``(None, why)`` when such a YAML exists but names another image or cannot be read (the
+        image is read alone; ``why`` says so); ``(None, None)`` when there is none (or ``path`` is a
+        YAML or a bag).
+    """
+    from .errors import TopomapError
+
+    p = Path(os.fspath(path))
+    if p.suffix.lower() in _YAML_SUFFIXES or p.suffix.lower() in (".bag", ".mcap", ".db3") or not p.is_file():
+        return None, None
+    for suffix in _YAML_SUFFIXES:
+        y = p.with_suffix(suffix)
+        if y == p or not y.is_file():
+            continue
+        try:
+            image = _read_yaml(y, str(y)).get("image")
+        except (TopomapError, OSError) as exc:
+            return None, f"{y.name} beside it cannot be read ({_one_line(exc)}); the image is read alone"
+        if isinstance(image, str) and image.strip() and "\x00" not in image:
+            target = Path(image) if Path(image).is_absolute() else y.parent / image
+            try:
+                if target.exists() and os.path.samefile(target, p):
+                    return y, None
+            except OSError:
+                pass
+        return None, f"{y.name} beside it names another image ({_one_line(repr(image))[:60]}); the image is read alone"
+    return None, None
+
+
 def load_map(path, *, resolution=None, origin=None, negate=None, occupied_thresh=None,
              free_thresh=None, mode=None, topic=None, time=None) -> OccupancyGrid:
     """Load an occupancy grid from a ROS map_server YAML, an image file or a ROS bag.
@@ -736,7 +866,7 @@ def load_map(path, *, resolution=None, origin=None, negate=None, occupied_thresh
     MapFileError
         A directory or unreadable file.
     MapTooLargeError
-        More than :data:`MAX_CELLS` cells (checked from the image header).
+        More than :func:`cell_limit` cells (checked from the image header).
     MapError
         Empty, corrupt, truncated or unreadable content; bad YAML.
     ParameterError
@@ -842,11 +972,37 @@ def load_map(path, *, resolution=None, origin=None, negate=None, occupied_thresh
     if is_yaml or any(v is not None for v in (occupied_thresh, free_thresh, mode)):
         cells = classify_gray(gray, negate=neg, occupied_thresh=occ, free_thresh=free,
                               mode=mod, transparent=transparent)
+        _warn_unknown_read_free(name, gray, cells, free, where_f, neg)
     else:
         cells = classify_plan(gray, negate=neg, transparent=transparent)
     grid = OccupancyGrid(cells, res, org, name, gray=gray)
     _warn_free_area(name, np.count_nonzero(cells == FREE) * res * res)
     return grid
+
+
+#: :func:`load_map` warns when at least this share of the free cells (and :data:`UNKNOWN_FREE_MIN_CELLS`
+#: cells) have exactly map_saver's unknown gray (205) and the thresholds read them as free.
+UNKNOWN_FREE_SHARE = 0.01
+UNKNOWN_FREE_MIN_CELLS = 100
+
+
+def _warn_unknown_read_free(name, gray, cells, free_thresh, where, negate=False):
+    """One warning when the thresholds make map_saver's unknown gray 205 free and many cells have it
+    (Nav2's ``free_thresh: 0.25`` reads 205, p = 0.196, as free: the unknown outside becomes rooms)."""
+    g = GRAY_UNKNOWN
+    at = np.flatnonzero(gray.ravel() == g)
+    if at.size < UNKNOWN_FREE_MIN_CELLS:
+        return
+    n = int(np.count_nonzero(cells.ravel()[at] == FREE))
+    n_free = int(np.count_nonzero(cells == FREE))
+    if n < max(UNKNOWN_FREE_MIN_CELLS, UNKNOWN_FREE_SHARE * n_free):
+        return
+    pv = (255 - (255 - g if negate else g)) / 255
+    src = "" if where == name else f" (from {where})"
+    log.warning("%s", _msg(name, f"{n:,} cells ({100 * n / n_free:.0f} % of the free space) have gray {g}, "
+                                 f"map_saver's unknown, and free_thresh {free_thresh:g}{src} reads them as free "
+                                 f"(p = {pv:.3f}); if they are unknown, set free_thresh to at most "
+                                 f"{pv - 0.001:.3f} (map_server's default is {FREE_THRESH})"))
 
 
 #: Free area (m²) outside which :func:`load_map` warns: less than a small room, more than any building.

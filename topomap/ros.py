@@ -31,6 +31,7 @@ import os
 import shutil
 import tempfile
 from dataclasses import dataclass
+from contextlib import contextmanager
 from functools import lru_cache
 from pathlib import Path
 from typing import Optional
@@ -226,7 +227,7 @@ def occupancy_cells(data, width: int, height: int, *, free_thresh: float = SAVER
     MapError
         Empty, or not ``width * height`` values.
     MapTooLargeError
-        More than :data:`topomap.io.MAX_CELLS` cells.
+        More than :func:`topomap.io.cell_limit` cells.
     """
     from . import io
 
@@ -234,8 +235,9 @@ def occupancy_cells(data, width: int, height: int, *, free_thresh: float = SAVER
     w, h = int(width), int(height)
     if w <= 0 or h <= 0:
         raise MapError(f"{name}: the map is empty ({w} x {h} cells)")
-    if w * h > io.MAX_CELLS:
-        raise MapTooLargeError(f"{name}: map is {w * h:,} cells, more than topomap.io.MAX_CELLS = {io.MAX_CELLS:,}")
+    limit, why = io.cell_limit()
+    if w * h > limit:
+        raise MapTooLargeError(f"{name}: map is {w:,} x {h:,} cells = {w * h:,}, more than {why}")
     if isinstance(data, (bytes, bytearray, memoryview)):
         v = np.frombuffer(data, np.int8)
     else:
@@ -341,6 +343,154 @@ def grid_from_message(msg, *, source: Optional[str] = None, free_thresh: float =
     return RosMap(cells, res, org, source, frame_id=frame, stamp=stamp, topic=topic, log_time=log_time)
 
 
+#: A compressed bag may expand to at most this many times its bytes on disk (or
+#: :data:`MIN_EXPANSION_BYTES`, whichever is more): zstd and lz4 give a map a few
+#: ten times at most; a small file that claims gigabytes is refused before any of
+#: it is decompressed into memory or the temporary folder.
+MAX_EXPANSION = 1000
+MIN_EXPANSION_BYTES = 64 << 20
+
+_MCAP_MAGIC = b"\x89MCAP0\r\n"
+
+
+def _decompressor(kind: str, raw):
+    """A file object reading ``raw`` (a binary file object) decompressed by ``kind`` ('zstd', 'lz4'),
+    or None for no compression."""
+    if kind in ("", None):
+        return None
+    if kind == "zstd":
+        try:
+            from compression import zstd
+        except ImportError:
+            from backports import zstd
+        return zstd.open(raw, "rb")
+    if kind == "lz4":
+        import lz4.frame
+
+        return lz4.frame.open(raw, "rb")
+    return None  # an unknown compression: rosbags refuses it
+
+
+def _expanded(stream, limit: int) -> int:
+    """Bytes ``stream`` decompresses to, reading at most ``limit + 1`` of them (1 MiB at a time)."""
+    n = 0
+    with stream:
+        while n <= limit:
+            block = stream.read(min(1 << 20, limit + 1 - n))
+            if not block:
+                break
+            n += len(block)
+    return n
+
+
+def _check_expansion(p: Path, name: str):
+    """BagError when bag ``p`` decompresses to more than :data:`MAX_EXPANSION` times its bytes: ROS 2
+    file compression (each ``.zstd`` file), ROS 2 message compression of a sqlite3 bag (each message),
+    and MCAP chunks (each chunk, its size header checked against its data). Streams, bounded memory."""
+    import io as _pyio
+    import struct
+
+    from .io import _yaml_loader
+
+    files, mode, fmt = [p], "", ""
+    if p.is_dir():
+        import yaml
+
+        meta_path = p / "metadata.yaml"
+        if meta_path.stat().st_size > 1 << 20:
+            raise BagError(f"{name}: metadata.yaml is {meta_path.stat().st_size:,} bytes, more than 1 MiB")
+        try:
+            meta = yaml.load(meta_path.read_bytes(), Loader=_yaml_loader())["rosbag2_bagfile_information"]
+            files = [p / Path(str(f)).name for f in meta.get("relative_file_paths") or []]
+            mode = str(meta.get("compression_mode") or "").lower()
+            fmt = str(meta.get("compression_format") or "").lower()
+        except Exception as exc:  # noqa: BLE001 - any odd metadata
+            raise BagError(_one_line(f"{name}: not a readable bag (metadata.yaml: "
+                                     f"{_one_line(exc) or type(exc).__name__})")) from None
+    files = [f for f in files if f.is_file()]
+    packed = sum(f.stat().st_size for f in files)
+    budget = max(MAX_EXPANSION * packed, MIN_EXPANSION_BYTES)
+    total = 0
+
+    def spend(n, what):
+        nonlocal total
+        total += n
+        if total > budget:
+            raise BagError(f"{name}: {what} expands to more than {budget:,} bytes ({MAX_EXPANSION} times the "
+                           f"bag's {packed:,} bytes): refused before decompressing it")
+
+    for f in files:
+        if mode == "file" and fmt == "zstd":
+            with open(f, "rb") as raw:
+                spend(_expanded(_decompressor("zstd", raw), budget - total), f"{f.name} (file compression)")
+            continue
+        if mode == "message" and fmt == "zstd" and f.suffix == ".db3":
+            import sqlite3
+
+            con = sqlite3.connect(f"file:{f}?mode=ro", uri=True)
+            try:
+                for (data,) in con.execute("SELECT data FROM messages"):
+                    spend(_expanded(_decompressor("zstd", _pyio.BytesIO(data)), budget - total),
+                          f"a message of {f.name}")
+            except sqlite3.Error:
+                pass  # not a bag database: rosbags says so
+            finally:
+                con.close()
+            continue
+        with open(f, "rb") as fh:
+            if fh.read(8) != _MCAP_MAGIC:
+                continue
+            while True:
+                head = fh.read(9)
+                if len(head) < 9:
+                    break
+                op, length = struct.unpack("<BQ", head)
+                if op != 0x06:  # not a chunk
+                    fh.seek(length, 1)
+                    continue
+                rec = fh.read(min(length, packed))
+                if len(rec) < 32:
+                    break
+                claimed = struct.unpack_from("<Q", rec, 16)[0]
+                (clen,) = struct.unpack_from("<I", rec, 28)
+                kind = rec[32:32 + clen].decode("ascii", "replace")
+                data = rec[32 + clen + 8:]
+                if claimed > budget - total:
+                    spend(claimed, f"an MCAP chunk of {f.name}")
+                stream = _decompressor(kind, _pyio.BytesIO(data))
+                if stream is not None:  # its size header may lie: count what it really expands to
+                    try:
+                        real = _expanded(stream, claimed)
+                    except Exception:  # noqa: BLE001 - corrupt data: rosbags reports it
+                        real = 0
+                    if real > claimed:
+                        raise BagError(f"{name}: an MCAP chunk of {f.name} expands to more than the "
+                                       f"{claimed:,} bytes its header says")
+                spend(claimed, f"an MCAP chunk of {f.name}")
+
+
+def _map_size(raw: bytes, ros2: bool):
+    """``(width, height)`` an OccupancyGrid message's header claims (``raw``: CDR, or ROS 1
+    serialised), read before the message is decoded; None when it cannot be read."""
+    import struct
+
+    try:
+        if ros2:
+            end = "<" if raw[1] & 1 else ">"
+            pos = 4 + 8  # encapsulation, stamp
+            (n,) = struct.unpack_from(end + "I", raw, pos)
+            pos += 4 + n
+            pos = 4 + -(-(pos - 4) // 4) * 4  # aligned to 4 (CDR alignment counts from after the encapsulation)
+            pos += 8 + 4  # map_load_time, resolution
+            return struct.unpack_from(end + "II", raw, pos)
+        pos = 4 + 8  # seq, stamp
+        (n,) = struct.unpack_from("<I", raw, pos)
+        pos += 4 + n + 8 + 4
+        return struct.unpack_from("<II", raw, pos)
+    except (struct.error, IndexError):
+        return None
+
+
 def _topic_list(topics: dict) -> str:
     return ", ".join(f"{t} ({ty})" for t, ty in sorted(topics.items())) or "none"
 
@@ -410,6 +560,7 @@ def read_map(path, *, topic: Optional[str] = None, time: Optional[float] = None,
             raise BagError(f"{name}: a directory without metadata.yaml is not a ROS 2 bag")
         if not p.is_dir() and p.suffix.lower() not in BAG_SUFFIXES:
             raise BagError(f"{name}: not a bag name (use .bag, .mcap, .db3 or a ROS 2 bag directory)")
+        _check_expansion(p, name)
         with AnyReader([p], default_typestore=_store("ros2")) as reader:
             topics = {c.topic: c.msgtype for c in reader.connections}
             if not topics or reader.message_count == 0:
@@ -442,6 +593,14 @@ def read_map(path, *, topic: Optional[str] = None, time: Optional[float] = None,
                 raise BagError(f"{name}: no message on {topic} at or before {float(time):g} s "
                                f"(the first is at {(first - start) / 1e9:g} s)")
             conn, t, raw = chosen
+            size = _map_size(raw, reader.is2)
+            if size is not None:  # the cell bound from the message's header, before the message is decoded
+                from . import io
+
+                limit, why = io.cell_limit()
+                if size[0] * size[1] > limit:
+                    raise MapTooLargeError(f"{name}: map is {size[0]:,} x {size[1]:,} cells = "
+                                           f"{size[0] * size[1]:,}, more than {why}")
             msg = reader.deserialize(raw, conn.msgtype)
     except TopomapError:
         raise
@@ -780,6 +939,22 @@ def write_bag(seg, path, *, frame_id: Optional[str] = None, stamp: Optional[int]
     MissingDependencyError
         ``rosbags`` is not installed.
     """
+    with staged_bag(seg, path, frame_id=frame_id, stamp=stamp, log_time=log_time) as p:
+        pass
+    return p
+
+
+@contextmanager
+def staged_bag(seg, path, *, frame_id: Optional[str] = None, stamp: Optional[int] = None,
+               log_time: Optional[int] = None):
+    """Write the bag of :func:`write_bag` to a temporary beside ``path``; rename it into place when the
+    ``with`` block ends without an error, else remove it.
+
+    So a bag and other outputs land together or not at all: write the bag
+    first (its errors come before anything else is written), the other
+    files inside the block. Yields the final path; the errors are those of
+    :func:`write_bag` (an error of the block itself passes through unchanged).
+    """
     import time as _time
 
     p = Path(os.fspath(path))
@@ -798,30 +973,35 @@ def write_bag(seg, path, *, frame_id: Optional[str] = None, stamp: Optional[int]
     except OSError as exc:
         raise MapFileError(f"{p}: cannot write bag: {exc.strerror or exc}") from None
     try:
-        if kind == "ros1":
-            out = tmpdir / p.name
-            with Writer1(out) as w:
-                for topic, typ, msg in msgs:
-                    conn = w.add_connection(topic, typ, typestore=ts, latching=1)
-                    w.write(conn, when, ts.serialize_ros1(msg, typ))
-        else:
-            from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
+        try:
+            if kind == "ros1":
+                out = tmpdir / p.name
+                with Writer1(out) as w:
+                    for topic, typ, msg in msgs:
+                        conn = w.add_connection(topic, typ, typestore=ts, latching=1)
+                        w.write(conn, when, ts.serialize_ros1(msg, typ))
+            else:
+                from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, \
+                    QosTime
 
-            zero = QosTime(0, 0)
-            qos = Qos(QosHistory.KEEP_LAST, 1, QosReliability.RELIABLE, QosDurability.TRANSIENT_LOCAL, zero, zero,
-                      QosLiveliness.AUTOMATIC, zero, False)
-            bagdir = tmpdir / (p.stem if kind == "mcap" else p.name)
-            plugin = StoragePlugin.MCAP if kind == "mcap" else StoragePlugin.SQLITE3
-            with Writer2(bagdir, version=8, storage_plugin=plugin) as w:  # 8: QoS as older distros read it
-                for topic, typ, msg in msgs:
-                    conn = w.add_connection(topic, typ, typestore=ts, offered_qos_profiles=[qos])
-                    w.write(conn, when, ts.serialize_cdr(msg, typ))
-            out = bagdir / f"{bagdir.name}.mcap" if kind == "mcap" else bagdir
-        os.replace(out, p)
-    except TopomapError:
-        raise
-    except OSError as exc:
-        raise MapFileError(f"{p}: cannot write bag: {exc.strerror or exc}") from None
+                zero = QosTime(0, 0)
+                qos = Qos(QosHistory.KEEP_LAST, 1, QosReliability.RELIABLE, QosDurability.TRANSIENT_LOCAL, zero,
+                          zero, QosLiveliness.AUTOMATIC, zero, False)
+                bagdir = tmpdir / (p.stem if kind == "mcap" else p.name)
+                plugin = StoragePlugin.MCAP if kind == "mcap" else StoragePlugin.SQLITE3
+                with Writer2(bagdir, version=8, storage_plugin=plugin) as w:  # 8: QoS as older distros read it
+                    for topic, typ, msg in msgs:
+                        conn = w.add_connection(topic, typ, typestore=ts, offered_qos_profiles=[qos])
+                        w.write(conn, when, ts.serialize_cdr(msg, typ))
+                out = bagdir / f"{bagdir.name}.mcap" if kind == "mcap" else bagdir
+        except TopomapError:
+            raise
+        except OSError as exc:
+            raise MapFileError(f"{p}: cannot write bag: {exc.strerror or exc}") from None
+        yield p  # the caller's other outputs; an error there removes the bag unwritten
+        try:
+            os.replace(out, p)
+        except OSError as exc:
+            raise MapFileError(f"{p}: cannot write bag: {exc.strerror or exc}") from None
     finally:
         shutil.rmtree(tmpdir, ignore_errors=True)
-    return p

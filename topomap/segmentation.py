@@ -1076,7 +1076,8 @@ def segment(grid: OccupancyGrid, *, method: str = None, previous=None, **params)
     if previous is not None:
         from .identity import DoorPrior
 
-        previous = DoorPrior(previous)  # read once, for the door stage and the matching
+        previous = DoorPrior(previous, within=grid)  # read once, for the door stage and the matching (of
+        # a previous room graph: only where it overlaps this map)
         t_prev = time.perf_counter() - t0
         if method == "topomap":
             params = {**params, "prior": previous}
