@@ -123,3 +123,28 @@ def test_blocks_reduce_like_the_definition():
         blocks = pad.reshape(pad.shape[0] // k, k, pad.shape[1] // k, k)
         assert np.array_equal(O._blocks(m, k, np.logical_and), blocks.all(axis=(1, 3)))
         assert np.array_equal(O._blocks(m, k, np.logical_or), blocks.any(axis=(1, 3)))
+
+
+def test_no_building_no_outside():
+    """Free space and nothing else (no wall anywhere): every direction ends at the map's edge, yet
+    there is no building to be outside of."""
+    seg = topomap.segment(OccupancyGrid(np.zeros((60, 80), np.int8), 0.05))
+    assert seg.n_rooms == 1 and seg.outside == ()
+
+
+def test_walls_drawn_in_gray_are_obstacles_not_the_unknown():
+    """A SLAM map saved with its probabilities draws walls in grays the thresholds leave unknown
+    (Willow Garage's map): they bound the room; only the map's unknown gray is the open unknown."""
+    gray = np.full((120, 200), 205, np.uint8)
+    gray[20:100, 20:180] = 150                                  # walls: seen, p about 0.4
+    gray[23:97, 23:177] = 254                                   # the room
+    c = np.where(gray == 254, FREE, UNKNOWN).astype(np.int8)
+    free, occ = c == FREE, c == OCCUPIED
+    unknown = O.unknown_cells(free, occ, gray)
+    assert not unknown[20:100, 20:180].any() and unknown[:20].all()
+    e = O.enclosure(free, occ, 0.05, open_area=1.0, window=0.5, gray=gray)
+    assert np.allclose(e[free], 8)
+    e_no_gray = O.enclosure(free, occ, 0.05, open_area=1.0, window=0.5)
+    assert e_no_gray[free].max() == 0                           # without the grays: nothing bounds it
+    seg = topomap.segment(OccupancyGrid(c, 0.05, gray=gray))
+    assert seg.n_rooms == 1 and seg.outside == ()

@@ -31,13 +31,31 @@ import numpy as np
 
 from ._fast import label_stats
 
-__all__ = ["DIRECTIONS", "open_unknown", "enclosure", "outside_regions", "drop_outside"]
+__all__ = ["DIRECTIONS", "unknown_cells", "open_unknown", "enclosure", "outside_regions", "drop_outside"]
 
 #: The eight grid directions ``(d_row, d_col)`` :func:`enclosure` looks along.
 DIRECTIONS = ((0, 1), (0, -1), (1, 0), (-1, 0), (1, 1), (1, -1), (-1, 1), (-1, -1))
 
 
-def open_unknown(free: np.ndarray, occupied: np.ndarray, resolution: float, *, min_area: float) -> np.ndarray:
+def unknown_cells(free: np.ndarray, occupied: np.ndarray, gray=None, *, tolerance: int = 8) -> np.ndarray:
+    """The cells nothing was seen in: neither free nor occupied and, when the map's gray image is
+    given, of the gray the map writes for the unknown (its most common gray among those cells,
+    within ``tolerance`` levels).
+
+    A map drawn in grays (a SLAM map saved with its probabilities) draws its walls in grays between
+    free and occupied, which the thresholds leave unknown; they are obstacles the laser saw, not the
+    unexplored world.
+    """
+    unknown = ~free & ~occupied
+    if gray is None or not unknown.any():
+        return unknown
+    g = np.asarray(gray)
+    mode = int(np.argmax(np.bincount(g[unknown].ravel(), minlength=256)))
+    return unknown & (np.abs(g.astype(np.int16) - mode) <= tolerance)
+
+
+def open_unknown(free: np.ndarray, occupied: np.ndarray, resolution: float, *, min_area: float,
+                 gray=None) -> np.ndarray:
     """Unknown cells of the open unknown: of a region of at least ``min_area`` m² or at the map's edge.
 
     Parameters
@@ -48,12 +66,14 @@ def open_unknown(free: np.ndarray, occupied: np.ndarray, resolution: float, *, m
     min_area : float
         m²: smaller unknown regions inside free space are clutter seen in
         part (a chair, a box), not the unexplored world.
+    gray : (M, N) ndarray of uint8, optional
+        The map's gray image (:func:`unknown_cells`).
 
     Returns
     -------
     (M, N) ndarray of bool
     """
-    unknown = ~free & ~occupied
+    unknown = unknown_cells(free, occupied, gray)
     n, lab, stats, _ = label_stats(unknown, connectivity=8)
     H, W = unknown.shape
     x, y, w, h, area = stats.T
@@ -90,7 +110,7 @@ def _first_hit(free: np.ndarray, hit: np.ndarray, direction) -> np.ndarray:
 
 
 def enclosure(free: np.ndarray, occupied: np.ndarray, resolution: float, *, open_area: float,
-              window: float, cell: float = 0.1) -> np.ndarray:
+              window: float, cell: float = 0.1, gray=None) -> np.ndarray:
     """How many of the eight directions from each free cell end at an obstacle.
 
     Parameters
@@ -102,6 +122,9 @@ def enclosure(free: np.ndarray, occupied: np.ndarray, resolution: float, *, open
         m², see :func:`open_unknown`.
     window : float
         Side of the square window the counts are averaged over, m.
+    gray : (M, N) ndarray of uint8, optional
+        The map's gray image: non-free cells of another gray than the
+        unknown's are obstacles (:func:`unknown_cells`).
     cell : float
         The counts are taken on blocks of about this size (m; a block is
         free where all its cells are, an obstacle where any is): 0.1 m, finer
@@ -119,7 +142,7 @@ def enclosure(free: np.ndarray, occupied: np.ndarray, resolution: float, *, open
 
     free = np.asarray(free, bool)
     H, W = free.shape
-    hit = ~free & ~open_unknown(free, occupied, resolution, min_area=open_area)
+    hit = ~free & ~open_unknown(free, occupied, resolution, min_area=open_area, gray=gray)
     hit = cv2.dilate(hit.view(np.uint8), np.ones((3, 3), np.uint8)).view(bool)
     k = max(1, int(round(cell / resolution)))
     inner, hit = _blocks(free & ~hit, k, np.logical_and), _blocks(hit, k, np.logical_or)
@@ -168,7 +191,9 @@ def outside_regions(labels: np.ndarray, n_rooms: int, encl: np.ndarray, *, thres
     Returns
     -------
     (n_rooms + 1,) ndarray of bool
-        True for the rooms outside (index 0 unused, False).
+        True for the rooms outside (index 0 unused, False). None is outside
+        when every room would be: without a building (a map of free space
+        and nothing else, a plan drawn without walls) there is no outside.
     """
     lab = np.asarray(labels)
     m = (lab > 0) & (lab <= n_rooms)
@@ -176,6 +201,8 @@ def outside_regions(labels: np.ndarray, n_rooms: int, encl: np.ndarray, *, thres
     total = np.bincount(lab[m], weights=encl[m], minlength=n_rooms + 1)
     out = (cells > 0) & (total < threshold * cells)
     out[0] = False
+    if out[1:].all():
+        out[:] = False
     return out[:n_rooms + 1]
 
 

@@ -835,7 +835,7 @@ def _drop_outside(grid: OccupancyGrid, labels, doors, n_rooms: int, opts: Topoma
     from . import outside as O
 
     encl = O.enclosure(grid.free, grid.occupied, grid.resolution, open_area=opts.open_unknown_area,
-                       window=opts.enclosure_window)
+                       window=opts.enclosure_window, gray=grid.gray)
     is_out = O.outside_regions(labels, n_rooms, encl, threshold=8 * opts.outside_enclosure)
     return O.drop_outside(labels, doors, n_rooms, is_out)
 
