@@ -956,7 +956,8 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
     with T("rooms"):
         min_cells = int(np.ceil(opts.min_room_area / res ** 2 - 1e-9))
         wide = d_free >= 0.5 * opts.wall_gap / res - 1e-6 if opts.wall_gap > 0 else None
-        labels, door_objs, n_rooms = cut_rooms(rooms_grid, segs, space=space, min_room_cells=min_cells, wide=wide)
+        labels, door_objs, n_rooms = cut_rooms(rooms_grid, segs, space=space, min_room_cells=min_cells, wide=wide,
+                                               max_door_width=opts.max_door_width)
     im = Intermediates(free_mask=f, occupied_mask=occ, clearance=d_free, occupied_clearance=d_occ,
                        clutter=clutter, skeleton_factor=factor, closed_gaps=closed, wall_lines=wl.fine_lines(),
                        straight_share=straight)
