@@ -255,7 +255,8 @@ def test_plan_along_the_row(row):
 def test_plan_room_ids(row):
     route = P.plan_path(row, 2, 4)
     assert route["rooms"] == [2, 3, 4] and route["doors"] == [1, 2]
-    np.testing.assert_allclose(route["waypoints"][0], [row.room_graph.nodes[2]["x"], row.room_graph.nodes[2]["y"]])
+    n = row.room_graph.nodes[2]
+    np.testing.assert_allclose(route["waypoints"][0], [n["interior_x"], n["interior_y"]])
     same = P.plan_path(row, 3, 3)
     assert same["rooms"] == [3] and same["doors"] == [] and same["length"] == 0
 

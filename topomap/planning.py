@@ -921,10 +921,16 @@ def _endpoint(ctx, G, v, what):
         if r not in G:
             raise NotInRoomError(f"{what} room {r} does not exist (rooms: "
                                  f"{', '.join(str(n) for n in sorted(G.nodes))})")
-        x, y = float(G.nodes[r]["x"]), float(G.nodes[r]["y"])
-        row, col = _pixel(ctx, x, y)
+        nd = G.nodes[r]
+        # the room's interior point (a cell of the room, roomgraph.interior_points); a graph without
+        # it (written by an older version): the centroid, when it is in the room
+        key = ("interior_x", "interior_y") if "interior_x" in nd and "interior_y" in nd else ("x", "y")
+        x, y = float(nd[key[0]]), float(nd[key[1]])
+        row, col = _pixel(ctx, x, y) if np.isfinite(x) and np.isfinite(y) else (-1, -1)
         if ctx.label_at_pixel(row, col) == r:
             return r, (x, y), (row, col)
+        x, y = float(nd["x"]), float(nd["y"])
+        row, col = _pixel(ctx, x, y)
         # centroid outside the room (L shape, ring): nearest cell of the room
         space = _RoomSpace(ctx, r, doors=[])
         r0, _, c0, _ = space.win
@@ -983,8 +989,10 @@ def plan_path(seg_or_G, start, goal, *, robot_width: float = 0.0) -> dict:
         by ``topomap segment``, so door-to-door distances are not recomputed).
     start, goal : (float, float) or int
         A map-frame point ``(x, y)`` in metres, or a room ID; a room stands
-        for its centroid (or, when the centroid lies outside the room, the
-        room's cell nearest to it).
+        for its interior point (node attributes ``interior_x``,
+        ``interior_y``: a cell of the room as far from its edge as any; for
+        a graph without them, the centroid, or the room's cell nearest to it
+        when the centroid lies outside the room).
     robot_width : float
         Doors narrower than this (m) are not used.
 

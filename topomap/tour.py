@@ -8,9 +8,9 @@ distances a room graph carries after :func:`topomap.planning.travel_graph`
 (every saved ``rooms.graphml`` / ``rooms.json``), plus the in-room legs from
 the start point and to each room's point.
 
-Visiting a room means reaching its point: its centroid, or the room's cell
-nearest the centroid when the centroid lies outside the room (the point
-``plan_path`` uses for a room ID). The start room counts as visited at the
+Visiting a room means reaching its point: its interior point (node
+attributes ``interior_x``, ``interior_y``: a cell of the room as far from its
+edge as any), the point ``plan_path`` uses for a room ID. The start room counts as visited at the
 start. The distance between two stops is the shortest route through doors
 (Dijkstra on the door graph), so the distances are a metric and every tour
 is a sequence of real routes through free space.
