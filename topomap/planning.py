@@ -246,6 +246,22 @@ class _Ctx:
                 return int(r)
         return 0
 
+    def in_room(self, row, col, r) -> bool:
+        """Whether cell ``(row, col)`` is a cell of room ``r`` (for a graph: a test against that
+        room's polygon only, not every room's)."""
+        H, W = self.shape
+        if not (0 <= row < H and 0 <= col < W):
+            return False
+        if self.seg is not None:
+            return int(self.seg.labels[row, col]) == r
+        import shapely
+
+        poly = self.G.nodes[r].get("polygon") if r in self.G else None
+        if poly is None or poly.is_empty:
+            return False
+        x, y = self.grid.pixel_to_world(row + _PROBE, col + _PROBE)
+        return bool(shapely.contains_xy(poly, float(x), float(y)))
+
     def doors_of(self, r):
         return list(self._of.get(r, ()))
 
@@ -927,10 +943,12 @@ def _endpoint(ctx, G, v, what):
         key = ("interior_x", "interior_y") if "interior_x" in nd and "interior_y" in nd else ("x", "y")
         x, y = float(nd[key[0]]), float(nd[key[1]])
         row, col = _pixel(ctx, x, y) if np.isfinite(x) and np.isfinite(y) else (-1, -1)
-        if ctx.label_at_pixel(row, col) == r:
+        if ctx.in_room(row, col, r):
             return r, (x, y), (row, col)
         x, y = float(nd["x"]), float(nd["y"])
         row, col = _pixel(ctx, x, y)
+        if ctx.in_room(row, col, r):
+            return r, (x, y), (row, col)
         # centroid outside the room (L shape, ring): nearest cell of the room
         space = _RoomSpace(ctx, r, doors=[])
         r0, _, c0, _ = space.win
