@@ -214,3 +214,29 @@ def test_benchmark_maps_whole_graph(path):
     grid = load_map(path, resolution=0.05) if Path(path).suffix == ".png" else load_map(path)
     seg = segment(grid)
     check_whole(seg.labels, seg.n_rooms, seg.doors, seg.room_graph)
+
+
+# --------------------------------------------------------------------------
+# JPEG maps: compression noise in walls and floor
+# --------------------------------------------------------------------------
+
+@pytest.mark.parametrize("quality", [75, 30])
+@pytest.mark.parametrize("make", [T.corridor_with_rooms, T.noisy_corridor_with_pillars, T.room_with_desks])
+def test_jpeg_map_every_free_cell_in_a_room_or_fragment(tmp_path, make, quality):
+    """A map saved as JPEG (ringing round every wall, specks of free gray in them) and read back as a
+    bare image: every free cell in exactly one room or fragment, only free cells labelled."""
+    import cv2
+
+    m = make()
+    a = m.array
+    gray = np.where(a, 254, 0).astype(np.uint8) if a.dtype == bool else a
+    path = tmp_path / "map.jpg"
+    cv2.imwrite(str(path), gray, [cv2.IMWRITE_JPEG_QUALITY, quality])
+    grid = load_map(path, resolution=m.resolution)
+    assert (grid.free != (gray >= 250)).any()  # the compression moved cells in or out of free space
+    seg = segment(grid)
+    free = grid.free
+    assert ((seg.labels > 0) == free).all()
+    top = int(seg.labels.max())
+    assert np.array_equal(np.unique(seg.labels[free]), np.arange(1, top + 1))
+    check_whole(seg.labels, seg.n_rooms, seg.doors, seg.room_graph)
