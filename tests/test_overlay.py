@@ -57,9 +57,9 @@ def test_room_numbers_are_drawn(seg):
     plain = plot.overlay_image(seg)
     G = seg.room_graph
     r = max(G.nodes, key=lambda n: G.nodes[n]["area"])
-    row, col = int(round(G.nodes[r]["row"])), int(round(G.nodes[r]["col"]))
+    row, col = int(round(G.nodes[r]["interior_row"])), int(round(G.nodes[r]["interior_col"]))
     box = plain[row - 4:row + 5, col - 4:col + 5]
-    assert (box == 0).all(axis=2).any()  # black digits at the centroid
+    assert (box == 0).all(axis=2).any()  # black digits at the room's interior point
 
 
 def test_skeletons_and_graph_add_lines(seg):

@@ -255,7 +255,8 @@ def test_plan_along_the_row(row):
 def test_plan_room_ids(row):
     route = P.plan_path(row, 2, 4)
     assert route["rooms"] == [2, 3, 4] and route["doors"] == [1, 2]
-    np.testing.assert_allclose(route["waypoints"][0], [row.room_graph.nodes[2]["x"], row.room_graph.nodes[2]["y"]])
+    n = row.room_graph.nodes[2]
+    np.testing.assert_allclose(route["waypoints"][0], [n["interior_x"], n["interior_y"]])
     same = P.plan_path(row, 3, 3)
     assert same["rooms"] == [3] and same["doors"] == [] and same["length"] == 0
 
@@ -466,20 +467,26 @@ def test_small_rooms_get_the_exact_distance():
 
 def _door_cells_one_by_one(ctx, r):
     """The reference of ``_RoomSpace``'s door cells: door by door, the cells of its segment on the
-    room or the rooms it joins, and of those the one nearest its midpoint (the first of equals)."""
+    two rooms it joins; of those the ones with a cell of each of the two rooms in their 3 x 3
+    neighbourhood (where the rooms meet; all of them when there is none), the one nearest its
+    midpoint (the first of equals)."""
     sp = P._RoomSpace(ctx, r)
     r0, _, c0, _ = sp.win
-    L = ctx.window_labels({r} | {x for d in ctx.doors_of(r) for x in ctx.doors[d][:2]}, sp.win)
     out = {}
     for d in ctx.doors_of(r):
+        a, b = ctx.doors[d][:2]
+        L = np.pad(ctx.window_labels({a, b}, sp.win), 1)
         rr, cc = ctx.door_cells(d)
         rr, cc = rr - r0, cc - c0
-        ok = L[rr, cc] > 0
+        ok = L[rr + 1, cc + 1] > 0
         if ok.any():
+            around = [set(L[i:i + 3, j:j + 3].ravel().tolist()) for i, j in zip(rr, cc)]
+            meet = ok & np.array([{a, b} <= s for s in around])
+            pick = meet if meet.any() else ok
             p1, p2 = ctx.doors[d][2:4]
             mr, mc = (p1[0] + p2[0]) / 2 - r0, (p1[1] + p2[1]) / 2 - c0
-            i = int(np.argmin((rr[ok] - mr) ** 2 + (cc[ok] - mc) ** 2))
-            out[d] = (int(rr[ok][i]), int(cc[ok][i]))
+            i = int(np.argmin((rr[pick] - mr) ** 2 + (cc[pick] - mc) ** 2))
+            out[d] = (int(rr[pick][i]), int(cc[pick][i]))
             assert sp.mask[rr[ok], cc[ok]].all()  # the door's cells are traversable
     return sp.door_px, out
 
@@ -537,3 +544,30 @@ def test_window_room_test_of_door_cells_is_membership_in_the_rooms():
             mask, on = ctx.window_room(r, rooms, (0, H, 0, W))
             np.testing.assert_array_equal(mask, labels == r)
             np.testing.assert_array_equal(on(rr, cc), np.isin(labels[rr, cc], sorted(rooms)))
+
+
+def test_route_across_a_door_whose_segment_runs_on_through_a_wall():
+    """A door segment that runs on past the place its two rooms meet, through a wall into a part
+    of one room the other does not reach, with its midpoint there: the route crosses it where the
+    rooms meet (the cell nearest the midpoint was beyond the wall: no route from the other room)."""
+    cells = np.full((50, 66), OCCUPIED, np.int8)
+    labels = np.zeros((50, 66), np.int32)
+    labels[5:25, 5:61] = 1  # room 1: a band across the top ...
+    labels[25:45, 35:61] = 1  # ... and a block below its right half
+    labels[25:45, 5:31] = 2  # room 2 below its left half; columns 31-34 a wall between 2 and 1
+    cells[labels > 0] = FREE
+    grid = OccupancyGrid(cells, RES)
+    from topomap.doors import Door
+
+    p1, p2 = (25.0, 10.0), (25.0, 60.0)  # midpoint column 35: room 1, beyond the wall
+    (x1, x2), (y1, y2) = grid.pixel_to_world(np.array([p1[0], p2[0]]), np.array([p1[1], p2[1]]))
+    door = Door(id=0, p1=p1, p2=p2, xy1=(x1, y1), xy2=(x2, y2), width=2.5, rooms=(1, 2))
+    seg = Segmentation(grid=grid, labels=labels, doors=[door], method="manual")
+    for source in (seg, seg.room_graph):
+        start, goal = grid.pixel_to_world(10, 20), grid.pixel_to_world(40, 15)
+        route = P.plan_path(source, tuple(map(float, start)), tuple(map(float, goal)))
+        assert route["rooms"] == [1, 2] and route["doors"] == [0]
+        # start -> (25, 30) -> goal, octile steps in open floor (round the wall would be longer)
+        want = (15 + 10 * (np.sqrt(2) - 1) + 15 * np.sqrt(2)) * RES
+        assert route["length"] == pytest.approx(want, rel=1e-9)
+    assert P._Ctx(seg).door_point(0) == (25, 30)  # beside both rooms, nearest the midpoint

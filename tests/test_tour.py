@@ -131,7 +131,7 @@ def test_comb_round_trip_and_subset(combseg):
     sub = plan_tour(seg, west_end(seg), rooms=[5, 3])
     assert sub["order"] == [1, 3, 5]
     # from the middle room: its neighbours on one side first, then the other side
-    start = (seg.room_graph.nodes[4]["x"], seg.room_graph.nodes[4]["y"])
+    start = (seg.room_graph.nodes[4]["interior_x"], seg.room_graph.nodes[4]["interior_y"])
     mid = plan_tour(seg, 4)
     assert mid["order"][0] == 4 and np.allclose(mid["waypoints"][0], start)
     assert mid["length"] == pytest.approx(brute_force(stop_distances(seg, 4)["D"], False))

@@ -506,31 +506,46 @@ def benchmark_cmd(dataset_dir, methods, variant, jobs, out, maps):
         sys.exit(EXIT_INPUT)
 
 
+def _place(point, room, name: str):
+    """The start or goal of ``plan`` / ``tour``: the point ``(x, y)`` of ``--NAME`` or the room ID of
+    ``--NAME-room``, exactly one of them."""
+    if (point is None) == (room is None):
+        raise click.UsageError(f"give one of --{name} X Y (a point, m) or --{name}-room ID (a room)")
+    return tuple(point) if point is not None else int(room)
+
+
 @main.command("plan")
 @click.argument("graph", type=click.Path(path_type=Path))
-@click.option("--from", "start", nargs=2, type=float, required=True, metavar="X Y",
+@click.option("--from", "start", nargs=2, type=float, default=None, metavar="X Y",
               help="Start point, map-frame metres.")
-@click.option("--to", "goal", nargs=2, type=float, required=True, metavar="X Y",
+@click.option("--from-room", "start_room", type=int, default=None, metavar="ID",
+              help="Start in this room (at its interior point), instead of --from.")
+@click.option("--to", "goal", nargs=2, type=float, default=None, metavar="X Y",
               help="Goal point, map-frame metres.")
+@click.option("--to-room", "goal_room", type=int, default=None, metavar="ID",
+              help="Go to this room (to its interior point), instead of --to.")
 @click.option("--robot-width", type=float, default=0.0, show_default=True,
               help="Doors narrower than this (m) are not used.")
 @click.option("--json", "as_json", is_flag=True, help="Print the route as JSON.")
-def plan_cmd(graph, start, goal, robot_width, as_json):
+def plan_cmd(graph, start, start_room, goal, goal_room, robot_width, as_json):
     """Plan a route through rooms and doors of GRAPH.
 
     GRAPH is rooms.graphml, rooms.json or rooms.geojson as written by
     ``topomap segment``: it holds the room outlines and the in-room
     door-to-door travel distances, so no map is needed. Prints the room
     sequence, the doors with their midpoints (m) and the travel length.
+    A room given by its ID stands for its interior point (a point inside
+    the room, as far from its walls as any).
     """
     import json
 
     from .export import load_graph
     from .planning import plan_path
 
+    start, goal = _place(start, start_room, "from"), _place(goal, goal_room, "to")
     try:
         G = load_graph(graph)
-        route = plan_path(G, tuple(start), tuple(goal), robot_width=robot_width)
+        route = plan_path(G, start, goal, robot_width=robot_width)
     except Exception as exc:  # noqa: BLE001
         sys.exit(_fail(exc, _naming(graph, exc)))
     if as_json:
@@ -550,21 +565,25 @@ def plan_cmd(graph, start, goal, robot_width, as_json):
 
 @main.command("tour")
 @click.argument("graph", type=click.Path(path_type=Path))
-@click.option("--from", "start", nargs=2, type=float, required=True, metavar="X Y",
+@click.option("--from", "start", nargs=2, type=float, default=None, metavar="X Y",
               help="Start point, map-frame metres.")
+@click.option("--from-room", "start_room", type=int, default=None, metavar="ID",
+              help="Start in this room (at its interior point), instead of --from.")
 @click.option("--rooms", default=None, metavar="IDS",
               help="Comma-separated room IDs to visit (default: every room reachable from the start).")
 @click.option("--return", "return_to_start", is_flag=True, help="End the tour back at the start.")
 @click.option("--robot-width", type=float, default=0.0, show_default=True,
               help="Doors narrower than this (m) are not used.")
 @click.option("--json", "as_json", is_flag=True, help="Print the tour as JSON.")
-def tour_cmd(graph, start, rooms, return_to_start, robot_width, as_json):
+def tour_cmd(graph, start, start_room, rooms, return_to_start, robot_width, as_json):
     """The order in which to visit the rooms of GRAPH, and the doors to pass.
 
     GRAPH is rooms.graphml, rooms.json or rooms.geojson as written by
     ``topomap segment``. Optimal for up to 12 rooms, a heuristic above (see
     topomap.planning.plan_tour). Prints the rooms in order with the travel
-    distance to each, the doors passed and the total length.
+    distance to each, the doors passed and the total length. A room is
+    visited at its interior point (a point inside the room, as far from its
+    walls as any); --from-room starts there.
     """
     import json
 
@@ -572,6 +591,7 @@ def tour_cmd(graph, start, rooms, return_to_start, robot_width, as_json):
     from .export import load_graph
     from .planning import plan_tour
 
+    start = _place(start, start_room, "from")
     try:
         ids = None
         if rooms is not None:
@@ -580,7 +600,7 @@ def tour_cmd(graph, start, rooms, return_to_start, robot_width, as_json):
             except ValueError:
                 raise ParameterError(f"--rooms must be comma-separated room IDs, got {rooms!r}") from None
         G = load_graph(graph)
-        tour = plan_tour(G, tuple(start), rooms=ids, return_to_start=return_to_start, robot_width=robot_width)
+        tour = plan_tour(G, start, rooms=ids, return_to_start=return_to_start, robot_width=robot_width)
     except Exception as exc:  # noqa: BLE001
         sys.exit(_fail(exc, _naming(graph, exc)))
     if as_json:

@@ -582,6 +582,7 @@ GRAPH_TYPES = {"resolution": float, "origin": _float_tuple, "method": _opt(str),
                "travel_distances": _opt(str)}
 #: Types of the room (node) attributes.
 NODE_TYPES = {"area": float, "cells": int, "x": float, "y": float, "row": float, "col": float,
+              "interior_x": float, "interior_y": float, "interior_row": float, "interior_col": float,
               "polygon": _opt(_geometry), "door_distances": _door_distances}
 #: Types of the door (edge) attributes.
 EDGE_TYPES = {"door": int, "width": float, "x": float, "y": float, "x1": float, "y1": float, "x2": float,

@@ -158,6 +158,7 @@ class _Ctx:
                 self._of.setdefault(r, []).append(did)
         self._bbox = None
         self._cells = {}  # door -> its cells (door_cells)
+        self._points = {}  # door -> the cell a route crosses it at (door_point)
 
     # -- rooms ------------------------------------------------------------
     def room_bbox(self, r):
@@ -245,6 +246,22 @@ class _Ctx:
                 return int(r)
         return 0
 
+    def in_room(self, row, col, r) -> bool:
+        """Whether cell ``(row, col)`` is a cell of room ``r`` (for a graph: a test against that
+        room's polygon only, not every room's)."""
+        H, W = self.shape
+        if not (0 <= row < H and 0 <= col < W):
+            return False
+        if self.seg is not None:
+            return int(self.seg.labels[row, col]) == r
+        import shapely
+
+        poly = self.G.nodes[r].get("polygon") if r in self.G else None
+        if poly is None or poly.is_empty:
+            return False
+        x, y = self.grid.pixel_to_world(row + _PROBE, col + _PROBE)
+        return bool(shapely.contains_xy(poly, float(x), float(y)))
+
     def doors_of(self, r):
         return list(self._of.get(r, ()))
 
@@ -255,6 +272,44 @@ class _Ctx:
             _, _, p1, p2, _, _ = self.doors[did]
             cells = self._cells[did] = line_pixels(p1, p2, self.shape)
         return cells
+
+    def door_point(self, did):
+        """The cell ``(row, col)`` of door ``did``'s segment a route crosses it at, or None (no cell of it
+        on its rooms): of its cells on its two rooms, those beside both rooms (a cell of one room with
+        a cell of the other among its 8 neighbours), the one closest to the door's midpoint (the first
+        along the segment of equals). Only when no cell is beside both, the one closest of all.
+
+        A segment may run on past the place where its rooms meet, through a wall into a part of one
+        of them that the other does not reach: its cell closest to the midpoint can lie there, and
+        a route to it from the other room does not exist."""
+        if did in self._points:
+            return self._points[did]
+        a, b, p1, p2 = self.doors[did][:4]
+        rr, cc = self.door_cells(did)
+        pt = None
+        if len(rr):
+            H, W = self.shape
+            r0, c0 = max(int(rr.min()) - 1, 0), max(int(cc.min()) - 1, 0)
+            r1, c1 = min(int(rr.max()) + 2, H), min(int(cc.max()) + 2, W)
+            L = np.pad(self.window_labels({a, b}, (r0, r1, c0, c1)), 1)
+            lr, lc = rr - r0 + 1, cc - c0 + 1
+            on = L[lr, lc] > 0
+            if on.any():
+                near_a = np.zeros(len(rr), bool)
+                near_b = np.zeros(len(rr), bool)
+                for dr in (-1, 0, 1):
+                    for dc in (-1, 0, 1):
+                        v = L[lr + dr, lc + dc]
+                        near_a |= v == a
+                        near_b |= v == b
+                both = on & near_a & near_b
+                cand = both if both.any() else on
+                mr, mc = (p1[0] + p2[0]) / 2, (p1[1] + p2[1]) / 2
+                d2 = np.where(cand, (rr - mr) ** 2 + (cc - mc) ** 2, np.inf)
+                i = int(np.argmin(d2))
+                pt = (int(rr[i]), int(cc[i]))
+        self._points[did] = pt
+        return pt
 
 
 def _pixel(ctx, x, y):
@@ -275,7 +330,6 @@ class _RoomSpace:
             self.win, self.mask, self.door_px = (0, 0, 0, 0), np.zeros((0, 0), bool), {}
             return
         # all the doors' cells at once (one test against the rooms instead of one per door)
-        n = np.array([len(rr) for rr, _ in lines], np.intp)
         RR = np.concatenate([rr for rr, _ in lines]) if lines else np.zeros(0, np.intp)
         CC = np.concatenate([cc for _, cc in lines]) if lines else np.zeros(0, np.intp)
         rows = ([box[0], box[1] - 1] if box else []) + ([int(RR.min()), int(RR.max())] if RR.size else [])
@@ -288,23 +342,12 @@ class _RoomSpace:
         RR, CC = RR - r0, CC - c0
         ok = on_rooms(RR, CC)
         mask[RR[ok], CC[ok]] = True
-        # each door's cell closest to its midpoint (the first of equals along its line), among its cells
-        # on the rooms: the squared distances of all cells, inf off the rooms, the first minimum per door
-        mid = np.array([[(p1[0] + p2[0]) / 2 - r0, (p1[1] + p2[1]) / 2 - c0]
-                        for p1, p2 in (ctx.doors[d][2:4] for d in doors)], float).reshape(-1, 2)
-        owner = np.repeat(np.arange(len(doors)), n)
-        d2 = np.where(ok, (RR - mid[owner, 0]) ** 2 + (CC - mid[owner, 1]) ** 2, np.inf)
-        first = np.cumsum(n) - n
+        # each door at the cell a route crosses it (its cells on the rooms are on the mask)
         self.door_px = {}
-        if d2.size:
-            low = np.minimum.reduceat(d2, first[n > 0])  # inf: no cell of the door on the rooms
-            at = np.flatnonzero(d2 == np.repeat(low, n[n > 0]))
-            best = at[np.r_[True, owner[at][1:] != owner[at][:-1]]]  # the first minimum of each door
-            pick = dict(zip(owner[best].tolist(), best.tolist()))
-            for k, reached in zip(np.flatnonzero(n > 0).tolist(), np.isfinite(low).tolist()):
-                if reached:
-                    i = pick[k]
-                    self.door_px[doors[k]] = (int(RR[i]), int(CC[i]))
+        for d in doors:
+            pt = ctx.door_point(d)
+            if pt is not None:
+                self.door_px[d] = (pt[0] - r0, pt[1] - c0)
         self.mask = mask
 
     def local(self, row, col):
@@ -894,9 +937,17 @@ def _endpoint(ctx, G, v, what):
         if r not in G:
             raise NotInRoomError(f"{what} room {r} does not exist (rooms: "
                                  f"{', '.join(str(n) for n in sorted(G.nodes))})")
-        x, y = float(G.nodes[r]["x"]), float(G.nodes[r]["y"])
+        nd = G.nodes[r]
+        # the room's interior point (a cell of the room, roomgraph.interior_points); a graph without
+        # it (written by an older version): the centroid, when it is in the room
+        key = ("interior_x", "interior_y") if "interior_x" in nd and "interior_y" in nd else ("x", "y")
+        x, y = float(nd[key[0]]), float(nd[key[1]])
+        row, col = _pixel(ctx, x, y) if np.isfinite(x) and np.isfinite(y) else (-1, -1)
+        if ctx.in_room(row, col, r):
+            return r, (x, y), (row, col)
+        x, y = float(nd["x"]), float(nd["y"])
         row, col = _pixel(ctx, x, y)
-        if ctx.label_at_pixel(row, col) == r:
+        if ctx.in_room(row, col, r):
             return r, (x, y), (row, col)
         # centroid outside the room (L shape, ring): nearest cell of the room
         space = _RoomSpace(ctx, r, doors=[])
@@ -956,8 +1007,10 @@ def plan_path(seg_or_G, start, goal, *, robot_width: float = 0.0) -> dict:
         by ``topomap segment``, so door-to-door distances are not recomputed).
     start, goal : (float, float) or int
         A map-frame point ``(x, y)`` in metres, or a room ID; a room stands
-        for its centroid (or, when the centroid lies outside the room, the
-        room's cell nearest to it).
+        for its interior point (node attributes ``interior_x``,
+        ``interior_y``: a cell of the room as far from its edge as any; for
+        a graph without them, the centroid, or the room's cell nearest to it
+        when the centroid lies outside the room).
     robot_width : float
         Doors narrower than this (m) are not used.
 

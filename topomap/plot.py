@@ -66,9 +66,21 @@ def plot_map(grid, ax=None):
 FRAGMENT_COLOR = (0.45, 0.25, 0.45, 1.0)
 
 
+def _anchor(node: dict, metres: bool = True):
+    """Where a room's label and graph node are drawn: its interior point (a cell of the room), or
+    its centroid for a graph without one. ``(x, y)`` in metres, or ``(row, col)`` in pixels."""
+    keys = (("interior_x", "interior_y"), ("x", "y")) if metres else (("interior_row", "interior_col"),
+                                                                       ("row", "col"))
+    for a, b in keys:
+        if a in node and b in node and np.isfinite(node[a]) and np.isfinite(node[b]):
+            return float(node[a]), float(node[b])
+    return float(node[keys[1][0]]), float(node[keys[1][1]])
+
+
 def plot_rooms(seg, ax=None, *, alpha: float = 0.75, ids: bool = True):
     """Colour every room of ``seg`` over its map (fragments all in
-    :data:`FRAGMENT_COLOR`); label rooms with their ID."""
+    :data:`FRAGMENT_COLOR`); label rooms with their ID, at their interior
+    point (inside the room, unlike the centroid of an L-shaped room)."""
     ax = plot_map(seg.grid, ax)
     n = int(seg.room_labels.max()) if seg.labels.size else 0  # the largest room ID (IDs may have gaps)
     colors = np.vstack([room_colors(n), np.tile(FRAGMENT_COLOR, (int(seg.labels.max(initial=0)) - n, 1))])
@@ -79,7 +91,7 @@ def plot_rooms(seg, ax=None, *, alpha: float = 0.75, ids: bool = True):
         G = seg.room_graph
         big = [i for i in G.nodes if G.nodes[i]["area"] >= 1.0]
         for i in big:
-            ax.text(G.nodes[i]["x"], G.nodes[i]["y"], str(i), ha="center", va="center", fontsize=7,
+            ax.text(*_anchor(G.nodes[i]), str(i), ha="center", va="center", fontsize=7,
                     bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.7))
     return ax
 
@@ -120,15 +132,14 @@ def plot_skeletons(seg, ax=None, *, free_color="limegreen", occupied_color="mage
 
 
 def plot_room_graph(seg, ax=None, *, color="navy", node_size: float = 30):
-    """Draw the room–door graph over the map: room centroids joined through door midpoints."""
+    """Draw the room–door graph over the map: the rooms' interior points joined through door midpoints."""
     ax = _ax(ax)
     G = seg.room_graph
     for a, b, d in G.edges(data=True):
-        xa, ya = G.nodes[a]["x"], G.nodes[a]["y"]
-        xb, yb = G.nodes[b]["x"], G.nodes[b]["y"]
+        (xa, ya), (xb, yb) = _anchor(G.nodes[a]), _anchor(G.nodes[b])
         ax.plot([xa, d["x"], xb], [ya, d["y"], yb], color=color, lw=1.2, alpha=0.8)
-    xs = [G.nodes[n]["x"] for n in G.nodes if G.degree(n) or G.nodes[n]["area"] >= 1.0]
-    ys = [G.nodes[n]["y"] for n in G.nodes if G.degree(n) or G.nodes[n]["area"] >= 1.0]
+    pts = [_anchor(G.nodes[n]) for n in G.nodes if G.degree(n) or G.nodes[n]["area"] >= 1.0]
+    xs, ys = [p[0] for p in pts], [p[1] for p in pts]
     ax.scatter(xs, ys, s=node_size, c=color, zorder=3)
     return ax
 
@@ -241,13 +252,13 @@ def _overlay_indexed(seg, skeletons=False, graph=False, alpha=0.75):
     G = seg.room_graph
     if graph:
         for a, b, d in G.edges(data=True):
-            pts = [(G.nodes[a]["row"], G.nodes[a]["col"]), tuple(np.mean([d["p1"], d["p2"]], 0)),
-                   (G.nodes[b]["row"], G.nodes[b]["col"])]
+            pts = [_anchor(G.nodes[a], False), tuple(np.mean([d["p1"], d["p2"]], 0)), _anchor(G.nodes[b], False)]
             pts = np.rint(np.asarray(pts)[:, ::-1]).astype(np.int32).reshape(-1, 1, 2)
             cv2.polylines(idx, [pts], False, _GRAPH, t)
         for i in G.nodes:
             if G.degree(i) or G.nodes[i]["area"] >= 1.0:
-                cv2.circle(idx, (int(round(G.nodes[i]["col"])), int(round(G.nodes[i]["row"]))), 2 * t + 1, _GRAPH, -1)
+                r, c = _anchor(G.nodes[i], False)
+                cv2.circle(idx, (int(round(c)), int(round(r))), 2 * t + 1, _GRAPH, -1)
     scale = max(0.35, min(H, W) / 1600)
     th = max(1, int(round(scale * 1.5)))
     font = cv2.FONT_HERSHEY_SIMPLEX
@@ -256,8 +267,9 @@ def _overlay_indexed(seg, skeletons=False, graph=False, alpha=0.75):
             continue
         text = str(i)
         (tw, tht), below = cv2.getTextSize(text, font, scale, th)
-        x0 = int(round(G.nodes[i]["col"])) - tw // 2
-        y0 = int(round(G.nodes[i]["row"])) + tht // 2
+        r, c = _anchor(G.nodes[i], False)  # inside the room
+        x0 = int(round(c)) - tw // 2
+        y0 = int(round(r)) + tht // 2
         cv2.rectangle(idx, (x0 - 2, y0 - tht - 2), (x0 + tw + 1, y0 + below - 1), _BOX, -1)
         # the glyphs into their own mask (text may be drawn antialiased), then set in one colour
         r0, c0 = max(y0 - tht - 2, 0), max(x0 - 2, 0)

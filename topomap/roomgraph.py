@@ -18,7 +18,7 @@ from scipy import ndimage as ndi
 from ._fast import lookup
 from .geometry import label_rings, mask_rings
 
-__all__ = ["room_graph", "room_polygons", "OUTLINE_MIN_RINGS", "OUTLINE_CELLS_PER_RING"]
+__all__ = ["room_graph", "room_polygons", "interior_points", "OUTLINE_MIN_RINGS", "OUTLINE_CELLS_PER_RING"]
 
 log = logging.getLogger("topomap")
 
@@ -265,12 +265,78 @@ def _outline_cells(L, i, cell):
     return m2
 
 
+def interior_points(labels: np.ndarray, n: int, centroids=None):
+    """A cell inside each room, as far from the room's edge as any: its pole of inaccessibility on
+    the grid, where its label is drawn and a route to the room goes.
+
+    Parameters
+    ----------
+    labels : (M, N) ndarray of int
+        Room labels ``1..n``; 0 (and labels above ``n``: fragments) are no room.
+    n : int
+        The largest room label.
+    centroids : (n + 1, 2) ndarray of float, optional
+        ``(row, col)`` of each room's centroid (row ``i`` for room ``i``): of the cells within half a
+        cell of the room's largest clearance, the one nearest it is taken (the middle of a ridge of
+        equal clearance, as in a rectangular room); default: the first in a row-major scan.
+
+    Returns
+    -------
+    rows, cols : (n + 1,) ndarray of int
+        The cell of room ``i`` at index ``i`` (-1 for a label without cells); always a cell of the
+        room, unlike the centroid of a ring corridor or an L-shaped room. Its clearance is the
+        Euclidean distance (cells) to the nearest cell of the room's edge (a cell with a
+        4-neighbour of another label, of no room or off the map). Time and memory linear in the
+        cells of the labels' bounding box.
+    """
+    from ._fast import edt
+    from .geometry import true_bbox
+
+    rows = np.full(n + 1, -1, np.int64)
+    cols = np.full(n + 1, -1, np.int64)
+    L = np.asarray(labels)
+    box = true_bbox((L > 0) & (L <= n)) if n > 0 and L.size else None
+    if box is None:
+        return rows, cols
+    r0, r1, c0, c1 = box
+    L = L[r0:r1, c0:c1]
+    L = np.where(L <= n, L, 0) if L.max() > n else L
+    P = np.pad(L, 1)
+    inner = ((L > 0) & (P[:-2, 1:-1] == L) & (P[2:, 1:-1] == L) & (P[1:-1, :-2] == L) & (P[1:-1, 2:] == L))
+    del P
+    clear = edt(inner, exact=False)  # 0 on the rooms' edges, else the distance to the nearest edge cell
+    del inner
+    flat, val = L.ravel(), clear.ravel()
+    cells = np.flatnonzero(flat)
+    lab, v = flat[cells], val[cells]
+    top = np.zeros(n + 1, v.dtype)
+    np.maximum.at(top, lab, v)  # each room's largest clearance
+    keep = v >= top[lab] - 0.5
+    cand, lab = cells[keep], lab[keep]
+    del cells, v
+    r, c = np.divmod(cand, L.shape[1])
+    if centroids is not None:
+        cen = np.asarray(centroids, float)
+        d2 = (r + r0 - cen[lab, 0]) ** 2 + (c + c0 - cen[lab, 1]) ** 2
+    else:
+        d2 = np.zeros(cand.size)
+    order = np.lexsort((cand, d2, lab))  # per room: nearest the centroid, then first in the scan
+    lab, r, c = lab[order], r[order], c[order]
+    first = np.r_[True, lab[1:] != lab[:-1]]
+    rows[lab[first]] = r[first] + r0
+    cols[lab[first]] = c[first] + c0
+    return rows, cols
+
+
 def room_graph(seg) -> nx.MultiGraph:
     """Build the room–door graph of a segmentation.
 
     Nodes are room labels (``int``, 1..N) with ``area`` (m²), ``x``, ``y``
-    (centroid, m), ``row``, ``col`` (centroid, pixels), ``cells`` (count) and
-    ``polygon`` (shapely geometry in map-frame metres). Edges are doors,
+    (centroid, m), ``row``, ``col`` (centroid, pixels), ``interior_x``,
+    ``interior_y`` (m), ``interior_row``, ``interior_col`` (pixels: the centre
+    of a cell of the room as far from its edge as any,
+    :func:`interior_points`; the centroid may lie outside the room),
+    ``cells`` (count) and ``polygon`` (shapely geometry in map-frame metres). Edges are doors,
     keyed by door id, with ``door`` (id), ``width`` (m), ``x``, ``y``
     (midpoint, m), ``x1``, ``y1``, ``x2``, ``y2`` (end points, m) and ``p1``,
     ``p2`` (end points, pixels). Graph attributes: ``resolution`` (m/px),
@@ -309,13 +375,18 @@ def room_graph(seg) -> nx.MultiGraph:
     del rings
     _BOXES[G] = (weakref.ref(seg.labels), objs)
     area_cell = grid.resolution ** 2
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cen = np.stack([sr[:n + 1] / cnt[:n + 1], sc[:n + 1] / cnt[:n + 1]], 1)
+    ir, ic = interior_points(labels, n, cen)
+    ix, iy = grid.pixel_to_world(ir.astype(float), ic.astype(float))
     for i in range(1, n + 1):
         if cnt[i] == 0:
             continue
-        r, c = sr[i] / cnt[i], sc[i] / cnt[i]
+        r, c = cen[i]
         x, y = grid.pixel_to_world(r, c)
         G.add_node(i, area=float(cnt[i] * area_cell), cells=int(cnt[i]), x=float(x), y=float(y),
-                   row=float(r), col=float(c), polygon=polys.get(i))
+                   row=float(r), col=float(c), interior_x=float(ix[i]), interior_y=float(iy[i]),
+                   interior_row=float(ir[i]), interior_col=float(ic[i]), polygon=polys.get(i))
     for d in seg.doors:
         a, b = d.rooms
         mx, my = d.midpoint

@@ -19,7 +19,8 @@ from .geometry import line_pixels
 if TYPE_CHECKING:  # pragma: no cover
     from .io import OccupancyGrid
 
-__all__ = ["fill_unlabeled", "relabel_sequential", "cut_rooms", "doors_between_rooms", "EIGHT", "FOUR"]
+__all__ = ["fill_unlabeled", "relabel_sequential", "cut_rooms", "doors_between_rooms", "join_touching_rooms",
+           "EIGHT", "FOUR"]
 
 EIGHT = np.ones((3, 3), bool)
 FOUR = ndi.generate_binary_structure(2, 1)
@@ -137,7 +138,7 @@ def _grow(seeds: np.ndarray, todo: np.ndarray, max_steps: int = 8) -> np.ndarray
 
 def _wall_to_wall(rc, p, q, space, reach: int = 2):
     """The cells ``rc`` of a cut from ``p`` to ``q``, carried on past each end
-    cell, for at most ``reach`` cells, while they are cells of ``space``: a
+    cell of ``space``, for at most ``reach`` cells, while they are cells of ``space``: a
     cut whose end was rounded onto the free cell beside a wall would leave a
     4-connected way round it. The steps follow the cut's direction turned
     to the nearest of the 8 neighbours (integer steps: the same cells
@@ -155,6 +156,8 @@ def _wall_to_wall(rc, p, q, space, reach: int = 2):
     s1 = ((v1 > 0) - (v1 < 0)) if a1 >= _TAN_22_5 * top else 0
     rr, cc = [], []
     for r, c, d0, d1 in ((int(rc[0][-1]), int(rc[1][-1]), s0, s1), (int(rc[0][0]), int(rc[1][0]), -s0, -s1)):
+        if not (0 <= r < H and 0 <= c < W) or not space[r, c]:
+            continue  # an end on a wall: past it lies the far side of the wall, not this cut's way round
         for _ in range(reach):
             r, c = r + d0, c + d1
             if not (0 <= r < H and 0 <= c < W) or not space[r, c]:
@@ -169,7 +172,8 @@ def _wall_to_wall(rc, p, q, space, reach: int = 2):
 _TAN_22_5 = float(np.tan(np.pi / 8))
 
 
-def cut_rooms(grid: OccupancyGrid, segments, *, space=None, min_room_cells: int = 0, wide=None):
+def cut_rooms(grid: OccupancyGrid, segments, *, space=None, min_room_cells: int = 0, wide=None,
+              max_door_width=None):
     """Cut free space along door segments and label the rooms (and fragments).
 
     Parameters
@@ -193,6 +197,10 @@ def cut_rooms(grid: OccupancyGrid, segments, *, space=None, min_room_cells: int 
         half of ``wall_gap`` from every obstacle). With it, a piece or region
         without such a cell — a strip of free cells along the map's edge, a
         single scan ray — is treated like one smaller than ``min_room_cells``.
+    max_door_width : float, optional
+        Widest door (m). Two rooms that touch with no door between them
+        (:func:`join_touching_rooms`) along more than this are one room
+        (merged); default: never merged, a door is added.
 
     Returns
     -------
@@ -204,7 +212,9 @@ def cut_rooms(grid: OccupancyGrid, segments, *, space=None, min_room_cells: int 
         ``n_rooms + 1 ..``; each group in order of first appearance
         (row-major).
     doors : list of Door
-        See :func:`doors_between_rooms`; only doors between two rooms.
+        See :func:`doors_between_rooms`; only doors between two rooms. Every
+        two rooms whose cells touch have a door between them
+        (:func:`join_touching_rooms`).
     n_rooms : int
         Number of rooms.
     """
@@ -244,7 +254,7 @@ def cut_rooms(grid: OccupancyGrid, segments, *, space=None, min_room_cells: int 
     doors = [d for d in _doors_between(grid, labels, segments, lines) if max(d.rooms) <= n_rooms]
     for k, d in enumerate(doors):
         d.id = k
-    return labels, doors, n_rooms
+    return join_touching_rooms(grid, labels, doors, n_rooms, max_door_width=max_door_width)
 
 
 def _runs(whole: np.ndarray, pieces: np.ndarray):
@@ -498,10 +508,13 @@ def doors_between_rooms(grid: OccupancyGrid, labels: np.ndarray, segments) -> li
     """The segments that separate two different rooms, as :class:`Door` objects.
 
     A segment's rooms are the two labels most frequent among the 8-neighbours
-    of its pixels; a segment with fewer than two labels around it separates
-    nothing and is dropped, and so is a repeat of a kept segment.
+    of its pixels on free space; a segment with fewer than two labels around it separates
+    nothing and is dropped, and so is a repeat of a kept segment. Every label
+    is a room: two rooms whose cells touch and that no segment joins get a
+    door where they touch (:func:`join_touching_rooms`, never merged).
     """
-    return _doors_between(grid, labels, segments, [line_pixels(p, q, labels.shape) for p, q in segments])
+    doors = _doors_between(grid, labels, segments, [line_pixels(p, q, labels.shape) for p, q in segments])
+    return join_touching_rooms(grid, labels, doors, int(labels.max(initial=0)))[1]
 
 
 def _doors_between(grid: OccupancyGrid, labels: np.ndarray, segments, lines) -> list:
@@ -512,6 +525,9 @@ def _doors_between(grid: OccupancyGrid, labels: np.ndarray, segments, lines) -> 
     doors, seen = [], set()
     if not len(segments):
         return doors
+    # the segments' cells on free space (a post on a wall has the far side of a thin wall among its
+    # neighbours: a room the segment does not touch)
+    lines = [(rr[on], cc[on]) for rr, cc in lines for on in (labels[rr, cc] > 0,)]
     sizes = np.array([len(rr) for rr, _ in lines])
     rr = np.concatenate([rr for rr, _ in lines])
     cc = np.concatenate([cc for _, cc in lines])
@@ -552,3 +568,218 @@ def _doors_between(grid: OccupancyGrid, labels: np.ndarray, segments, lines) -> 
     for k, (p, q, rooms) in enumerate(kept):
         doors.append(Door(id=k, p1=p, p2=q, xy1=(x1[k], y1[k]), xy2=(x2[k], y2[k]), width=width[k], rooms=rooms))
     return doors
+
+
+def join_touching_rooms(grid: OccupancyGrid, labels: np.ndarray, doors: list, n_rooms: int, *,
+                        max_door_width=None):
+    """Join every two rooms whose cells touch: by a door between them, or as one room.
+
+    Rooms are cut apart along door segments, yet two rooms can still touch
+    where no door joins them: two cuts across the two faces of a doorway in a
+    thick wall share the sliver between them out to the rooms on either side
+    (each cut then has one room beside it and makes no door); the cells of a
+    gap in a wall narrower than ``wall_gap`` belong to the rooms on either
+    side; a cut beside three rooms makes one door, between the two it
+    touches most. Without this the room graph falls apart where the free
+    space does not, and no route or tour crosses there.
+
+    Each two rooms whose cells are 8-neighbours and that no door joins are
+
+    * merged into one room when they touch along more than ``max_door_width``
+      (m) in one place: a boundary wider than any door is no narrowing of
+      free space, so nothing a robot passes through separates the two;
+    * otherwise joined by a new door, at the widest place where they touch
+      (a run of touching cells, 8-connected): its end points are the two
+      farthest points of the boundary between the rooms there, carried on
+      by half a cell at each end, so its ``width`` (m) is the length of that
+      boundary (one cell for rooms that touch at one cell). It may be
+      narrower than ``min_door_width`` (a scan gap in a wall): a planner
+      given the robot's width leaves such a door out.
+
+    Parameters
+    ----------
+    grid : OccupancyGrid
+        The map (its resolution and frame).
+    labels : (M, N) ndarray of int
+        Rooms ``1..n_rooms``, fragments after them, 0 = no free cell.
+    doors : list of Door
+        The doors between rooms so far (ids ``0..len(doors) - 1``).
+    n_rooms : int
+        Number of rooms.
+    max_door_width : float, optional
+        Widest door (m); default: rooms are never merged, only joined by doors.
+
+    Returns
+    -------
+    labels : (M, N) ndarray of int32
+        ``labels`` itself when no rooms were merged; else the merged rooms
+        renumbered ``1..n_rooms`` in order of first appearance (row-major),
+        the fragments after them.
+    doors : list of Door
+        The doors (of merged rooms: renamed, a door between two merged rooms
+        dropped) and then the new doors, ids ``0..`` in that order.
+    n_rooms : int
+        Number of rooms.
+    """
+    pairs = _doorless_contacts(labels, n_rooms, doors)
+    if pairs is None:
+        return labels, doors, n_rooms
+    if max_door_width is not None:
+        res = grid.resolution
+        wide = [(a, b) for (a, b), runs in pairs.items() if max(_extent(m) for m in runs) * res > max_door_width]
+        if wide:
+            labels, doors, n_rooms = _merge_rooms(labels, doors, n_rooms, wide)
+            pairs = _doorless_contacts(labels, n_rooms, doors)
+            if pairs is None:
+                return labels, doors, n_rooms
+    from .doors import Door
+
+    new = []
+    for (a, b), runs in sorted(pairs.items()):
+        mids = max(runs, key=_extent)  # the widest place the two rooms touch
+        p, q = _far_ends(mids)
+        new.append((p, q, (a, b)))
+    ends = np.array([p + q for p, q, _ in new], float)
+    x1, y1 = (v.tolist() for v in grid.pixel_to_world(ends[:, 0], ends[:, 1]))
+    x2, y2 = (v.tolist() for v in grid.pixel_to_world(ends[:, 2], ends[:, 3]))
+    width = (np.hypot(ends[:, 0] - ends[:, 2], ends[:, 1] - ends[:, 3]) * grid.resolution).tolist()
+    k0 = len(doors)
+    doors = list(doors) + [Door(id=k0 + k, p1=p, p2=q, xy1=(x1[k], y1[k]), xy2=(x2[k], y2[k]), width=width[k],
+                                rooms=rooms) for k, (p, q, rooms) in enumerate(new)]
+    return labels, doors, n_rooms
+
+
+#: The forward half of the 8-neighbourhood ``(drow, dcol)``: each two neighbours once.
+_FORWARD = ((0, 1), (1, -1), (1, 0), (1, 1))
+
+
+def _doorless_contacts(labels: np.ndarray, n_rooms: int, doors):
+    """``{(a, b): [mids, ...]}``: the rooms ``a < b`` whose cells are 8-neighbours and that no door in
+    ``doors`` joins, each with the runs where they touch (8-connected groups of their touching
+    cells), a run as the ``(k, 2)`` float array of the midpoints ``(row, col)`` of its touching cell
+    pairs; None when there are none. One pass over the labels per direction."""
+    H, W = labels.shape
+    if n_rooms < 2 or H == 0 or W == 0:
+        return None
+    ii, jj = [], []
+    for dr, dc in _FORWARD:
+        a = labels[:H - dr, max(0, -dc):W - max(0, dc)]
+        b = labels[dr:, max(0, dc):W - max(0, -dc)]
+        r, c = np.nonzero((a != b) & (a > 0) & (b > 0) & (a <= n_rooms) & (b <= n_rooms))
+        c = c + max(0, -dc)
+        ii.append(r * W + c)
+        jj.append((r + dr) * W + c + dc)
+    i, j = np.concatenate(ii).astype(np.int64), np.concatenate(jj).astype(np.int64)
+    if not i.size:
+        return None
+    la, lb = labels.ravel()[i].astype(np.int64), labels.ravel()[j].astype(np.int64)
+    lo, hi = np.minimum(la, lb), np.maximum(la, lb)
+    span = n_rooms + 1
+    key = lo * span + hi
+    joined = np.array(sorted({min(d.rooms) * span + max(d.rooms) for d in doors}), np.int64)
+    keep = ~np.isin(key, joined)
+    if not keep.any():
+        return None
+    i, j, key = i[keep], j[keep], key[keep]
+    # the runs: the touching cells of each pair (a cell once per pair), joined by their contacts and
+    # by 8-adjacency among the pair's own cells
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    size = labels.size
+    code = np.unique(np.concatenate([key * size + i, key * size + j]))
+    ei = [np.searchsorted(code, key * size + i)]
+    ej = [np.searchsorted(code, key * size + j)]
+    cells = code % size
+    for dr, dc in _FORWARD:
+        nb = code + (dr * W + dc)
+        at = np.minimum(np.searchsorted(code, nb), code.size - 1)
+        ok = ((code[at] == nb) & (cells + (dr * W + dc) < size)
+              & (np.abs((cells + dr * W + dc) % W - cells % W) <= 1))
+        ei.append(np.flatnonzero(ok))
+        ej.append(at[ok])
+    ei, ej = np.concatenate(ei), np.concatenate(ej)
+    A = coo_matrix((np.ones(ei.size, np.int8), (ei, ej)), shape=(code.size, code.size))
+    _, comp = connected_components(A, directed=False)
+    run = comp[np.searchsorted(code, key * size + i)]
+    ri, ci = np.divmod(i, W)
+    rj, cj = np.divmod(j, W)
+    mid = np.stack([(ri + rj) / 2.0, (ci + cj) / 2.0], 1)
+    order = np.lexsort((run, key))
+    key, run, mid = key[order], run[order], mid[order]
+    cut = np.flatnonzero(np.r_[True, (key[1:] != key[:-1]) | (run[1:] != run[:-1]), True])
+    out = {}
+    for s, e in zip(cut[:-1].tolist(), cut[1:].tolist()):
+        k = int(key[s])
+        out.setdefault((k // span, k % span), []).append(mid[s:e])
+    return out
+
+
+def _far_ends(mids: np.ndarray):
+    """The two farthest of the points ``mids`` ((k, 2), row/col), each carried on by half a cell
+    away from the other (across the contact for one point): ``((r1, c1), (r2, c2))``."""
+    if len(mids) > 3:
+        import cv2
+
+        hull = cv2.convexHull(np.ascontiguousarray(mids[:, ::-1], np.float32), returnPoints=False).ravel()
+        pts = mids[hull]
+    else:
+        pts = mids
+    d = np.hypot(pts[:, None, 0] - pts[None, :, 0], pts[:, None, 1] - pts[None, :, 1])
+    a, b = np.unravel_index(int(np.argmax(d)), d.shape)
+    p, q = pts[a].astype(float), pts[b].astype(float)
+    u = q - p
+    n = float(np.hypot(*u))
+    if n < 1e-9:
+        # one point: a half-cell contact across an edge (its pair's axis is a cell's side: take the
+        # cell's other axis) or at a corner; either way, one cell wide along a side of the cell
+        frac = p - np.floor(p)
+        u = np.array([0.0, 1.0]) if frac[0] > 0.25 else np.array([1.0, 0.0])
+        n = 1.0
+    u = u / n / 2
+    return (float(p[0] - u[0]), float(p[1] - u[1])), (float(q[0] + u[0]), float(q[1] + u[1]))
+
+
+def _extent(mids: np.ndarray) -> float:
+    """Length (cells) of a boundary run between two rooms: the distance between its farthest points
+    plus a cell (:func:`_far_ends`)."""
+    p, q = _far_ends(mids)
+    return float(np.hypot(q[0] - p[0], q[1] - p[1]))
+
+
+def _merge_rooms(labels: np.ndarray, doors: list, n_rooms: int, pairs):
+    """Merge the rooms of each pair in ``pairs`` (joined transitively): ``(labels, doors, n_rooms)``
+    with the rooms renumbered in order of first appearance and the fragments after them, the doors
+    renamed, those between two merged rooms dropped, ids renumbered."""
+    import dataclasses
+
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    a = np.array([p[0] for p in pairs])
+    b = np.array([p[1] for p in pairs])
+    A = coo_matrix((np.ones(a.size, np.int8), (a, b)), shape=(n_rooms + 1, n_rooms + 1))
+    _, comp = connected_components(A, directed=False)
+    rep = np.zeros(n_rooms + 1, np.int64)
+    first = np.full(comp.max() + 1, n_rooms + 1, np.int64)
+    np.minimum.at(first, comp, np.arange(n_rooms + 1))
+    rep[:] = first[comp]
+    rep[0] = 0
+    top = int(labels.max(initial=0))
+    lut = np.zeros(top + 1, np.int32)
+    lut[:n_rooms + 1] = rep
+    rooms = relabel_sequential(lookup(lut, labels))  # the merged rooms, numbered by first appearance
+    n_new = int(rooms.max(initial=0))
+    frag = labels > n_rooms
+    out = np.where(frag, labels - n_rooms + n_new, rooms).astype(np.int32)
+    # each old room's new label: read at one of its cells (the rooms renumbered as a whole)
+    new_of = np.zeros(n_rooms + 1, np.int64)
+    flat_old, flat_new = labels.ravel(), out.ravel()
+    idx = np.flatnonzero((flat_old > 0) & (flat_old <= n_rooms))
+    new_of[flat_old[idx]] = flat_new[idx]
+    kept = []
+    for d in doors:
+        x, y = int(new_of[d.rooms[0]]), int(new_of[d.rooms[1]])
+        if x != y:
+            kept.append(dataclasses.replace(d, id=len(kept), rooms=(min(x, y), max(x, y))))
+    return out, kept, n_new

@@ -983,7 +983,8 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
     with T("rooms"):
         min_cells = int(np.ceil(opts.min_room_area / res ** 2 - 1e-9))
         wide = d_free >= 0.5 * opts.wall_gap / res - 1e-6 if opts.wall_gap > 0 else None
-        labels, door_objs, n_rooms = cut_rooms(rooms_grid, segs, space=space, min_room_cells=min_cells, wide=wide)
+        labels, door_objs, n_rooms = cut_rooms(rooms_grid, segs, space=space, min_room_cells=min_cells, wide=wide,
+                                               max_door_width=opts.max_door_width)
     outside = ()
     if opts.outside_enclosure > 0 and n_rooms:
         with T("outside"):

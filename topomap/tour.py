@@ -8,9 +8,9 @@ distances a room graph carries after :func:`topomap.planning.travel_graph`
 (every saved ``rooms.graphml`` / ``rooms.json``), plus the in-room legs from
 the start point and to each room's point.
 
-Visiting a room means reaching its point: its centroid, or the room's cell
-nearest the centroid when the centroid lies outside the room (the point
-``plan_path`` uses for a room ID). The start room counts as visited at the
+Visiting a room means reaching its point: its interior point (node
+attributes ``interior_x``, ``interior_y``: a cell of the room as far from its
+edge as any), the point ``plan_path`` uses for a room ID. The start room counts as visited at the
 start. The distance between two stops is the shortest route through doors
 (Dijkstra on the door graph), so the distances are a metric and every tour
 is a sequence of real routes through free space.
@@ -21,9 +21,15 @@ Up to ``exact_limit`` rooms (12 by default) the order is the optimum, by the
 Held–Karp dynamic programme over subsets (``O(2^n n^2)``; 12 rooms take a
 few tens of milliseconds). Above that, a heuristic: the nearest-neighbour
 tour improved by 2-opt (reversing a stretch of the tour) and Or-opt (moving
-one, two or three consecutive stops elsewhere) until no move shortens it;
-:func:`tour_lower_bound` (a minimum spanning tree of the stops) bounds how far
-from the optimum it can be.
+one, two or three consecutive stops elsewhere) until no move shortens it,
+then rounds of iterated local search, with at most :data:`MOVES_BASE` +
+:data:`MOVES_PER_STOP` moves per room in all and kicks only up to
+:data:`KICK_LIMIT` rooms; :func:`tour_lower_bound` (a minimum spanning tree
+of the stops) bounds how far from the optimum it can be. Above
+:data:`TREE_LIMIT` rooms (1,000) no distance matrix is made: the rooms are
+visited in the order of a depth-first walk of a minimum spanning tree of the
+door graph (at most twice the tree's weight), in time about linear in the
+rooms and doors.
 """
 
 from __future__ import annotations
@@ -38,12 +44,26 @@ from .errors import NoPathError, NotInRoomError, PlanningError
 
 log = logging.getLogger("topomap")
 
-__all__ = ["plan_tour", "tour_length", "solve_order", "tour_lower_bound", "stop_distances", "EXACT_LIMIT"]
+__all__ = ["plan_tour", "tour_length", "solve_order", "tour_lower_bound", "stop_distances", "EXACT_LIMIT",
+           "TREE_LIMIT"]
 
 #: Largest number of rooms to visit for which the order is computed exactly.
 EXACT_LIMIT = 12
 #: Rounds of iterated local search (double-bridge kicks) of the heuristic.
 KICKS = 30
+#: Improving moves (2-opt or Or-opt) the heuristic makes at most over its local search and all its
+#: kicks together: ``MOVES_BASE + MOVES_PER_STOP * n`` for ``n`` rooms to visit, each move a scan of
+#: ``O(n^2)`` pairs at most (the local search of the benchmark tours makes far fewer).
+MOVES_BASE = 1000
+#: See :data:`MOVES_BASE`.
+MOVES_PER_STOP = 2
+#: The kicks of the iterated local search run only up to this many rooms to visit (each ends with a
+#: full scan of ``O(n^2)`` pairs that finds no move).
+KICK_LIMIT = 200
+#: Above this many rooms to visit, no distance matrix (``n^2`` distances) is made and the order is a
+#: depth-first walk of a minimum spanning tree of the door graph (:func:`_tree_walk`): time
+#: ``O(N log N)`` in the doors and rooms of the graph, a tour at most twice the tree's weight.
+TREE_LIMIT = 1000
 
 
 # --------------------------------------------------------------------------
@@ -89,12 +109,16 @@ def _held_karp(D, closed):
 
 
 def _nearest_neighbour(D):
+    """From stop 0, always on to the nearest stop not yet visited (of equals the first): ``n`` scans of a row."""
     n = D.shape[0]
-    left, at, order = set(range(1, n)), 0, []
-    while left:
-        at = min(left, key=lambda j: (D[at, j], j))
+    left = np.ones(n, bool)
+    left[0] = False
+    at, order = 0, []
+    for _ in range(n - 1):
+        row = np.where(left, D[at], np.inf)
+        at = int(np.argmin(row)) if np.isfinite(row).any() else int(np.flatnonzero(left)[0])
         order.append(at)
-        left.discard(at)
+        left[at] = False
     return order
 
 
@@ -156,28 +180,41 @@ def _cycle_length(E, t):
     return float(E[t, np.roll(t, -1)].sum())
 
 
-def _local_search(E, t):
-    while _two_opt_move(E, t) or _or_opt_move(E, t):
-        pass
+def _local_search(E, t, budget):
+    """2-opt and Or-opt moves until none shortens the cycle ``t`` or ``budget[0]`` moves are spent."""
+    while budget[0] > 0 and (_two_opt_move(E, t) or _or_opt_move(E, t)):
+        budget[0] -= 1
     return t
 
 
-def _improve(D, order, closed, kicks=KICKS):
+def _improve(D, order, closed, kicks=KICKS, stats=None):
     """2-opt and Or-opt moves until none shortens the tour, then ``kicks`` rounds
     of iterated local search: a random double-bridge move (three cuts, two
     stretches swapped; seeded, so the result is reproducible) followed by the
-    same local search, kept when the tour got shorter."""
+    same local search, kept when the tour got shorter. At most
+    :data:`MOVES_BASE` + :data:`MOVES_PER_STOP` moves per stop in all (the
+    kicks stop when they are spent), kicks only up to :data:`KICK_LIMIT`
+    stops; ``stats`` (a dict), when given, gets the ``moves`` made and the
+    ``searches`` run."""
     E, t = _as_cycle(np.asarray(D, float), order, closed)
-    t = _local_search(E, t)
+    m = len(t)
+    total = MOVES_BASE + MOVES_PER_STOP * m
+    budget = [total]
+    t = _local_search(E, t, budget)
+    searches = 1
     best = _cycle_length(E, t)
     rng = np.random.default_rng(0)
-    m = len(t)
-    for _ in range(kicks if m >= 8 else 0):
+    for _ in range(kicks if 8 <= m <= KICK_LIMIT + 1 else 0):
+        if budget[0] <= 0:
+            break
         a, b, c = np.sort(rng.choice(np.arange(1, m), 3, replace=False))
-        cand = _local_search(E, np.concatenate([t[:a], t[b:c], t[a:b], t[c:]]))
+        cand = _local_search(E, np.concatenate([t[:a], t[b:c], t[a:b], t[c:]]), budget)
+        searches += 1
         L = _cycle_length(E, cand)
         if L < best - 1e-9:
             t, best = cand, L
+    if stats is not None:
+        stats.update(moves=total - budget[0], searches=searches, budget=total)
     k = int(np.nonzero(t == 0)[0][0])
     t = list(np.roll(t, -k))
     if not closed:
@@ -237,27 +274,10 @@ def tour_lower_bound(D: np.ndarray) -> float:
 # Stops on the room graph
 # --------------------------------------------------------------------------
 
-def stop_distances(seg_or_G, start, rooms=None, *, robot_width: float = 0.0):
-    """Travel distances between a start and the rooms to visit.
-
-    Parameters
-    ----------
-    seg_or_G : Segmentation or networkx.MultiGraph
-    start : (float, float) or int
-        Map-frame point (m) or room ID.
-    rooms : iterable of int, optional
-        Rooms to visit (default every room of the graph).
-    robot_width : float
-        Doors narrower than this (m) are not used.
-
-    Returns
-    -------
-    dict
-        ``D`` ((n + 1, n + 1) ndarray, m; stop 0 the start, ``inf`` where
-        unreachable), ``stops`` (the n room IDs), ``points`` (n + 1 map-frame
-        points), ``paths`` (``(i, j) -> list of door IDs`` along the shortest
-        route), ``start_room``, ``graph`` (the door graph with the stops).
-    """
+def _stop_graph(seg_or_G, start, rooms, robot_width):
+    """The door graph with the start and the rooms to visit joined to their rooms' doors:
+    ``(H, names, stops, points, start_room)``; ``names[0]`` is the start's node, ``names[k]`` stop
+    ``k`` (room ``stops[k - 1]``); ``points`` their map-frame points."""
     from .planning import _attach_to_doors, _Ctx, _annotated, _endpoint, door_graph
 
     from .options import check_length
@@ -271,12 +291,12 @@ def stop_distances(seg_or_G, start, rooms=None, *, robot_width: float = 0.0):
     else:
         try:
             stops = sorted({int(r) for r in rooms})
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             raise PlanningError(f"rooms must be room IDs, got {rooms!r}") from None
         missing = [r for r in stops if r not in G]
         if missing:
-            raise NotInRoomError(f"no room {', '.join(map(str, missing))} in the graph (rooms: "
-                                 f"{', '.join(str(n) for n in sorted(G.nodes))})")
+            raise NotInRoomError(f"no room {', '.join(map(str, missing[:20]))}"
+                                 f"{' ...' if len(missing) > 20 else ''} in the graph")
     stops = [r for r in stops if r != rs]  # the start room is visited at the start
     H = door_graph(G, min_width=robot_width)
     names = [("start",)] + [("room", r) for r in stops]
@@ -301,16 +321,141 @@ def stop_distances(seg_or_G, start, rooms=None, *, robot_width: float = 0.0):
                 (L,) = space.distances(src, [q])
                 if math.isfinite(L):
                     H.add_edge(("start",), name, length=L, room=rs)
-    n = len(names)
-    D = np.full((n, n), np.inf)
-    paths = {}
-    for i, a in enumerate(names):
-        dist, route = nx.single_source_dijkstra(H, a, weight="length")
-        for j, b in enumerate(names):
-            if b in dist:
-                D[i, j] = dist[b]
-                paths[(i, j)] = route[b]
-    return {"D": D, "stops": stops, "points": points, "paths": paths, "start_room": rs, "graph": H}
+    return H, names, stops, points, rs
+
+
+def _sparse(H):
+    """``(nodes, index, A)``: the nodes of ``H``, each node's index, and the symmetric sparse matrix
+    of its edge lengths (an edge of length 0 kept as a tiny length: a sparse matrix has no explicit zero)."""
+    from scipy.sparse import coo_matrix
+
+    nodes = list(H.nodes)
+    index = {v: i for i, v in enumerate(nodes)}
+    u = np.array([index[a] for a, b in H.edges], np.int64)
+    v = np.array([index[b] for a, b in H.edges], np.int64)
+    w = np.array([max(float(d["length"]), 1e-12) for _, _, d in H.edges(data=True)], float)
+    A = coo_matrix((np.r_[w, w], (np.r_[u, v], np.r_[v, u])), shape=(len(nodes), len(nodes))).tocsr()
+    return nodes, index, A
+
+
+def _route(nodes, pred, i, j):
+    """The nodes from ``nodes[i]`` to ``nodes[j]`` along a predecessor row of a search from ``i``."""
+    out = [j]
+    while out[-1] != i:
+        out.append(int(pred[out[-1]]))
+    return [nodes[k] for k in out[::-1]]
+
+
+def stop_distances(seg_or_G, start, rooms=None, *, robot_width: float = 0.0):
+    """Travel distances between a start and the rooms to visit.
+
+    Parameters
+    ----------
+    seg_or_G : Segmentation or networkx.MultiGraph
+    start : (float, float) or int
+        Map-frame point (m) or room ID.
+    rooms : iterable of int, optional
+        Rooms to visit (default every room of the graph).
+    robot_width : float
+        Doors narrower than this (m) are not used.
+
+    Returns
+    -------
+    dict
+        ``D`` ((n + 1, n + 1) ndarray, m; stop 0 the start, ``inf`` where
+        unreachable), ``stops`` (the n room IDs), ``points`` (n + 1 map-frame
+        points), ``paths`` (``(i, j) -> list of door IDs`` along the shortest
+        route, made when first read), ``start_room``, ``graph`` (the door graph with the stops).
+        Memory ``O(n N)`` for ``N`` doors (one search from every stop, in
+        :func:`scipy.sparse.csgraph.dijkstra`).
+    """
+    from scipy.sparse.csgraph import dijkstra
+
+    H, names, stops, points, rs = _stop_graph(seg_or_G, start, rooms, robot_width)
+    nodes, index, A = _sparse(H)
+    src = np.array([index[v] for v in names], np.int64)
+    dist, pred = dijkstra(A, directed=False, indices=src, return_predecessors=True)
+    D = dist[:, src]
+    return {"D": D, "stops": stops, "points": points, "paths": _Paths(nodes, src, pred, D),
+            "start_room": rs, "graph": H}
+
+
+class _Paths(dict):
+    """``(i, j) -> route`` (the nodes of the door graph from stop ``i`` to stop ``j``), each drawn
+    from the searches' predecessors when first read; a missing key: no route."""
+
+    def __init__(self, nodes, src, pred, D):
+        super().__init__()
+        self._args = (nodes, src, pred, D)
+
+    def __missing__(self, key):
+        nodes, src, pred, D = self._args
+        i, j = key
+        if not np.isfinite(D[i, j]):
+            raise KeyError(key)
+        self[key] = r = _route(nodes, pred[i], int(src[i]), int(src[j]))
+        return r
+
+    def __contains__(self, key):
+        nodes, src, pred, D = self._args
+        i, j = key
+        return bool(np.isfinite(D[i, j]))
+
+
+def _tree_walk(seg_or_G, start, rooms, robot_width, closed):
+    """A tour of many rooms without a distance matrix: the rooms in the order a depth-first walk of
+    a minimum spanning tree of the door graph (with the start and the rooms joined to their doors,
+    branches to no room cut off) from the start meets them, each leg the way along the tree.
+
+    Every tree edge is walked at most twice (once more back to the start when ``closed``), so the
+    tour is at most twice the weight of the tree. Time ``O(N log N)`` in the graph's doors and
+    rooms. Returns ``(H, names, stops, points, start_room, visits, legs, routes, unreachable)``."""
+    from scipy.sparse.csgraph import breadth_first_order, depth_first_order, dijkstra, minimum_spanning_tree
+
+    H, names, stops, points, rs = _stop_graph(seg_or_G, start, rooms, robot_width)
+    nodes, index, A = _sparse(H)
+    T = minimum_spanning_tree(A)
+    T = (T + T.T).tocsr()
+    s0 = index[names[0]]
+    order, pred = depth_first_order(T, s0, directed=False, return_predecessors=True)
+    stop_of = {index[v]: k for k, v in enumerate(names)}
+    reach = {k for k in (stop_of.get(int(i)) for i in order) if k is not None}
+    unreachable = [stops[k - 1] for k in range(1, len(names)) if k not in reach]
+    # depth and distance from the start along the tree, in breadth-first order (parents first)
+    bfs = breadth_first_order(T, s0, directed=False, return_predecessors=False)
+    depth = np.zeros(len(nodes), np.int64)
+    for v, p in zip(bfs[1:].tolist(), pred[bfs[1:]].tolist()):
+        depth[v] = depth[p] + 1
+    along = dijkstra(T, directed=False, indices=s0)
+    visits = [0] + [stop_of[int(i)] for i in order if int(i) in stop_of and stop_of[int(i)] != 0]
+    if closed:
+        visits.append(0)
+    legs, routes = [], []
+    for a, b in zip(visits[:-1], visits[1:]):
+        i, j = index[names[a]], index[names[b]]
+        up, down = [i], [j]
+        while up[-1] != down[-1]:  # climb from the deeper end until the two meet
+            if depth[up[-1]] >= depth[down[-1]]:
+                up.append(int(pred[up[-1]]))
+            else:
+                down.append(int(pred[down[-1]]))
+        top = up[-1]
+        legs.append(float(along[i] + along[j] - 2 * along[top]))
+        routes.append([nodes[k] for k in up + down[-2::-1]])
+    return H, names, stops, points, rs, visits, legs, routes, unreachable
+
+
+def _unreachable(rooms, start_room, robot_width) -> NoPathError:
+    why = f" with doors at least {robot_width:g} m wide" if robot_width else ""
+    more = " ..." if len(rooms) > 20 else ""
+    return NoPathError(f"rooms {', '.join(map(str, rooms[:20]))}{more} cannot be reached from room {start_room}{why}")
+
+
+def _graph_size(seg_or_G) -> int:
+    """Number of rooms of a segmentation or a room graph (the stops of a tour of every room)."""
+    if isinstance(seg_or_G, nx.Graph):
+        return seg_or_G.number_of_nodes()
+    return int(getattr(seg_or_G, "n_rooms", 0))
 
 
 def plan_tour(seg_or_G, start, *, rooms=None, return_to_start: bool = False, robot_width: float = 0.0,
@@ -346,7 +491,8 @@ def plan_tour(seg_or_G, start, *, rooms=None, return_to_start: bool = False, rob
         start when ``return_to_start``); ``length`` (float, m): their sum;
         ``waypoints`` ((K, 2) ndarray, m): the start, the door midpoints and
         the room points in order; ``method`` (str): ``"held-karp"``
-        (optimal) or the heuristic's name; ``start_room`` (int);
+        (optimal), the heuristic's name, or ``"spanning-tree-walk"`` (above
+        :data:`TREE_LIMIT` rooms to visit); ``start_room`` (int);
         ``unreachable`` (list of int).
 
     Raises
@@ -362,23 +508,31 @@ def plan_tour(seg_or_G, start, *, rooms=None, return_to_start: bool = False, rob
         exact_limit = int(exact_limit)
     except (TypeError, ValueError):
         raise PlanningError(f"exact_limit must be an integer, got {exact_limit!r}") from None
-    sd = stop_distances(seg_or_G, start, rooms, robot_width=robot_width)
-    D, stops, rs = sd["D"], sd["stops"], sd["start_room"]
-    reach = [k for k in range(1, len(stops) + 1) if np.isfinite(D[0, k])]
-    unreachable = [stops[k - 1] for k in range(1, len(stops) + 1) if not np.isfinite(D[0, k])]
+    n_stops = (len(rooms) if rooms is not None and hasattr(rooms, "__len__")
+               else _graph_size(seg_or_G) if rooms is None else None)
+    if n_stops is not None and n_stops > max(TREE_LIMIT, exact_limit):
+        H, names, stops, points, rs, visits, legs, routes, unreachable = _tree_walk(
+            seg_or_G, start, rooms, robot_width, return_to_start)
+        seq = visits[1:-1] if return_to_start else visits[1:]
+        method = "spanning-tree-walk"
+    else:
+        sd = stop_distances(seg_or_G, start, rooms, robot_width=robot_width)
+        D, stops, rs, H, points = sd["D"], sd["stops"], sd["start_room"], sd["graph"], sd["points"]
+        reach = [k for k in range(1, len(stops) + 1) if np.isfinite(D[0, k])]
+        unreachable = [stops[k - 1] for k in range(1, len(stops) + 1) if not np.isfinite(D[0, k])]
+        idx = [0] + reach
+        if unreachable and rooms is not None:
+            raise _unreachable(unreachable, rs, robot_width)
+        sub = D[np.ix_(idx, idx)]
+        local, method = solve_order(sub, closed=return_to_start, exact_limit=exact_limit)
+        seq = [idx[k] for k in local]
+        visits = [0] + seq + ([0] if return_to_start else [])
+        legs = [float(D[a, b]) for a, b in zip(visits[:-1], visits[1:])]
+        routes = [sd["paths"][(a, b)] for a, b in zip(visits[:-1], visits[1:])]
     if unreachable and rooms is not None:
-        why = f" with doors at least {robot_width:g} m wide" if robot_width else ""
-        raise NoPathError(f"rooms {', '.join(map(str, unreachable))} cannot be reached from room {rs}{why}")
-    idx = [0] + reach
-    sub = D[np.ix_(idx, idx)]
-    local, method = solve_order(sub, closed=return_to_start, exact_limit=exact_limit)
-    seq = [idx[k] for k in local]
-    visits = [0] + seq + ([0] if return_to_start else [])
-    H = sd["graph"]
-    doors, passed, legs, pts = [], [rs], [], [sd["points"][0]]
-    for a, b in zip(visits[:-1], visits[1:]):
-        route = sd["paths"][(a, b)]
-        legs.append(float(D[a, b]))
+        raise _unreachable(unreachable, rs, robot_width)
+    doors, passed, pts = [], [rs], [points[0]]
+    for b, route in zip(visits[1:], routes):
         for u, v in zip(route[:-1], route[1:]):
             room = int(H.edges[u, v]["room"])
             if room != passed[-1]:
@@ -389,7 +543,7 @@ def plan_tour(seg_or_G, start, *, rooms=None, return_to_start: bool = False, rob
         end_room = rs if b == 0 else stops[b - 1]
         if end_room != passed[-1]:
             passed.append(end_room)
-        pts.append(sd["points"][b])
+        pts.append(points[b])
     log.info("tour of %d rooms from room %d: %.2f m (%s)", len(seq) + 1, rs, sum(legs), method)
     return {"order": [rs] + [stops[k - 1] for k in seq], "doors": doors, "rooms": passed, "legs": legs,
             "length": float(sum(legs)), "waypoints": np.asarray(pts, float).reshape(-1, 2), "method": method,
