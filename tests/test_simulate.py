@@ -178,3 +178,36 @@ def test_drift_is_bounded_however_long_the_path():
     assert 0.01 < np.sqrt(np.mean(err_m ** 2)) < 0.07  # about sqrt(2) * 0.03
     yaw = np.degrees(np.abs(believed[:, 2] - true[:, 2]))
     assert np.percentile(yaw, 99) < 2.0 and yaw.max() > 0.1
+
+
+def test_the_scan_truth_is_the_rooms_the_map_shows_whole():
+    from topomap.simulate import SHOWN_AREA, shown_doors, shown_rooms
+
+    rooms = np.zeros((60, 90), np.uint16)
+    rooms[5:55, 5:40] = 1
+    rooms[5:55, 45:85] = 3
+    rooms[0:4, 0:4] = 7  # a room with no free cell in the map
+    free = np.zeros(rooms.shape, bool)
+    free[10:30, 10:30] = True        # room 1: 400 cells = 1 m² free at 0.05 m: shown, and whole
+    free[10:29, 50:70] = True        # room 3: 380 cells: not shown
+    shown = shown_rooms(rooms, free, resolution=0.05)
+    assert SHOWN_AREA == 1.0 and shown.dtype == rooms.dtype
+    np.testing.assert_array_equal(shown, np.where(rooms == 1, 1, 0))
+    assert set(np.unique(shown_rooms(rooms, free, resolution=0.05, min_area=0.9))) == {0, 1, 3}
+    assert set(np.unique(shown_rooms(rooms, free, resolution=0.1))) == {0, 1, 3}  # 4 m², 3.8 m²
+    doors = [{"rooms": (1, 3)}, {"rooms": (0, 1)}, {"rooms": (0, 3)}, {"rooms": (1, 1)}]
+    assert shown_doors(doors, shown) == [doors[1], doors[3]]
+    with pytest.raises(ParameterError, match="shape"):
+        shown_rooms(rooms, free[1:], resolution=0.05)
+    with pytest.raises(ParameterError, match="min_area"):
+        shown_rooms(rooms, free, resolution=0.05, min_area=-1)
+
+
+def test_a_room_behind_a_closed_door_is_not_in_the_scan_truth(plan):
+    from topomap.simulate import shown_doors, shown_rooms
+
+    r = simulate_scan(plan, options=ScanOptions(**{**CLEAN, "closed_doors": 1.0}), seed=1)
+    shown = shown_rooms(plan.rooms, r.grid.free, resolution=plan.resolution)
+    assert set(np.unique(shown)) - {0} == set(r.visited)
+    assert np.array_equal(shown > 0, np.isin(plan.rooms, r.visited))  # the shown rooms whole
+    assert shown_doors(plan.doors, shown) == []  # every door leads into a room behind it

@@ -66,10 +66,10 @@ import numpy as np
 from .errors import ParameterError
 from .floorplan import FloorPlan
 from .io import FREE, FREE_THRESH, OCCUPIED, OCCUPIED_THRESH, UNKNOWN, OccupancyGrid
-from .options import _Options, _opt
+from .options import _check_area, _Options, _opt
 
 __all__ = ["ScanOptions", "ScanResult", "World", "build_world", "robot_path", "scan_poses",
-           "cast_rays", "integrate", "to_grid", "simulate_scan"]
+           "cast_rays", "integrate", "to_grid", "simulate_scan", "SHOWN_AREA", "shown_rooms", "shown_doors"]
 
 log = logging.getLogger(__name__)
 
@@ -1100,3 +1100,75 @@ def simulate_scan(plan: FloorPlan, *, options: Optional[ScanOptions] = None, see
     return ScanResult(grid=grid, path=_to_world(plan, path), poses=world_poses(true),
                       map_poses=world_poses(believed), visited=visited, world=world,
                       people=_to_world(plan, [(r, c) for r, c, *_ in people]), logodds=L)
+
+
+# --------------------------------------------------------------------------
+# The ground truth of a robot map: the rooms it shows
+# --------------------------------------------------------------------------
+
+#: Least area of a room that a robot map shows free for the room to be in that map's ground
+#: truth, m²: 1 m² (20 x 20 cells at 0.05 m), a patch a person labelling the map draws as a room;
+#: a room behind a closed door or never reached shows at most a few specks of free cells.
+SHOWN_AREA = 1.0
+
+
+def shown_rooms(rooms, free, *, resolution: float, min_area: float = SHOWN_AREA) -> np.ndarray:
+    """The ground truth of a robot map: the true rooms the map shows, each whole.
+
+    A person labelling a robot map draws the rooms they see in it; a room
+    the robot never saw (behind a closed door, or never reached in a
+    partial exploration) is unknown in the map, and no one can draw it. So
+    the rooms of a scan's ground truth are the rooms with at least
+    ``min_area`` of their cells free in the map, kept whole (with their
+    cells the map leaves unknown or occupied, as the original protocol of
+    Bormann et al. wants true rooms).
+
+    Parameters
+    ----------
+    rooms : (M, N) array_like of int
+        The true rooms of the plan (0 = no room).
+    free : (M, N) array_like of bool
+        The free cells of the robot map, on the same grid.
+    resolution : float
+        Metres per cell.
+    min_area : float, optional
+        Least free area of a shown room, m² (:data:`SHOWN_AREA`).
+
+    Returns
+    -------
+    (M, N) ndarray
+        ``rooms`` (its dtype) with the rooms the map does not show set to 0.
+    """
+    from .io import check_resolution
+
+    rooms = np.asarray(rooms)
+    free = np.asarray(free, bool)
+    if rooms.shape != free.shape:
+        raise ParameterError(f"<array>: rooms {rooms.shape} and free cells {free.shape} differ in shape")
+    res = check_resolution(resolution, name="resolution")
+    min_cells = _check_area("min_area", min_area) / res ** 2
+    lab = np.where(rooms > 0, rooms, 0).astype(np.int64)
+    seen = np.bincount(lab[free], minlength=int(lab.max(initial=0)) + 1)
+    keep = seen >= min_cells - 1e-9
+    keep[0] = False
+    return np.where(keep[lab], rooms, 0).astype(rooms.dtype)
+
+
+def shown_doors(doors, rooms) -> list:
+    """The doors of a robot map's ground truth: those whose rooms are each shown or the outside.
+
+    Parameters
+    ----------
+    doors : iterable of PlanDoor or dict
+        Doors with their two rooms (``door.rooms`` or ``door["rooms"]``; 0 = outside).
+    rooms : (M, N) array_like of int
+        The shown rooms (:func:`shown_rooms`).
+
+    Returns
+    -------
+    list
+        The doors, in their order, whose every room is 0 or a label of ``rooms``.
+    """
+    labels = set(np.unique(np.asarray(rooms)).tolist()) | {0}
+    return [d for d in doors
+            if all(int(r) in labels for r in (d["rooms"] if isinstance(d, dict) else d.rooms))]
