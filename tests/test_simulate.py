@@ -211,3 +211,22 @@ def test_a_room_behind_a_closed_door_is_not_in_the_scan_truth(plan):
     assert set(np.unique(shown)) - {0} == set(r.visited)
     assert np.array_equal(shown > 0, np.isin(plan.rooms, r.visited))  # the shown rooms whole
     assert shown_doors(plan.doors, shown) == []  # every door leads into a room behind it
+
+
+def test_furniture_leaves_a_way_through_every_room():
+    """Random pieces never cut a room's floor the robot can drive on (clearance from every obstacle)
+    into pieces: people walk through every part of a room."""
+    from _floorplans import draw_plan
+
+    plan = draw_plan([(0.2, 0.2, 9.0, 1.8), (0.2, 2.0, 4.0, 5.0)], [(2.0, 1.9, 0.9, "x")])  # a hall, a room
+    opts = ScanOptions(**{**CLEAN, "furniture_density": 1.0})
+    placed = 0
+    for seed in range(6):
+        r = simulate_scan(plan, options=opts, seed=seed)
+        placed += len(r.furniture)
+        floor = plan.inside & ~plan.walls & ~r.world.blocked
+        walk = ndi.distance_transform_edt(floor) * plan.resolution > opts.clearance
+        for lab in (1, 2):
+            _, n = ndi.label(walk & (plan.rooms == lab), structure=np.ones((3, 3), bool))
+            assert n == 1, (seed, lab)
+    assert placed >= 12  # furniture was placed, not all refused

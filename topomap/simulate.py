@@ -48,8 +48,8 @@ beam nearest its direction (far cells between two beams are filled in, where
 a real scan leaves a moire of gaps); glass is fully transparent (no
 reflections off windows, no frames); mirrors, black surfaces at grazing
 angles and sun light are not modelled beyond the random no-return share;
-the robot follows its path exactly and the SLAM's error is one random walk
-(no scan matching, no loop closures that jump the map); the world is static
+the robot follows its path exactly and the SLAM's error is one smooth,
+bounded wander (no scan matching, no loop closures that jump the map); the world is static
 but for the people; poses are the centres of cells.
 """
 
@@ -179,7 +179,10 @@ class ScanOptions(_Options):
     furniture_density : float
         Random furniture pieces (tables, beds, shelves) per m² of room,
         placed inside the rooms away from the doors: 0.05 (a 12 m² bedroom
-        gets about one piece beyond its plan's own objects).
+        gets about one piece beyond its plan's own objects). A piece never
+        cuts the floor of its room the robot drives on into pieces (people
+        walk through every part of a room); where it would, it goes
+        elsewhere or is left out.
     closed_doors : float
         Share of the doors that are closed, in [0, 1]: 0.1, drawn among the
         doors of dead-end rooms only (a bedroom, a bathroom, a closet off
@@ -462,9 +465,23 @@ def _draw_piece(plan, mask, kind_legs, box) -> None:
             mask[rs, cs] = True
 
 
+def _walkable_parts(space: np.ndarray, clearance_px: float) -> int:
+    """Number of 8-connected pieces of the cells of ``space`` farther than ``clearance_px`` from
+    every cell that is not (the border of the array counts as not)."""
+    from scipy import ndimage as ndi
+
+    walk = ndi.distance_transform_edt(np.pad(space, 1)) > clearance_px
+    return int(ndi.label(walk, structure=np.ones((3, 3), bool))[1])
+
+
 def _random_furniture(plan: FloorPlan, options: ScanOptions, rng, keep_free: np.ndarray) -> tuple:
     """Random tables, beds and shelves inside the rooms: ``(kind, x1, y1, x2, y2)`` boxes that lie
-    wholly in one room, clear of the door cells by :data:`_DOOR_KEEPOUT` and of ``keep_free``."""
+    wholly in one room, clear of the door cells by :data:`_DOOR_KEEPOUT` and of ``keep_free``.
+
+    A piece stands where it leaves a way round it: people walk through every part of a room, so
+    furniture never cuts the room's floor (for the robot: the cells ``clearance`` from every
+    obstacle) into more pieces than it had. A piece that would is placed elsewhere, or left out.
+    """
     if options.furniture_density <= 0:
         return ()
     from scipy import ndimage as ndi
@@ -489,6 +506,9 @@ def _random_furniture(plan: FloorPlan, options: ScanOptions, rng, keep_free: np.
         cand = np.argwhere(ok)
         if n == 0 or len(cand) == 0:
             continue
+        floor = room & ~keep_free[sl]  # the room's floor the pieces placed so far leave
+        clear_px = options.clearance / res
+        parts = _walkable_parts(floor, clear_px)
         for _ in range(n):
             kind, (w, d), legs = _FURNITURE[int(rng.integers(len(_FURNITURE)))]
             if rng.random() < 0.5:
@@ -504,7 +524,14 @@ def _random_furniture(plan: FloorPlan, options: ScanOptions, rng, keep_free: np.
                     continue
                 (xa, ya), (xb, yb) = _to_world(plan, np.array([[a1 + sl[0].start + 0.5, b0 + sl[1].start - 0.5],
                                                               [a0 + sl[0].start - 0.5, b1 + sl[1].start + 0.5]]))
-                pieces.append((kind, float(xa), float(ya), float(xb), float(yb)))
+                box = (float(xa), float(ya), float(xb), float(yb))
+                drawn = np.zeros(plan.shape, bool)
+                _draw_piece(plan, drawn, legs, box)
+                after = floor & ~drawn[sl]
+                if _walkable_parts(after, clear_px) > parts:
+                    continue  # it would cut the room's floor in two
+                floor = after
+                pieces.append((kind, *box))
                 ok[max(a0 - 2, 0):a1 + 3, max(b0 - 2, 0):b1 + 3] = False  # no overlaps
                 break
     return tuple(pieces)
