@@ -225,12 +225,36 @@ def test_the_section_script(corpus, tmp_path):
     assert "`python benchmarks/simulated.py CORPUS --jobs 1 --methods topomap,watershed`" in text
     assert str(corpus) not in text  # no machine path in the page
     # house_a's door found, house_b's listed 2 m off: pooled door P = R = 1 of 2
-    assert "| topomap | plan | 2 | " in text and "| 4 / 4 | 50.0 | 50.0 |" in text
-    assert "| watershed | scan | 2 | " in text and "| – | 0.0 |" in text
+    # both cases are of the held-out plans (plan_split)
+    assert "| topomap | plan | held-out | 2 | " in text and "| 4 / 4 | 50.0 | 50.0 |" in text
+    assert "| watershed | scan | held-out | 2 | " in text and "| – | 0.0 |" in text
+    assert "| dev |" not in text
     assert rows.read_text().count("\n") == 1 + 2 * 2 * 2
     assert simulated.main([str(corpus), "--maps", "house_a", "--methods", "topomap", "--jobs", "1",
                            "--out", str(out)]) == 0
     assert "`CORPUS`), 1 case, commit" in out.read_text() and "--maps 'house_a'" in out.read_text()
+    shutil.copytree(corpus / "house_a", corpus / "house_d")  # a case of the dev plans
+    assert simulated.main([str(corpus), "--split", "dev", "--methods", "topomap", "--jobs", "1",
+                           "--out", str(out)]) == 0
+    text = out.read_text()
+    assert "--split dev" in text and "`CORPUS`), 1 case, commit" in text
+    assert "| topomap | plan | dev | 1 | " in text and "held-out" not in text.split("| --- |")[-1]
+    with pytest.raises(SystemExit, match="no case of the dev plans"):
+        simulated.main([str(corpus), "--split", "dev", "--maps", "house_a", "--out", str(out)])
+
+
+def test_plan_split_is_a_fixed_rule_on_the_name():
+    from topomap.datasets import SPLITS, plan_split
+
+    # pinned: the halves must never change between versions (tuning on dev, reporting on held-out)
+    assert [plan_split(n) for n in ("a", "house_a", "house_d")] == ["dev", "held-out", "dev"]
+    assert plan_split("plans/house_a.txt") == plan_split("house_a.txt") == plan_split("house_a")
+    halves = [plan_split(f"plan_{i:04d}") for i in range(1000)]
+    assert set(halves) == set(SPLITS) and 450 < halves.count("dev") < 550
+    with pytest.raises(ParameterError, match="plan name"):
+        plan_split(3)
+    with pytest.raises(ParameterError, match="empty"):
+        plan_split(".txt")
 
 
 def test_the_scan_is_scored_on_the_rooms_it_shows(tmp_path):

@@ -70,6 +70,8 @@ __all__ = [
     "load_benchmark",
     "load_labelled",
     "load_simulated",
+    "plan_split",
+    "SPLITS",
     "read_doors",
     "door_cells",
     "load_dataset",
@@ -562,6 +564,45 @@ def door_cells(doors, grid) -> list:
         r, c = line_pixels(grid.world_to_pixel(x1, y1), grid.world_to_pixel(x2, y2), grid.shape)
         out.append(np.column_stack([r, c]))
     return out
+
+
+#: The two halves of the plans of a simulated corpus (:func:`plan_split`): tune on ``"dev"``,
+#: report on ``"held-out"``.
+SPLITS = ("dev", "held-out")
+
+
+def plan_split(name) -> str:
+    """The half of the plans a plan, or its case, belongs to: ``"dev"`` or ``"held-out"``.
+
+    A fixed rule on the name alone, so every user of a corpus splits it the
+    same way, whichever plans it holds: ``"dev"`` when the first byte of the
+    SHA-256 digest of the plan's name (UTF-8) is even, ``"held-out"`` when
+    it is odd. About half each (502 and 522 of the 1,024 R2V plans).
+
+    Parameters
+    ----------
+    name : str or os.PathLike
+        The plan's name: the stem of its file, which is also the name of its
+        case folder in a corpus (``topomap simulate plans/*.txt -o CORPUS``
+        writes ``CORPUS/NAME/``). A path or a ``NAME.txt`` file name is
+        reduced to that name.
+
+    Returns
+    -------
+    str
+        ``"dev"`` or ``"held-out"`` (:data:`SPLITS`).
+    """
+    import hashlib
+
+    if not isinstance(name, (str, os.PathLike)):
+        raise ParameterError(f"<plan name>: expected a plan name (str), got {name!r}")
+    stem = Path(name).name
+    if stem.lower().endswith(".txt"):
+        stem = stem[:-4]
+    if not stem:
+        raise ParameterError(f"<plan name>: empty plan name in {os.fspath(name)!r}")
+    digest = hashlib.sha256(stem.encode("utf-8", "surrogateescape")).digest()
+    return SPLITS[digest[0] % 2]
 
 
 def load_simulated(directory, *, variant: str = "scan", names=None) -> list:
