@@ -77,7 +77,12 @@ log = logging.getLogger(__name__)
 #: A bed (1.4 m x 2.0 m, a double bed) and a shelf (1.0 m x 0.4 m) stand on the floor with closed
 # sides the laser (at 0.2-0.3 m height) sees; a table (1.2 m x 0.8 m) shows only its four legs.
 _FURNITURE = (("table", (1.2, 0.8), True), ("bed", (1.4, 2.0), False), ("shelf", (1.0, 0.4), False))
-_LEGS_ONLY = {kind: legs for kind, _size, legs in _FURNITURE}
+_LEGS_ONLY = dict({kind: legs for kind, _size, legs in _FURNITURE}, chair=True)
+#: A table stands with its chairs: four (two along each long side), each 0.45 m square (a dining
+#: chair's seat), seen by its four legs, its centre this far out from the table's edge (pulled half
+#: under the table), metres.
+_CHAIR = 0.45
+_CHAIR_OUT = 0.1
 #: Side of a table leg, metres (a wooden table leg, 4-5 cm).
 _LEG = 0.05
 #: Furniture keeps this far from the door cells, metres (a door leaf swings ~0.8 m into a room).
@@ -465,13 +470,19 @@ def _draw_piece(plan, mask, kind_legs, box) -> None:
             mask[rs, cs] = True
 
 
-def _walkable_parts(space: np.ndarray, clearance_px: float) -> int:
-    """Number of 8-connected pieces of the cells of ``space`` farther than ``clearance_px`` from
-    every cell that is not (the border of the array counts as not)."""
+#: A piece of a room's floor a robot (or a person) walks into, m²: smaller pockets (under a table
+#: ringed by its chairs, behind a bed's foot) are not a part of the room the furniture cut off.
+_FLOOR_PART = 0.5
+
+
+def _walkable_parts(space: np.ndarray, clearance_px: float, min_cells: float) -> int:
+    """Number of 8-connected pieces, of more than ``min_cells`` cells, of the cells of ``space``
+    farther than ``clearance_px`` from every cell that is not (the border of the array counts as not)."""
     from scipy import ndimage as ndi
 
     walk = ndi.distance_transform_edt(np.pad(space, 1)) > clearance_px
-    return int(ndi.label(walk, structure=np.ones((3, 3), bool))[1])
+    lab, n = ndi.label(walk, structure=np.ones((3, 3), bool))
+    return int((np.bincount(lab.ravel())[1:] > min_cells).sum()) if n else 0
 
 
 def _random_furniture(plan: FloorPlan, options: ScanOptions, rng, keep_free: np.ndarray) -> tuple:
@@ -508,7 +519,29 @@ def _random_furniture(plan: FloorPlan, options: ScanOptions, rng, keep_free: np.
             continue
         floor = room & ~keep_free[sl]  # the room's floor the pieces placed so far leave
         clear_px = options.clearance / res
-        parts = _walkable_parts(floor, clear_px)
+        part_px = _FLOOR_PART / res ** 2
+        parts = _walkable_parts(floor, clear_px, part_px)
+
+        def place(kind, legs, a0, a1, b0, b1, free_here):
+            """Put a piece on the slice's cells a0..a1 x b0..b1 if they are all ``free_here`` and it
+            leaves a way round it; its box, or None."""
+            nonlocal floor
+            if a0 < 0 or b0 < 0 or a1 >= room.shape[0] or b1 >= room.shape[1]:
+                return None
+            if not free_here[a0:a1 + 1, b0:b1 + 1].all():
+                return None
+            (xa, ya), (xb, yb) = _to_world(plan, np.array([[a1 + sl[0].start + 0.5, b0 + sl[1].start - 0.5],
+                                                          [a0 + sl[0].start - 0.5, b1 + sl[1].start + 0.5]]))
+            box = (float(xa), float(ya), float(xb), float(yb))
+            drawn = np.zeros(plan.shape, bool)
+            _draw_piece(plan, drawn, legs, box)
+            after = floor & ~drawn[sl]
+            if _walkable_parts(after, clear_px, part_px) > parts:
+                return None  # it would cut the room's floor in two
+            floor = after
+            pieces.append((kind, *box))
+            return box
+
         for _ in range(n):
             kind, (w, d), legs = _FURNITURE[int(rng.integers(len(_FURNITURE)))]
             if rng.random() < 0.5:
@@ -518,21 +551,25 @@ def _random_furniture(plan: FloorPlan, options: ScanOptions, rng, keep_free: np.
                 hr, hc = d / res / 2, w / res / 2  # rows along y (depth), cols along x (width)
                 a0, a1 = int(round(r - hr)), int(round(r + hr))
                 b0, b1 = int(round(c - hc)), int(round(c + hc))
-                if a0 < 0 or b0 < 0 or a1 >= room.shape[0] or b1 >= room.shape[1]:
+                before = ok.copy()
+                if place(kind, legs, a0, a1, b0, b1, ok) is None:
                     continue
-                if not ok[a0:a1 + 1, b0:b1 + 1].all():
-                    continue
-                (xa, ya), (xb, yb) = _to_world(plan, np.array([[a1 + sl[0].start + 0.5, b0 + sl[1].start - 0.5],
-                                                              [a0 + sl[0].start - 0.5, b1 + sl[1].start + 0.5]]))
-                box = (float(xa), float(ya), float(xb), float(yb))
-                drawn = np.zeros(plan.shape, bool)
-                _draw_piece(plan, drawn, legs, box)
-                after = floor & ~drawn[sl]
-                if _walkable_parts(after, clear_px) > parts:
-                    continue  # it would cut the room's floor in two
-                floor = after
-                pieces.append((kind, *box))
                 ok[max(a0 - 2, 0):a1 + 3, max(b0 - 2, 0):b1 + 3] = False  # no overlaps
+                if kind == "table":  # its chairs, two along each long side, pulled half under it
+                    under = before.copy()
+                    under[a0:a1 + 1, b0:b1 + 1] = True
+                    half = _CHAIR / res / 2
+                    out = _CHAIR_OUT / res
+                    along_cols = (b1 - b0) >= (a1 - a0)
+                    lo, hi = (b0, b1) if along_cols else (a0, a1)
+                    for side in ((a0 - out, a1 + out) if along_cols else (b0 - out, b1 + out)):
+                        for frac in (0.25, 0.75):
+                            u = lo + frac * (hi - lo)
+                            cr, cc = (side, u) if along_cols else (u, side)
+                            ca0, ca1 = int(round(cr - half)), int(round(cr + half))
+                            cb0, cb1 = int(round(cc - half)), int(round(cc + half))
+                            if place("chair", True, ca0, ca1, cb0, cb1, under) is not None:
+                                ok[max(ca0 - 1, 0):ca1 + 2, max(cb0 - 1, 0):cb1 + 2] = False
                 break
     return tuple(pieces)
 
@@ -693,6 +730,8 @@ def robot_path(plan: FloorPlan, options: Optional[ScanOptions] = None, rng=None,
     room with a door to the outside (or the room with most neighbours) of
     the largest part of the home the room graph joins (a plan may hold two
     flats, or a stair hall no door joins to the rest: a robot maps one),
+    in the largest piece of the space it can drive on there (fixtures may
+    leave a room by the door a pocket cut off from the rest of the home),
     takes the rooms in a depth-first walk over the room-door graph, the
     first ``max(1, round(explore * rooms))`` of those it can reach, and in
     each room visits waypoints (the most open point first, then farthest
@@ -745,15 +784,17 @@ def robot_path(plan: FloorPlan, options: Optional[ScanOptions] = None, rng=None,
     home = _largest_part(adj, area)
     if not home:
         return empty
-    entrance = [r for r in entrance if r in home]
+    # the robot is set down in the largest piece of robot space of that part (fixtures and
+    # furniture may leave a room with an outside door only a pocket cut off from the rest)
+    in_home = np.isin(labels, sorted(home))
+    piece = int(np.argmax(np.bincount(comp[in_home].ravel(), minlength=2)[1:])) + 1
+    reach = (comp == piece)
+    in_piece = set(np.unique(labels[reach]).tolist()) - {0}
+    entrance = [r for r in entrance if r in home and r in in_piece]
     if entrance:
         start = entrance[int(rng.integers(len(entrance)))]
     else:
-        start = max(sorted(home), key=lambda r: (len(adj.get(r, ())), area[r], -r))
-    # the rooms the robot can reach from the start room's biggest piece of robot space
-    sc = np.bincount(comp[labels == start].ravel())
-    piece = int(np.argmax(sc))
-    reach = (comp == piece)
+        start = max(sorted(home & in_piece) or sorted(home), key=lambda r: (len(adj.get(r, ())), area[r], -r))
     reach_area = np.bincount(labels[reach].ravel(), minlength=n_rooms + 1)
     reach_labels = {r for r in range(1, n_rooms + 1) if reach_area[r] > 0}
     order = _room_order(plan, reach_labels, adj, start, rng)
