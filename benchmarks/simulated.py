@@ -3,8 +3,8 @@
 
 Run (not a test)::
 
-    python benchmarks/simulated.py CORPUS [--jobs 2] [--maps 'a*,b*'] [--methods topomap,paper]
-        [--csv rows.csv] [--out benchmarks/sections/89_simulated.md]
+    python benchmarks/simulated.py CORPUS [--jobs 2] [--maps 'a*,b*'] [--split dev]
+        [--methods topomap,paper] [--csv rows.csv] [--out benchmarks/sections/89_simulated.md]
 
 ``CORPUS`` is what ``topomap simulate PLAN... -o CORPUS`` writes: one folder
 per case with the simulated robot map (``map.yaml``), the floor plan drawn
@@ -14,7 +14,13 @@ doors (``gt_doors.json``). One :func:`topomap.benchmark.run_benchmark` call
 variants:
 
 * ``plan``: the drawn floor plan, as a user loads ``CASE/plan.yaml``;
-* ``scan``: the simulated robot map, as a user loads ``CASE/map.yaml``.
+* ``scan``: the simulated robot map, as a user loads ``CASE/map.yaml``,
+  scored against its own ground truth (``gt_rooms_scan.png``,
+  ``gt_doors_scan.json``: the rooms the scan shows, whole, and their doors).
+
+The table is given per half of the plans (:func:`topomap.datasets.plan_split`,
+a fixed rule on the plan's name: ``dev`` to tune on, ``held-out`` to report
+on); ``--split`` runs one half only.
 
 Per method and variant the section gives the mean precision / recall of
 Bormann et al. under the **original protocol** (true rooms whole; segments
@@ -56,14 +62,18 @@ def _ratio(num, den) -> str:
 
 
 def table(rows) -> str:
-    """The section's table, one line per method and variant (order of the rows)."""
+    """The section's table, one line per method, variant and half of the plans (:func:`plan_split`):
+    the plan variant first, dev before held-out, methods in the order of the rows."""
+    from topomap.datasets import SPLITS, plan_split
+
     groups = {}
     for r in rows:
-        groups.setdefault((r["method"], r["variant"]), []).append(r)
-    order = sorted(groups, key=lambda k: (k[1] != "plan", list(dict.fromkeys(r["method"] for r in rows)).index(k[0])))
-    out = ["| method | variant | cases | P (%) | R (%) | ceiling P / R (%) | free-cells P / R (%) "
+        groups.setdefault((r["method"], r["variant"], plan_split(r["map"])), []).append(r)
+    methods = list(dict.fromkeys(r["method"] for r in rows))
+    order = sorted(groups, key=lambda k: (k[1] != "plan", SPLITS.index(k[2]), methods.index(k[0])))
+    out = ["| method | variant | plans | cases | P (%) | R (%) | ceiling P / R (%) | free-cells P / R (%) "
            "| rooms found / true | door P (%) | door R (%) | median s / case | failed |",
-           "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
+           "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
     for key in order:
         g = groups[key]
         ok = [r for r in g if not r.get("error")]
@@ -73,7 +83,7 @@ def table(rows) -> str:
         doorless = n_pred == 0
         rooms = f"{sum(int(r['n_rooms']) for r in ok)} / {sum(int(r['n_true_rooms']) for r in ok)}" if ok else "–"
         secs = np.median([float(r["runtime_s"]) for r in g]) if g else float("nan")
-        out.append(f"| {key[0]} | {key[1]} | {len(ok)} | {_mean_pct(ok, 'precision')} | {_mean_pct(ok, 'recall')} "
+        out.append(f"| {key[0]} | {key[1]} | {key[2]} | {len(ok)} | {_mean_pct(ok, 'precision')} | {_mean_pct(ok, 'recall')} "
                    f"| {_mean_pct(ok, 'ceiling_precision')} / {_mean_pct(ok, 'ceiling_recall')} "
                    f"| {_mean_pct(ok, 'precision_free')} / {_mean_pct(ok, 'recall_free')} "
                    f"| {rooms} | {'–' if doorless else _ratio(tp, n_pred)} | {_ratio(tp, n_true)} "
@@ -87,6 +97,8 @@ def main(argv=None) -> int:
     ap = _section.parser(__doc__, "the simulated corpus (one folder per case)", "89_simulated.md")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--maps", default=None, help="comma-separated case names or shell patterns (default all)")
+    ap.add_argument("--split", choices=("dev", "held-out"), default=None,
+                    help="only the cases of this half of the plans (topomap.datasets.plan_split; default both)")
     ap.add_argument("--methods", default=METHODS)
     ap.add_argument("--csv", type=Path, default=None, help="also save the per-case rows here")
     a = ap.parse_args(argv)
@@ -101,7 +113,15 @@ def main(argv=None) -> int:
             log.info("%d / %d %s %s %s %s", done, total, row["method"], row["variant"], row["map"],
                          row.get("error", ""))
 
-    rows = run_benchmark(a.directory, methods=a.methods, variants="both", jobs=a.jobs, maps=a.maps,
+    maps = a.maps
+    if a.split:
+        from topomap.datasets import _simulated_cases, plan_split, select_names
+
+        found = _simulated_cases(Path(a.directory))
+        maps = [n for n in select_names(found, a.maps, a.directory) if plan_split(n) == a.split]
+        if not maps:
+            sys.exit(f"error: no case of the {a.split} plans in {a.directory}")
+    rows = run_benchmark(a.directory, methods=a.methods, variants="both", jobs=a.jobs, maps=maps,
                          progress=progress)
     if a.csv is not None:
         write_rows(rows, a.csv)
@@ -109,6 +129,8 @@ def main(argv=None) -> int:
     cmd = f"python benchmarks/simulated.py CORPUS --jobs {a.jobs}"
     if a.maps:
         cmd += f" --maps '{a.maps}'"
+    if a.split:
+        cmd += f" --split {a.split}"
     if a.methods != METHODS:
         cmd += f" --methods {a.methods}"
     tab = table(rows)
@@ -120,12 +142,20 @@ def main(argv=None) -> int:
 
 Each case is a home floor plan twice, on one grid: the plan as drawn
 (**plan**: walls, free rooms, unknown outside) and the robot map a laser
-SLAM run through it gives (**scan**), with the plan's rooms and doors as
-the ground truth. Each map is loaded as `topomap segment CASE/plan.yaml`
-(or `CASE/map.yaml`) loads it. P / R: mean precision / recall of Bormann
+SLAM run through it gives (**scan**). The plan's ground truth is its rooms
+and doors; the scan's, the rooms it shows (at least 1 m² of a room free in
+the map; a room behind a closed door or never reached is not drawn by a
+person labelling the map), each whole, and the doors between them. Each
+map is loaded as `topomap segment CASE/plan.yaml` (or `CASE/map.yaml`)
+loads it. Plans: the half of the plans a case belongs to
+(`topomap.datasets.plan_split`, a fixed rule on the plan's name: tune on
+**dev**, report on **held-out**). P / R: mean precision / recall of Bormann
 et al. over the cases, **original protocol** (true rooms whole; segments on
 the free cells of the map as loaded; segments and rooms of 100 cells or
-fewer ignored). Rooms: reported (room-graph nodes) / true, summed over the
+fewer ignored); ceiling: the ground truth itself scored so (below 100 where
+a true room has cells the map does not show free: furniture, corners the
+laser did not reach); free-cells: the protocol that restricts the true rooms
+to the map's free cells too. Rooms: reported (room-graph nodes) / true, summed over the
 cases. Door P / R: detected doors within 0.5 m of a true door between two
 rooms, matched one to one, pooled over the cases (–: the method reports
 no doors). Runtimes with {a.jobs} parallel jobs.

@@ -112,3 +112,24 @@ def test_bad_plans_and_options_are_one_line_errors(plans, tmp_path):
     assert r.exit_code == 1 and "glass_share" in r.output
     with pytest.raises(ParameterError, match="bogus"):
         scan_options(extra=["bogus=1"])
+
+
+def test_the_scan_has_its_own_ground_truth_the_rooms_it_shows(plans, tmp_path):
+    out = tmp_path / "case"
+    # the living room is a dead end with no outside door: its door closed, the robot never sees it
+    r = _run("simulate", plans[0], "-o", out, "--closed-doors", 1, "--seed", 2)
+    assert r.exit_code == 0, r.output
+    gt = np.array(Image.open(out / "gt_rooms.png"))
+    scan_gt = np.array(Image.open(out / "gt_rooms_scan.png"))
+    free = load_map(out / "map.yaml").free
+    rooms = {x["id"]: x for x in json.loads((out / "gt_rooms.json").read_text())["rooms"]}
+    (seen,) = [k for k, x in rooms.items() if x["shown"]]
+    (hidden,) = [k for k, x in rooms.items() if not x["shown"]]
+    assert rooms[seen]["kinds"] == ["bedroom"] and rooms[hidden]["kinds"] == ["living_room"]
+    assert np.array_equal(scan_gt, np.where(gt == seen, seen, 0))  # the shown room whole, nothing else
+    assert rooms[hidden]["scan_area"] < 1.0 <= rooms[seen]["scan_area"]
+    assert rooms[seen]["scan_area"] == pytest.approx((free & (gt == seen)).sum() * 0.05 ** 2)
+    doors = json.loads((out / "gt_doors.json").read_text())["doors"]
+    scan_doors = json.loads((out / "gt_doors_scan.json").read_text())["doors"]
+    assert len(doors) == 2 and scan_doors == [d for d in doors if hidden not in d["rooms"]]
+    assert [tuple(d["rooms"]) for d in scan_doors] == [(0, seen)]

@@ -1,9 +1,11 @@
 """Vector floor plans read into a FloorPlan: the ground truth's invariants on hand-drawn plans."""
 
+import math
+
 import numpy as np
 import pytest
 
-from topomap.errors import MapFileNotFoundError, PlanFormatError
+from topomap.errors import MapFileNotFoundError, ParameterError, PlanFormatError
 from topomap.floorplan import ground_truth_problems, read_plan
 from topomap.io import FREE, OCCUPIED, UNKNOWN
 
@@ -105,13 +107,30 @@ def test_wall_gap_left_open_leaks(tmp_path):
     ("0\t0\t1\twall\n", "line 1"),
     ("0\t0\tx\t1\twall\n", "not a number"),
     ("0\t0\t10\t0\tdoor\n", "no walls"),
-    ("0\t0\t10\t0\twall\n", "no doors"),
+    ("0\t0\t10\t0\twall\n", "no doors and its walls span no area"),
 ])
 def test_bad_input(tmp_path, text, msg):
     p = _write(tmp_path, text, "bad.txt")
     with pytest.raises(PlanFormatError, match=msg) as e:
         read_plan(p)
     assert "bad.txt" in str(e.value) and "\n" not in str(e.value)
+
+
+def test_a_plan_without_doors_is_scaled_by_the_size_of_a_home(tmp_path):
+    doorless = "".join(line + "\n" for line in PLAN.splitlines() if "\tdoor\t" not in line)
+    path = _write(tmp_path, doorless)
+    p = read_plan(path)
+    # the walls span 600 x 400 units: a home's 62 m² box
+    assert p.scale == pytest.approx(math.sqrt(62.0 / (600 * 400)))
+    assert p.quirks["scale_from_area"] == 1 and p.doors == ()
+    assert ground_truth_problems(p) == []
+    assert p.n_rooms >= 2  # the rooms, each a part of its own (no door joins them)
+    assert read_plan(path, home_area=24.0).scale == pytest.approx(0.01)  # 24 m² over 240,000 units²
+    with_doors = read_plan(_write(tmp_path, PLAN, "doors.txt"), home_area=24.0)
+    assert with_doors.scale == pytest.approx(0.8 / 75) and with_doors.quirks["scale_from_area"] == 0
+    assert read_plan(path, scale=0.02).scale == 0.02
+    with pytest.raises(ParameterError, match="home_area"):
+        read_plan(path, home_area=0)
 
 
 def test_missing_file(tmp_path):

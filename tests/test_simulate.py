@@ -112,7 +112,7 @@ def test_random_furniture_and_people(plan):
     r = simulate_scan(plan, options=opts, seed=1)
     assert len(r.furniture) > 0 and len(r.people) > 0
     for kind, x1, y1, x2, y2 in r.furniture:
-        assert kind in ("table", "bed", "shelf") and x2 > x1 and y2 > y1
+        assert kind in ("table", "chair", "bed", "shelf") and x2 > x1 and y2 > y1
         rows, cols = r.grid.world_to_pixel(np.array([x1, x2]), np.array([y1, y2]))
         labs = plan.rooms[int(round(rows.min())) + 1:int(round(rows.max())), int(round(cols.min())) + 1:int(round(cols.max()))]
         assert len(np.unique(labs)) == 1 and labs.flat[0] > 0  # wholly inside one room
@@ -178,3 +178,108 @@ def test_drift_is_bounded_however_long_the_path():
     assert 0.01 < np.sqrt(np.mean(err_m ** 2)) < 0.07  # about sqrt(2) * 0.03
     yaw = np.degrees(np.abs(believed[:, 2] - true[:, 2]))
     assert np.percentile(yaw, 99) < 2.0 and yaw.max() > 0.1
+
+
+def test_the_scan_truth_is_the_rooms_the_map_shows_whole():
+    from topomap.simulate import SHOWN_AREA, shown_doors, shown_rooms
+
+    rooms = np.zeros((60, 90), np.uint16)
+    rooms[5:55, 5:40] = 1
+    rooms[5:55, 45:85] = 3
+    rooms[0:4, 0:4] = 7  # a room with no free cell in the map
+    free = np.zeros(rooms.shape, bool)
+    free[10:30, 10:30] = True        # room 1: 400 cells = 1 m² free at 0.05 m: shown, and whole
+    free[10:29, 50:70] = True        # room 3: 380 cells: not shown
+    shown = shown_rooms(rooms, free, resolution=0.05)
+    assert SHOWN_AREA == 1.0 and shown.dtype == rooms.dtype
+    np.testing.assert_array_equal(shown, np.where(rooms == 1, 1, 0))
+    assert set(np.unique(shown_rooms(rooms, free, resolution=0.05, min_area=0.9))) == {0, 1, 3}
+    assert set(np.unique(shown_rooms(rooms, free, resolution=0.1))) == {0, 1, 3}  # 4 m², 3.8 m²
+    doors = [{"rooms": (1, 3)}, {"rooms": (0, 1)}, {"rooms": (0, 3)}, {"rooms": (1, 1)}]
+    assert shown_doors(doors, shown) == [doors[1], doors[3]]
+    with pytest.raises(ParameterError, match="shape"):
+        shown_rooms(rooms, free[1:], resolution=0.05)
+    with pytest.raises(ParameterError, match="min_area"):
+        shown_rooms(rooms, free, resolution=0.05, min_area=-1)
+
+
+def test_a_room_behind_a_closed_door_is_not_in_the_scan_truth(plan):
+    from topomap.simulate import shown_doors, shown_rooms
+
+    r = simulate_scan(plan, options=ScanOptions(**{**CLEAN, "closed_doors": 1.0}), seed=1)
+    shown = shown_rooms(plan.rooms, r.grid.free, resolution=plan.resolution)
+    assert set(np.unique(shown)) - {0} == set(r.visited)
+    assert np.array_equal(shown > 0, np.isin(plan.rooms, r.visited))  # the shown rooms whole
+    assert shown_doors(plan.doors, shown) == []  # every door leads into a room behind it
+
+
+def test_furniture_leaves_a_way_through_every_room():
+    """Random pieces never cut a room's floor the robot can drive on (clearance from every obstacle)
+    into pieces (of more than 0.5 m²): people walk through every part of a room."""
+    from _floorplans import draw_plan
+
+    plan = draw_plan([(0.2, 0.2, 9.0, 1.8), (0.2, 2.0, 4.0, 5.0)], [(2.0, 1.9, 0.9, "x")])  # a hall, a room
+    opts = ScanOptions(**{**CLEAN, "furniture_density": 1.0})
+    placed = 0
+    for seed in range(6):
+        r = simulate_scan(plan, options=opts, seed=seed)
+        placed += len(r.furniture)
+        floor = plan.inside & ~plan.walls & ~r.world.blocked
+        walk = ndi.distance_transform_edt(floor) * plan.resolution > opts.clearance
+        for lab in (1, 2):
+            parts, n = ndi.label(walk & (plan.rooms == lab), structure=np.ones((3, 3), bool))
+            big = np.bincount(parts.ravel())[1:] * plan.resolution ** 2 > 0.5  # pockets under a table aside
+            assert big.sum() == 1, (seed, lab)
+    assert placed >= 12  # furniture was placed, not all refused
+
+
+def test_the_robot_starts_where_it_can_reach_most_of_the_home():
+    """The room by the front door may be a pocket a fixture cuts off from the rest: the robot is set
+    down in the largest piece of space it can drive on, not trapped in the pocket."""
+    from _floorplans import draw_plan
+
+    # room 1 (front door on its west wall) split by a fixture from wall to wall at x = 2.5-2.8 m:
+    # the pocket by the door (6.4 m²) is larger than room 1's side of the fixture (3.4 m²), which
+    # opens into room 2 (10.6 m²)
+    plan = draw_plan([(0.2, 0.2, 4.0, 3.0), (4.2, 0.2, 8.0, 3.0)],
+                     [(0.1, 1.5, 0.9, "y"), (4.1, 1.5, 0.9, "y")],
+                     objects=(("special", 2.5, 0.2, 2.8, 3.0),))
+    r = simulate_scan(plan, options=ScanOptions(**{**CLEAN, "plan_furniture": True}), seed=0)
+    assert set(r.visited) == {1, 2}
+    assert r.grid.free[plan.rooms == 2].mean() > 0.8
+    x = r.poses[:, 0]
+    assert (x > 2.8).all()  # never in the pocket
+
+
+def test_every_beam_stops_at_the_first_wall_that_is_not_glass(plan):
+    """Trace each beam of scans taken in every room up to its range: it crosses no wall cell but glass,
+    and beams through glass go on past the facade."""
+    from topomap.simulate import _beams, build_world, cast_rays
+
+    opts = ScanOptions(**{**CLEAN, "glass_share": 0.5, "range_sigma": 0.0, "no_return_share": 0.0,
+                          "field_of_view": 360.0, "angle_step": 2.0})
+    world = build_world(plan, opts, np.random.default_rng(1))
+    assert world.glass.any()
+    poses = []
+    for lab in range(1, 6):
+        r, c = np.argwhere(_interior(plan, lab, margin=6))[0]
+        poses.append((float(r), float(c), 0.3))
+    ranges = cast_rays(world.opaque, np.array(poses), plan.resolution, opts, np.random.default_rng(0))
+    rel, _idx, _n = _beams(opts)
+    # the core of the walls that are not glass (a beam may graze a wall's corner cell: the samples
+    # of a beam and this trace round differently; the walls are 4 cells thick, the core 2)
+    stone = ndi.binary_erosion(plan.walls & ~world.glass, np.ones((3, 3), bool))
+    through_glass = 0
+    for (r0, c0, th), rk in zip(poses, ranges):
+        for a, rng_m in zip(rel + th, rk):
+            end = (rng_m if np.isfinite(rng_m) else opts.range_max) / plan.resolution
+            t = np.arange(0.0, max(end - 0.5, 0.0), 0.25)
+            rr = np.rint(r0 - np.sin(a) * t).astype(int)
+            cc = np.rint(c0 + np.cos(a) * t).astype(int)
+            inside = (rr >= 0) & (rr < plan.shape[0]) & (cc >= 0) & (cc < plan.shape[1])
+            assert not stone[rr[inside], cc[inside]].any()
+            through_glass += bool(world.glass[rr[inside], cc[inside]].any())
+            if np.isfinite(rng_m):  # it ends on something opaque
+                re, ce = int(np.rint(r0 - np.sin(a) * end)), int(np.rint(c0 + np.cos(a) * end))
+                assert world.opaque[max(re - 1, 0):re + 2, max(ce - 1, 0):ce + 2].any()
+    assert through_glass > 0

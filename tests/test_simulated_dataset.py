@@ -225,9 +225,60 @@ def test_the_section_script(corpus, tmp_path):
     assert "`python benchmarks/simulated.py CORPUS --jobs 1 --methods topomap,watershed`" in text
     assert str(corpus) not in text  # no machine path in the page
     # house_a's door found, house_b's listed 2 m off: pooled door P = R = 1 of 2
-    assert "| topomap | plan | 2 | " in text and "| 4 / 4 | 50.0 | 50.0 |" in text
-    assert "| watershed | scan | 2 | " in text and "| – | 0.0 |" in text
+    # both cases are of the held-out plans (plan_split)
+    assert "| topomap | plan | held-out | 2 | " in text and "| 4 / 4 | 50.0 | 50.0 |" in text
+    assert "| watershed | scan | held-out | 2 | " in text and "| – | 0.0 |" in text
+    assert "| dev |" not in text
     assert rows.read_text().count("\n") == 1 + 2 * 2 * 2
     assert simulated.main([str(corpus), "--maps", "house_a", "--methods", "topomap", "--jobs", "1",
                            "--out", str(out)]) == 0
     assert "`CORPUS`), 1 case, commit" in out.read_text() and "--maps 'house_a'" in out.read_text()
+    shutil.copytree(corpus / "house_a", corpus / "house_d")  # a case of the dev plans
+    assert simulated.main([str(corpus), "--split", "dev", "--methods", "topomap", "--jobs", "1",
+                           "--out", str(out)]) == 0
+    text = out.read_text()
+    assert "--split dev" in text and "`CORPUS`), 1 case, commit" in text
+    assert "| topomap | plan | dev | 1 | " in text and "held-out" not in text.split("| --- |")[-1]
+    with pytest.raises(SystemExit, match="no case of the dev plans"):
+        simulated.main([str(corpus), "--split", "dev", "--maps", "house_a", "--out", str(out)])
+
+
+def test_plan_split_is_a_fixed_rule_on_the_name():
+    from topomap.datasets import SPLITS, plan_split
+
+    # pinned: the halves must never change between versions (tuning on dev, reporting on held-out)
+    assert [plan_split(n) for n in ("a", "house_a", "house_d")] == ["dev", "held-out", "dev"]
+    assert plan_split("plans/house_a.txt") == plan_split("house_a.txt") == plan_split("house_a")
+    halves = [plan_split(f"plan_{i:04d}") for i in range(1000)]
+    assert set(halves) == set(SPLITS) and 450 < halves.count("dev") < 550
+    with pytest.raises(ParameterError, match="plan name"):
+        plan_split(3)
+    with pytest.raises(ParameterError, match="empty"):
+        plan_split(".txt")
+
+
+def test_the_scan_is_scored_on_the_rooms_it_shows(tmp_path):
+    corpus = tmp_path / "c"
+    case = write_case(corpus / "half")
+    cells = _cells(True)
+    cells[5:75, 62:115] = UNKNOWN  # room 2 never seen but a 10 x 10 cell patch (0.25 m²)
+    cells[40:50, 70:80] = FREE
+    save_map(cells, case / "map", resolution=RES, origin=ORIGIN)
+    # a corpus without the scan's own files: derived from gt_rooms.png, gt_doors.json and the map
+    (scan,) = load_simulated(corpus, variant="scan")
+    (plan,) = load_simulated(corpus, variant="plan")
+    assert set(np.unique(plan.gt_rooms)) == {0, 1, 2} and len(plan.gt_doors) == 1
+    np.testing.assert_array_equal(scan.gt_rooms, np.where(_gt() == 1, 1, 0))  # room 1 whole, no room 2
+    assert scan.gt_doors == ()  # the door into room 2 is not a door of the map's rooms
+    rows = {r["variant"]: r for r in run_benchmark(corpus, methods="topomap", variants="both")}
+    assert rows["plan"]["n_true_rooms"] == 2 and rows["scan"]["n_true_rooms"] == 1
+    assert rows["scan"]["ceiling_precision"] == 1.0 and rows["scan"]["ceiling_recall"] > 0.9
+    # the case's own files win: here they list both rooms and the door
+    Image.fromarray(_gt()).save(case / "gt_rooms_scan.png")
+    (case / "gt_doors_scan.json").write_text(json.dumps({"doors": [_door()]}))
+    (scan,) = load_simulated(corpus, variant="scan")
+    assert set(np.unique(scan.gt_rooms)) == {0, 1, 2} and len(scan.gt_doors) == 1
+    assert scan.gt_path == case / "gt_rooms_scan.png"
+    (case / "gt_doors_scan.json").unlink()
+    with pytest.raises(MapFileError, match="gt_doors_scan.json"):
+        load_simulated(corpus, variant="scan")

@@ -641,8 +641,9 @@ def simulate_cmd(plans, outdir, seed, explore, glass, closed_doors, no_drift, no
 
     Writes map.pgm + map.yaml (the map as ROS map_saver writes it),
     plan.pgm + plan.yaml (the drawn plan on the same grid), gt_rooms.png
-    (16-bit room labels), gt_doors.json, gt_rooms.json and simulation.json
-    per plan. The output folder of several plans reads as a data set:
+    (16-bit room labels), gt_doors.json, gt_rooms_scan.png and
+    gt_doors_scan.json (the rooms the scan shows, and their doors),
+    gt_rooms.json and simulation.json per plan. The output folder of several plans reads as a data set:
     `topomap benchmark OUT --variant scan`.
     """
     from .batch import FAILED, SKIPPED

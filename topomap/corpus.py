@@ -9,10 +9,18 @@ single plan: ``OUT`` itself; several: ``OUT/NAME``, named as
 ``map.yaml``           (0 occupied, 254 free, 205 unknown; trinary)
 ``plan.pgm``,          the drawn floor-plan map on the same grid (walls
 ``plan.yaml``          occupied, the home free, the outside unknown)
-``gt_rooms.png``       16-bit room labels on that grid (0 = no room)
+``gt_rooms.png``       16-bit room labels on that grid (0 = no room): the
+                       ground truth of the plan
 ``gt_doors.json``      the plan's doors: end points in metres (map frame),
                        width, the two rooms (0 = outside)
-``gt_rooms.json``      each room's label kinds and area (m²)
+``gt_rooms_scan.png``  the ground truth of the scan: the rooms of
+                       ``gt_rooms.png`` the scan shows (at least
+                       :data:`~topomap.simulate.SHOWN_AREA` of a room free in
+                       ``map.pgm``), each whole; the others 0
+``gt_doors_scan.json`` the doors of the scan's ground truth: those of
+                       ``gt_doors.json`` whose rooms are shown (or outside)
+``gt_rooms.json``      each room's label kinds, area (m²), area the scan
+                       shows free (m²) and whether the scan shows it
 ``simulation.json``    the plan, the seed, every scan option, the scale
 =====================  ====================================================
 
@@ -46,8 +54,8 @@ __all__ = ["CASE_FILES", "case_seed", "scan_options", "write_case", "simulate_ca
 log = logging.getLogger("topomap.corpus")
 
 #: The files of a complete case folder.
-CASE_FILES = ("map.pgm", "map.yaml", "plan.pgm", "plan.yaml", "gt_rooms.png", "gt_doors.json", "gt_rooms.json",
-              "simulation.json")
+CASE_FILES = ("map.pgm", "map.yaml", "plan.pgm", "plan.yaml", "gt_rooms.png", "gt_doors.json",
+              "gt_rooms_scan.png", "gt_doors_scan.json", "gt_rooms.json", "simulation.json")
 _RECORD = "simulation.json"
 
 
@@ -96,16 +104,29 @@ def scan_options(*, explore=None, glass_share=None, closed_doors=None, no_drift:
     return ScanOptions(**values)
 
 
-def _doors_json(plan) -> dict:
+def _doors_json(plan, shown=None) -> dict:
+    """The plan's doors (numbered from 1 in the plan's order); with ``shown`` (the scan's rooms) only
+    the doors of :func:`topomap.simulate.shown_doors`, with their plan numbers."""
+    from .simulate import shown_doors
+
+    doors = list(enumerate(plan.doors, start=1))
+    if shown is not None:
+        keep = {id(d) for d in shown_doors(plan.doors, shown)}
+        doors = [(i, d) for i, d in doors if id(d) in keep]
     return {"doors": [{"id": i, "p1": [float(v) for v in d.p1], "p2": [float(v) for v in d.p2],
-                       "width": float(d.width), "rooms": [int(r) for r in d.rooms]}
-                      for i, d in enumerate(plan.doors, start=1)]}
+                       "width": float(d.width), "rooms": [int(r) for r in d.rooms]} for i, d in doors]}
 
 
-def _rooms_json(plan) -> dict:
+def _rooms_json(plan, free, shown) -> dict:
     labels = np.asarray(plan.rooms)
-    areas = np.bincount(labels.ravel(), minlength=int(labels.max(initial=0)) + 1) * plan.resolution ** 2
-    return {"rooms": [{"id": k, "kinds": list(plan.kinds.get(k, ())), "area": round(float(areas[k]), 4)}
+    n = int(labels.max(initial=0)) + 1
+    cell = plan.resolution ** 2
+    areas = np.bincount(labels.ravel(), minlength=n) * cell
+    seen = np.bincount(labels[free].ravel(), minlength=n) * cell
+    is_shown = np.zeros(n, bool)
+    is_shown[np.unique(shown)] = True
+    return {"rooms": [{"id": k, "kinds": list(plan.kinds.get(k, ())), "area": round(float(areas[k]), 4),
+                       "scan_area": round(float(seen[k]), 4), "shown": bool(is_shown[k])}
                       for k in range(1, len(areas)) if areas[k] > 0]}
 
 
@@ -149,6 +170,7 @@ def write_case(out_dir, plan, scan_grid, *, meta: Optional[dict] = None) -> Path
     from .export import save_labels
     from .floorplan import plan_grid
     from .io import save_map
+    from .simulate import shown_rooms
 
     out = Path(out_dir)
     if scan_grid.shape != plan.shape:
@@ -162,8 +184,11 @@ def write_case(out_dir, plan, scan_grid, *, meta: Optional[dict] = None) -> Path
         save_map(scan_grid, tmp / "map")
         save_map(plan_grid(plan), tmp / "plan")
         save_labels(plan.rooms, tmp / "gt_rooms.png")
+        shown = shown_rooms(plan.rooms, scan_grid.free, resolution=plan.resolution)
+        save_labels(shown, tmp / "gt_rooms_scan.png")
         record = dict(meta or {}, name=plan.name, resolution=plan.resolution, scale=plan.scale, complete=True)
-        for name, data in (("gt_doors.json", _doors_json(plan)), ("gt_rooms.json", _rooms_json(plan)),
+        for name, data in (("gt_doors.json", _doors_json(plan)), ("gt_doors_scan.json", _doors_json(plan, shown)),
+                           ("gt_rooms.json", _rooms_json(plan, scan_grid.free, shown)),
                            (_RECORD, _jsonable(record))):
             (tmp / name).write_text(json.dumps(data, indent=1, allow_nan=False), encoding="utf-8")
         if out.is_dir():
@@ -218,10 +243,11 @@ def simulate_case(plan_path, out_dir, *, seed: int = 0, options=None, resolution
     dict
         A summary row: ``plan``, ``output``, ``status`` (``"ok"`` or
         ``"skipped"``), ``rooms``, ``doors``, ``area`` (m² of the home),
-        ``free_share`` (share of the home's cells the scan saw free).
+        ``free_share`` (share of the home's cells the scan saw free),
+        ``shown_rooms`` (the rooms of the scan's ground truth).
     """
     from .floorplan import read_plan
-    from .simulate import ScanOptions, simulate_scan
+    from .simulate import ScanOptions, shown_rooms, simulate_scan
 
     options = ScanOptions() if options is None else options
     out = Path(out_dir)
@@ -234,8 +260,10 @@ def simulate_case(plan_path, out_dir, *, seed: int = 0, options=None, resolution
     scan = simulate_scan(plan, options=options, seed=seed)
     inside = np.asarray(plan.inside)
     seen = float((scan.grid.free & inside).sum() / max(1, inside.sum()))
+    shown = shown_rooms(plan.rooms, scan.grid.free, resolution=plan.resolution)
     summary = {"rooms": int(len(np.unique(plan.rooms[plan.rooms > 0]))), "doors": len(plan.doors),
-               "area": round(float(inside.sum()) * plan.resolution ** 2, 2), "free_share": round(seen, 4)}
+               "area": round(float(inside.sum()) * plan.resolution ** 2, 2), "free_share": round(seen, 4),
+               "shown_rooms": int(len(np.unique(shown[shown > 0])))}
     write_case(out, plan, scan.grid, meta=dict(meta, summary=summary))
     return dict(summary, plan=str(plan_path), output=str(out), status=OK)
 

@@ -23,8 +23,11 @@ map ``map.pgm`` + ``map.yaml`` (variant ``"scan"``), the drawn floor plan on
 the same grid ``plan.pgm`` + ``plan.yaml`` (variant ``"plan"``), the room
 labels ``gt_rooms.png`` (16-bit, 0 = no room) and the true doors
 ``gt_doors.json`` (``{"doors": [{"p1": [x, y], "p2": [x, y], "rooms": [a, b],
-...}]}``, metres in the map frame of the YAML, room 0 = outside). Each map is
-loaded through its YAML, as a user loads it.
+...}]}``, metres in the map frame of the YAML, room 0 = outside). The scan
+has its own ground truth, ``gt_rooms_scan.png`` and ``gt_doors_scan.json``:
+the rooms the scan shows and their doors (a room the robot never saw cannot
+be drawn by a person labelling its map). Each map is loaded through its
+YAML, as a user loads it.
 
 The data sets' licences may forbid redistributing them, so topomap never
 ships them: code reads them from a directory given at run time (see
@@ -67,6 +70,8 @@ __all__ = [
     "load_benchmark",
     "load_labelled",
     "load_simulated",
+    "plan_split",
+    "SPLITS",
     "read_doors",
     "door_cells",
     "load_dataset",
@@ -89,10 +94,12 @@ SIMULATED_VARIANTS = ("plan", "scan")
 _GT_SUFFIX = "_gt_segmentation.png"
 _FURN_SUFFIX = "_furnitures.png"
 _LABEL_SUFFIX = "_gt.png"
-#: Files of one case of the simulated layout: the map of each variant (YAML stem), the ground truth.
+#: Files of one case of the simulated layout: the map of each variant (YAML stem), the ground truth
+#: (rooms, doors) of each variant.
 _CASE_MAPS = {"plan": "plan", "scan": "map"}
 _CASE_ROOMS = "gt_rooms.png"
 _CASE_DOORS = "gt_doors.json"
+_CASE_TRUTH = {"plan": (_CASE_ROOMS, _CASE_DOORS), "scan": ("gt_rooms_scan.png", "gt_doors_scan.json")}
 
 
 @dataclass(frozen=True, eq=False)
@@ -559,6 +566,45 @@ def door_cells(doors, grid) -> list:
     return out
 
 
+#: The two halves of the plans of a simulated corpus (:func:`plan_split`): tune on ``"dev"``,
+#: report on ``"held-out"``.
+SPLITS = ("dev", "held-out")
+
+
+def plan_split(name) -> str:
+    """The half of the plans a plan, or its case, belongs to: ``"dev"`` or ``"held-out"``.
+
+    A fixed rule on the name alone, so every user of a corpus splits it the
+    same way, whichever plans it holds: ``"dev"`` when the first byte of the
+    SHA-256 digest of the plan's name (UTF-8) is even, ``"held-out"`` when
+    it is odd. About half each (502 and 522 of the 1,024 R2V plans).
+
+    Parameters
+    ----------
+    name : str or os.PathLike
+        The plan's name: the stem of its file, which is also the name of its
+        case folder in a corpus (``topomap simulate plans/*.txt -o CORPUS``
+        writes ``CORPUS/NAME/``). A path or a ``NAME.txt`` file name is
+        reduced to that name.
+
+    Returns
+    -------
+    str
+        ``"dev"`` or ``"held-out"`` (:data:`SPLITS`).
+    """
+    import hashlib
+
+    if not isinstance(name, (str, os.PathLike)):
+        raise ParameterError(f"<plan name>: expected a plan name (str), got {name!r}")
+    stem = Path(name).name
+    if stem.lower().endswith(".txt"):
+        stem = stem[:-4]
+    if not stem:
+        raise ParameterError(f"<plan name>: empty plan name in {os.fspath(name)!r}")
+    digest = hashlib.sha256(stem.encode("utf-8", "surrogateescape")).digest()
+    return SPLITS[digest[0] % 2]
+
+
 def load_simulated(directory, *, variant: str = "scan", names=None) -> list:
     """Load the cases of a simulated corpus (one folder per case).
 
@@ -568,9 +614,16 @@ def load_simulated(directory, *, variant: str = "scan", names=None) -> list:
         A folder of case folders ``CASE/`` holding ``map.pgm`` + ``map.yaml``
         (the simulated robot map), ``plan.pgm`` + ``plan.yaml`` (the drawn
         floor plan on the same grid), ``gt_rooms.png`` (room labels, 0 = no
-        room) and ``gt_doors.json`` (:func:`read_doors`).
+        room) and ``gt_doors.json`` (:func:`read_doors`), the plan's ground
+        truth, and ``gt_rooms_scan.png`` + ``gt_doors_scan.json``, the
+        scan's (the rooms the scan shows, whole, and their doors).
     variant : {"scan", "plan"}
-        Which map: ``map.yaml`` or ``plan.yaml``.
+        Which map and its ground truth: ``map.yaml`` with
+        ``gt_rooms_scan.png`` + ``gt_doors_scan.json``, or ``plan.yaml``
+        with ``gt_rooms.png`` + ``gt_doors.json``. A case without the
+        scan's files (written before they were) gets them derived as
+        ``topomap simulate`` derives them
+        (:func:`topomap.simulate.shown_rooms`, :func:`~topomap.simulate.shown_doors`).
     names : iterable of str or str, optional
         Only these cases (names or shell patterns, see :func:`select_names`).
 
@@ -579,8 +632,8 @@ def load_simulated(directory, *, variant: str = "scan", names=None) -> list:
     list of BenchmarkMap
         Sorted by case name; ``load_path`` the variant's YAML (loaded as
         ``topomap segment CASE/map.yaml``, scored on the free cells of the
-        grid as loaded, the true rooms kept whole), ``gt_rooms`` the label
-        image, ``gt_doors`` the doors of ``gt_doors.json``.
+        grid as loaded, the true rooms kept whole), ``gt_rooms`` the
+        variant's label image, ``gt_doors`` its doors.
 
     Raises
     ------
@@ -609,14 +662,24 @@ def load_simulated(directory, *, variant: str = "scan", names=None) -> list:
         for f in (yml, pgm):
             if not f.is_file():
                 raise MapFileError(f"{f}: missing {variant} map of case {name}")
-        gt = case / _CASE_ROOMS
+        rooms_file, doors_file = (case / f for f in _CASE_TRUTH[variant])
+        derive = variant == "scan" and not rooms_file.is_file() and not doors_file.is_file()
+        gt = case / _CASE_ROOMS if derive else rooms_file
         map_gray = read_gray(pgm)
         labels = read_label_image(gt)
         if labels.shape != map_gray.shape:
             raise MapError(f"{gt}: label image shape {labels.shape} differs from map "
                            f"{pgm.name} shape {map_gray.shape}")
+        doors = read_doors(case / _CASE_DOORS if derive else doors_file)
+        if derive:  # a case written before the scan had its own ground truth
+            from .io import load_map
+            from .simulate import shown_doors, shown_rooms
+
+            grid = load_map(yml)
+            labels = shown_rooms(labels, grid.free, resolution=grid.resolution)
+            doors = tuple(shown_doors(doors, labels))
         maps.append(BenchmarkMap(name, variant, pgm, gt, map_gray, None, load_path=yml, load_kwargs={},
-                                 gt_rooms=labels, gt_doors=read_doors(case / _CASE_DOORS)))
+                                 gt_rooms=labels, gt_doors=doors))
     return maps
 
 

@@ -48,8 +48,8 @@ beam nearest its direction (far cells between two beams are filled in, where
 a real scan leaves a moire of gaps); glass is fully transparent (no
 reflections off windows, no frames); mirrors, black surfaces at grazing
 angles and sun light are not modelled beyond the random no-return share;
-the robot follows its path exactly and the SLAM's error is one random walk
-(no scan matching, no loop closures that jump the map); the world is static
+the robot follows its path exactly and the SLAM's error is one smooth,
+bounded wander (no scan matching, no loop closures that jump the map); the world is static
 but for the people; poses are the centres of cells.
 """
 
@@ -66,10 +66,10 @@ import numpy as np
 from .errors import ParameterError
 from .floorplan import FloorPlan
 from .io import FREE, FREE_THRESH, OCCUPIED, OCCUPIED_THRESH, UNKNOWN, OccupancyGrid
-from .options import _Options, _opt
+from .options import _check_area, _Options, _opt
 
 __all__ = ["ScanOptions", "ScanResult", "World", "build_world", "robot_path", "scan_poses",
-           "cast_rays", "integrate", "to_grid", "simulate_scan"]
+           "cast_rays", "integrate", "to_grid", "simulate_scan", "SHOWN_AREA", "shown_rooms", "shown_doors"]
 
 log = logging.getLogger(__name__)
 
@@ -77,7 +77,12 @@ log = logging.getLogger(__name__)
 #: A bed (1.4 m x 2.0 m, a double bed) and a shelf (1.0 m x 0.4 m) stand on the floor with closed
 # sides the laser (at 0.2-0.3 m height) sees; a table (1.2 m x 0.8 m) shows only its four legs.
 _FURNITURE = (("table", (1.2, 0.8), True), ("bed", (1.4, 2.0), False), ("shelf", (1.0, 0.4), False))
-_LEGS_ONLY = {kind: legs for kind, _size, legs in _FURNITURE}
+_LEGS_ONLY = dict({kind: legs for kind, _size, legs in _FURNITURE}, chair=True)
+#: A table stands with its chairs: four (two along each long side), each 0.45 m square (a dining
+#: chair's seat), seen by its four legs, its centre this far out from the table's edge (pulled half
+#: under the table), metres.
+_CHAIR = 0.45
+_CHAIR_OUT = 0.1
 #: Side of a table leg, metres (a wooden table leg, 4-5 cm).
 _LEG = 0.05
 #: Furniture keeps this far from the door cells, metres (a door leaf swings ~0.8 m into a room).
@@ -179,7 +184,10 @@ class ScanOptions(_Options):
     furniture_density : float
         Random furniture pieces (tables, beds, shelves) per m² of room,
         placed inside the rooms away from the doors: 0.05 (a 12 m² bedroom
-        gets about one piece beyond its plan's own objects).
+        gets about one piece beyond its plan's own objects). A piece never
+        cuts the floor of its room the robot drives on into pieces (people
+        walk through every part of a room); where it would, it goes
+        elsewhere or is left out.
     closed_doors : float
         Share of the doors that are closed, in [0, 1]: 0.1, drawn among the
         doors of dead-end rooms only (a bedroom, a bathroom, a closet off
@@ -462,9 +470,29 @@ def _draw_piece(plan, mask, kind_legs, box) -> None:
             mask[rs, cs] = True
 
 
+#: A piece of a room's floor a robot (or a person) walks into, m²: smaller pockets (under a table
+#: ringed by its chairs, behind a bed's foot) are not a part of the room the furniture cut off.
+_FLOOR_PART = 0.5
+
+
+def _walkable_parts(space: np.ndarray, clearance_px: float, min_cells: float) -> int:
+    """Number of 8-connected pieces, of more than ``min_cells`` cells, of the cells of ``space``
+    farther than ``clearance_px`` from every cell that is not (the border of the array counts as not)."""
+    from scipy import ndimage as ndi
+
+    walk = ndi.distance_transform_edt(np.pad(space, 1)) > clearance_px
+    lab, n = ndi.label(walk, structure=np.ones((3, 3), bool))
+    return int((np.bincount(lab.ravel())[1:] > min_cells).sum()) if n else 0
+
+
 def _random_furniture(plan: FloorPlan, options: ScanOptions, rng, keep_free: np.ndarray) -> tuple:
     """Random tables, beds and shelves inside the rooms: ``(kind, x1, y1, x2, y2)`` boxes that lie
-    wholly in one room, clear of the door cells by :data:`_DOOR_KEEPOUT` and of ``keep_free``."""
+    wholly in one room, clear of the door cells by :data:`_DOOR_KEEPOUT` and of ``keep_free``.
+
+    A piece stands where it leaves a way round it: people walk through every part of a room, so
+    furniture never cuts the room's floor (for the robot: the cells ``clearance`` from every
+    obstacle) into more pieces than it had. A piece that would is placed elsewhere, or left out.
+    """
     if options.furniture_density <= 0:
         return ()
     from scipy import ndimage as ndi
@@ -489,6 +517,31 @@ def _random_furniture(plan: FloorPlan, options: ScanOptions, rng, keep_free: np.
         cand = np.argwhere(ok)
         if n == 0 or len(cand) == 0:
             continue
+        floor = room & ~keep_free[sl]  # the room's floor the pieces placed so far leave
+        clear_px = options.clearance / res
+        part_px = _FLOOR_PART / res ** 2
+        parts = _walkable_parts(floor, clear_px, part_px)
+
+        def place(kind, legs, a0, a1, b0, b1, free_here):
+            """Put a piece on the slice's cells a0..a1 x b0..b1 if they are all ``free_here`` and it
+            leaves a way round it; its box, or None."""
+            nonlocal floor
+            if a0 < 0 or b0 < 0 or a1 >= room.shape[0] or b1 >= room.shape[1]:
+                return None
+            if not free_here[a0:a1 + 1, b0:b1 + 1].all():
+                return None
+            (xa, ya), (xb, yb) = _to_world(plan, np.array([[a1 + sl[0].start + 0.5, b0 + sl[1].start - 0.5],
+                                                          [a0 + sl[0].start - 0.5, b1 + sl[1].start + 0.5]]))
+            box = (float(xa), float(ya), float(xb), float(yb))
+            drawn = np.zeros(plan.shape, bool)
+            _draw_piece(plan, drawn, legs, box)
+            after = floor & ~drawn[sl]
+            if _walkable_parts(after, clear_px, part_px) > parts:
+                return None  # it would cut the room's floor in two
+            floor = after
+            pieces.append((kind, *box))
+            return box
+
         for _ in range(n):
             kind, (w, d), legs = _FURNITURE[int(rng.integers(len(_FURNITURE)))]
             if rng.random() < 0.5:
@@ -498,14 +551,25 @@ def _random_furniture(plan: FloorPlan, options: ScanOptions, rng, keep_free: np.
                 hr, hc = d / res / 2, w / res / 2  # rows along y (depth), cols along x (width)
                 a0, a1 = int(round(r - hr)), int(round(r + hr))
                 b0, b1 = int(round(c - hc)), int(round(c + hc))
-                if a0 < 0 or b0 < 0 or a1 >= room.shape[0] or b1 >= room.shape[1]:
+                before = ok.copy()
+                if place(kind, legs, a0, a1, b0, b1, ok) is None:
                     continue
-                if not ok[a0:a1 + 1, b0:b1 + 1].all():
-                    continue
-                (xa, ya), (xb, yb) = _to_world(plan, np.array([[a1 + sl[0].start + 0.5, b0 + sl[1].start - 0.5],
-                                                              [a0 + sl[0].start - 0.5, b1 + sl[1].start + 0.5]]))
-                pieces.append((kind, float(xa), float(ya), float(xb), float(yb)))
                 ok[max(a0 - 2, 0):a1 + 3, max(b0 - 2, 0):b1 + 3] = False  # no overlaps
+                if kind == "table":  # its chairs, two along each long side, pulled half under it
+                    under = before.copy()
+                    under[a0:a1 + 1, b0:b1 + 1] = True
+                    half = _CHAIR / res / 2
+                    out = _CHAIR_OUT / res
+                    along_cols = (b1 - b0) >= (a1 - a0)
+                    lo, hi = (b0, b1) if along_cols else (a0, a1)
+                    for side in ((a0 - out, a1 + out) if along_cols else (b0 - out, b1 + out)):
+                        for frac in (0.25, 0.75):
+                            u = lo + frac * (hi - lo)
+                            cr, cc = (side, u) if along_cols else (u, side)
+                            ca0, ca1 = int(round(cr - half)), int(round(cr + half))
+                            cb0, cb1 = int(round(cc - half)), int(round(cc + half))
+                            if place("chair", True, ca0, ca1, cb0, cb1, under) is not None:
+                                ok[max(ca0 - 1, 0):ca1 + 2, max(cb0 - 1, 0):cb1 + 2] = False
                 break
     return tuple(pieces)
 
@@ -666,6 +730,8 @@ def robot_path(plan: FloorPlan, options: Optional[ScanOptions] = None, rng=None,
     room with a door to the outside (or the room with most neighbours) of
     the largest part of the home the room graph joins (a plan may hold two
     flats, or a stair hall no door joins to the rest: a robot maps one),
+    in the largest piece of the space it can drive on there (fixtures may
+    leave a room by the door a pocket cut off from the rest of the home),
     takes the rooms in a depth-first walk over the room-door graph, the
     first ``max(1, round(explore * rooms))`` of those it can reach, and in
     each room visits waypoints (the most open point first, then farthest
@@ -718,15 +784,17 @@ def robot_path(plan: FloorPlan, options: Optional[ScanOptions] = None, rng=None,
     home = _largest_part(adj, area)
     if not home:
         return empty
-    entrance = [r for r in entrance if r in home]
+    # the robot is set down in the largest piece of robot space of that part (fixtures and
+    # furniture may leave a room with an outside door only a pocket cut off from the rest)
+    in_home = np.isin(labels, sorted(home))
+    piece = int(np.argmax(np.bincount(comp[in_home].ravel(), minlength=2)[1:])) + 1
+    reach = (comp == piece)
+    in_piece = set(np.unique(labels[reach]).tolist()) - {0}
+    entrance = [r for r in entrance if r in home and r in in_piece]
     if entrance:
         start = entrance[int(rng.integers(len(entrance)))]
     else:
-        start = max(sorted(home), key=lambda r: (len(adj.get(r, ())), area[r], -r))
-    # the rooms the robot can reach from the start room's biggest piece of robot space
-    sc = np.bincount(comp[labels == start].ravel())
-    piece = int(np.argmax(sc))
-    reach = (comp == piece)
+        start = max(sorted(home & in_piece) or sorted(home), key=lambda r: (len(adj.get(r, ())), area[r], -r))
     reach_area = np.bincount(labels[reach].ravel(), minlength=n_rooms + 1)
     reach_labels = {r for r in range(1, n_rooms + 1) if reach_area[r] > 0}
     order = _room_order(plan, reach_labels, adj, start, rng)
@@ -1100,3 +1168,75 @@ def simulate_scan(plan: FloorPlan, *, options: Optional[ScanOptions] = None, see
     return ScanResult(grid=grid, path=_to_world(plan, path), poses=world_poses(true),
                       map_poses=world_poses(believed), visited=visited, world=world,
                       people=_to_world(plan, [(r, c) for r, c, *_ in people]), logodds=L)
+
+
+# --------------------------------------------------------------------------
+# The ground truth of a robot map: the rooms it shows
+# --------------------------------------------------------------------------
+
+#: Least area of a room that a robot map shows free for the room to be in that map's ground
+#: truth, m²: 1 m² (20 x 20 cells at 0.05 m), a patch a person labelling the map draws as a room;
+#: a room behind a closed door or never reached shows at most a few specks of free cells.
+SHOWN_AREA = 1.0
+
+
+def shown_rooms(rooms, free, *, resolution: float, min_area: float = SHOWN_AREA) -> np.ndarray:
+    """The ground truth of a robot map: the true rooms the map shows, each whole.
+
+    A person labelling a robot map draws the rooms they see in it; a room
+    the robot never saw (behind a closed door, or never reached in a
+    partial exploration) is unknown in the map, and no one can draw it. So
+    the rooms of a scan's ground truth are the rooms with at least
+    ``min_area`` of their cells free in the map, kept whole (with their
+    cells the map leaves unknown or occupied, as the original protocol of
+    Bormann et al. wants true rooms).
+
+    Parameters
+    ----------
+    rooms : (M, N) array_like of int
+        The true rooms of the plan (0 = no room).
+    free : (M, N) array_like of bool
+        The free cells of the robot map, on the same grid.
+    resolution : float
+        Metres per cell.
+    min_area : float, optional
+        Least free area of a shown room, m² (:data:`SHOWN_AREA`).
+
+    Returns
+    -------
+    (M, N) ndarray
+        ``rooms`` (its dtype) with the rooms the map does not show set to 0.
+    """
+    from .io import check_resolution
+
+    rooms = np.asarray(rooms)
+    free = np.asarray(free, bool)
+    if rooms.shape != free.shape:
+        raise ParameterError(f"<array>: rooms {rooms.shape} and free cells {free.shape} differ in shape")
+    res = check_resolution(resolution, name="resolution")
+    min_cells = _check_area("min_area", min_area) / res ** 2
+    lab = np.where(rooms > 0, rooms, 0).astype(np.int64)
+    seen = np.bincount(lab[free], minlength=int(lab.max(initial=0)) + 1)
+    keep = seen >= min_cells - 1e-9
+    keep[0] = False
+    return np.where(keep[lab], rooms, 0).astype(rooms.dtype)
+
+
+def shown_doors(doors, rooms) -> list:
+    """The doors of a robot map's ground truth: those whose rooms are each shown or the outside.
+
+    Parameters
+    ----------
+    doors : iterable of PlanDoor or dict
+        Doors with their two rooms (``door.rooms`` or ``door["rooms"]``; 0 = outside).
+    rooms : (M, N) array_like of int
+        The shown rooms (:func:`shown_rooms`).
+
+    Returns
+    -------
+    list
+        The doors, in their order, whose every room is 0 or a label of ``rooms``.
+    """
+    labels = set(np.unique(np.asarray(rooms)).tolist()) | {0}
+    return [d for d in doors
+            if all(int(r) in labels for r in (d["rooms"] if isinstance(d, dict) else d.rooms))]
