@@ -1,0 +1,139 @@
+"""What kind of space each room is: corridor, room, hall or doorway, from its shape.
+
+:func:`room_shape` measures a room from its cells alone; :func:`room_kind` turns
+the measures and the room's number of doors into a kind; :func:`annotate_kinds`
+puts both on every node of a room graph (:func:`topomap.roomgraph.room_graph`
+calls it). Every threshold is a physical quantity (m, m²) or a ratio of
+lengths; the "Graph attributes" page of the documentation gives the reason of
+each.
+
+The measures
+------------
+``width`` (m)
+    The room's mean width from its distance transform: each cell's distance
+    to the nearest cell outside the room, averaged over the room, times four
+    (a strip of width ``w`` has mean distance ``w / 4`` to its long sides;
+    one cell is taken off for the cell-centre distances). A long strip gives
+    its width, a square of side ``s`` ``2 s / 3``, an ``a`` × ``b`` rectangle
+    ``a - a² / (3 b)``.
+``length`` (m)
+    ``area / width``: the length of the strip of that width and area — the
+    length of the room's skeleton for a strip, however it bends.
+``elongation``
+    ``length / width`` (``area / width²``): about the ratio of the sides plus
+    0.8 for a rectangle, 2.25 for a square, the length over the width for a
+    long corridor.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import ndimage as ndi
+
+__all__ = ["KINDS", "CORRIDOR_MAX_WIDTH", "CORRIDOR_MIN_ELONGATION", "CORRIDOR_MIN_LENGTH",
+           "DOORWAY_MAX_AREA", "DOORWAY_MAX_WIDTH", "HALL_MIN_AREA", "HALL_MIN_WIDTH",
+           "room_shape", "room_kind", "annotate_kinds"]
+
+#: The kinds :func:`room_kind` gives.
+KINDS = ("corridor", "room", "hall", "doorway")
+
+#: A corridor is at most this wide (m): two people pass in 1.2 m, and hallways of homes and
+#: offices are 0.9 to 1.8 m wide; wider strips are rooms (a gallery, a long kitchen).
+CORRIDOR_MAX_WIDTH = 1.8
+#: ... and at least this many widths long (length / width): a square has 2.25 and a 2:1
+#: rectangle 2.9 on this measure; a passage longer than about three times its width is a corridor.
+CORRIDOR_MIN_ELONGATION = 3.0
+#: ... and at least this long (m): a shorter strip is the space of a door or a niche.
+CORRIDOR_MIN_LENGTH = 2.0
+#: A doorway area (a small space between two doors: a draught lobby, the passage through a thick
+#: wall, the short stub of hallway a segmentation cuts between two doors) is at most this large (m²).
+DOORWAY_MAX_AREA = 2.5
+#: ... and at most this wide (m): as wide as a door and its frame.
+DOORWAY_MAX_WIDTH = 1.5
+#: A hall is at least this large (m²) ...
+HALL_MIN_AREA = 40.0
+#: ... and this wide (m): a large open space (a lobby, an open-plan floor), not a long corridor.
+HALL_MIN_WIDTH = 3.0
+
+
+def room_shape(mask: np.ndarray, resolution: float) -> dict:
+    """Shape measures of one room.
+
+    Parameters
+    ----------
+    mask : (M, N) ndarray of bool
+        The room's cells (any box around them).
+    resolution : float
+        Metres per cell.
+
+    Returns
+    -------
+    dict
+        ``area`` (m²), ``width`` (m, mean width), ``length`` (m, ``area / width``) and
+        ``elongation`` (``length / width``), as the module docstring defines them.
+    """
+    m = np.pad(np.asarray(mask, bool), 1)
+    n = int(np.count_nonzero(m))
+    if n == 0:
+        return {"area": 0.0, "width": 0.0, "length": 0.0, "elongation": 0.0}
+    dt = ndi.distance_transform_edt(m)
+    mean = float(dt[m].mean())
+    width = max(4.0 * mean - 2.0, 1.0) * resolution  # cell-centre distances: a strip of k cells has mean (k + 2) / 4
+    area = n * resolution ** 2
+    length = area / width
+    return {"area": area, "width": width, "length": length, "elongation": length / width}
+
+
+def room_kind(area: float, width: float, length: float, doors: int) -> str:
+    """The kind of a room of these measures (:func:`room_shape`) and number of doors.
+
+    Parameters
+    ----------
+    area : float
+        m².
+    width, length : float
+        m.
+    doors : int
+        Number of the room's doors.
+
+    Returns
+    -------
+    str
+        ``"doorway"`` (at most :data:`DOORWAY_MAX_AREA` m², :data:`DOORWAY_MAX_WIDTH` m wide,
+        two doors or more), ``"corridor"`` (at most :data:`CORRIDOR_MAX_WIDTH` m wide, at least
+        :data:`CORRIDOR_MIN_LENGTH` m long and :data:`CORRIDOR_MIN_ELONGATION` widths long),
+        ``"hall"`` (at least :data:`HALL_MIN_AREA` m² and :data:`HALL_MIN_WIDTH` m wide), else
+        ``"room"``; tested in that order.
+    """
+    if doors >= 2 and area <= DOORWAY_MAX_AREA and width <= DOORWAY_MAX_WIDTH:
+        return "doorway"
+    if width <= CORRIDOR_MAX_WIDTH and length >= CORRIDOR_MIN_LENGTH and length >= CORRIDOR_MIN_ELONGATION * width:
+        return "corridor"
+    if area >= HALL_MIN_AREA and width >= HALL_MIN_WIDTH:
+        return "hall"
+    return "room"
+
+
+def annotate_kinds(G, labels: np.ndarray, resolution: float) -> None:
+    """Put ``room_kind``, ``width`` and ``length`` on every room node of ``G``.
+
+    Parameters
+    ----------
+    G : networkx.MultiGraph
+        Room graph: its nodes are labels of ``labels``, its edges doors.
+    labels : (M, N) ndarray of int
+        The room labels.
+    resolution : float
+        Metres per cell.
+    """
+    if G.number_of_nodes() == 0:
+        return
+    boxes = ndi.find_objects(labels, max_label=max(G.nodes))
+    for n in G.nodes:
+        sl = boxes[n - 1] if 0 < n <= len(boxes) else None
+        if sl is None:
+            continue
+        s = room_shape(labels[sl] == n, resolution)
+        G.nodes[n]["room_kind"] = room_kind(s["area"], s["width"], s["length"], G.degree(n))
+        G.nodes[n]["width"] = s["width"]
+        G.nodes[n]["length"] = s["length"]
