@@ -44,7 +44,7 @@ import _section  # noqa: E402
 from _section import _commit, _machine  # noqa: E402
 
 SECTION = "86_kinds.md"
-PASSAGE = {"corridor", "entrance", "closet", "PS"}
+PASSAGE = {"corridor", "entrance", "stairs", "closet", "PS"}
 
 
 def training(name: str) -> bool:

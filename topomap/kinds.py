@@ -30,21 +30,26 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage as ndi
 
-__all__ = ["KINDS", "CORRIDOR_MAX_WIDTH", "CORRIDOR_MIN_ELONGATION", "CORRIDOR_MIN_LENGTH",
+__all__ = ["KINDS", "CORRIDOR_MAX_WIDTH", "CORRIDOR_MIN_ELONGATION", "CORRIDOR_MIN_LENGTH", "CORRIDOR_MIN_DOORS",
            "DOORWAY_MAX_AREA", "DOORWAY_MAX_WIDTH", "HALL_MIN_AREA", "HALL_MIN_WIDTH",
            "room_shape", "room_kind", "annotate_kinds"]
 
 #: The kinds :func:`room_kind` gives.
 KINDS = ("corridor", "room", "hall", "doorway")
 
-#: A corridor is at most this wide (m): two people pass in 1.2 m, and hallways of homes and
-#: offices are 0.9 to 1.8 m wide; wider strips are rooms (a gallery, a long kitchen).
-CORRIDOR_MAX_WIDTH = 1.8
+#: A corridor is at most this wide (m, mean width): hallways of homes are 0.9 to 1.2 m wide (a
+#: wheelchair needs 0.9 m, two people pass in 1.2 m); a strip wider than that is a room (a long
+#: kitchen, a gallery), and small rooms of homes (a bathroom, a washroom) are 1.2 to 1.5 m wide on
+#: this measure, so a wider limit calls them corridors.
+CORRIDOR_MAX_WIDTH = 1.2
 #: ... and at least this many widths long (length / width): a square has 2.25 and a 2:1
 #: rectangle 2.9 on this measure; a passage longer than about three times its width is a corridor.
 CORRIDOR_MIN_ELONGATION = 3.0
 #: ... and at least this long (m): a shorter strip is the space of a door or a niche.
 CORRIDOR_MIN_LENGTH = 2.0
+#: ... with at least this many doors: a corridor leads somewhere; a narrow strip with one door is
+#: a closet, a washroom or a dead end.
+CORRIDOR_MIN_DOORS = 2
 #: A doorway area (a small space between two doors: a draught lobby, the passage through a thick
 #: wall, the short stub of hallway a segmentation cuts between two doors) is at most this large (m²).
 DOORWAY_MAX_AREA = 2.5
@@ -99,16 +104,18 @@ def room_kind(area: float, width: float, length: float, doors: int) -> str:
     Returns
     -------
     str
-        ``"doorway"`` (at most :data:`DOORWAY_MAX_AREA` m², :data:`DOORWAY_MAX_WIDTH` m wide,
-        two doors or more), ``"corridor"`` (at most :data:`CORRIDOR_MAX_WIDTH` m wide, at least
-        :data:`CORRIDOR_MIN_LENGTH` m long and :data:`CORRIDOR_MIN_ELONGATION` widths long),
-        ``"hall"`` (at least :data:`HALL_MIN_AREA` m² and :data:`HALL_MIN_WIDTH` m wide), else
+        ``"corridor"`` (at most :data:`CORRIDOR_MAX_WIDTH` m wide, at least
+        :data:`CORRIDOR_MIN_LENGTH` m and :data:`CORRIDOR_MIN_ELONGATION` widths long, at least
+        :data:`CORRIDOR_MIN_DOORS` doors), ``"doorway"`` (at most :data:`DOORWAY_MAX_AREA` m²
+        and :data:`DOORWAY_MAX_WIDTH` m wide, two doors or more), ``"hall"`` (at least
+        :data:`HALL_MIN_AREA` m² and :data:`HALL_MIN_WIDTH` m wide), else
         ``"room"``; tested in that order.
     """
+    if (doors >= CORRIDOR_MIN_DOORS and width <= CORRIDOR_MAX_WIDTH and length >= CORRIDOR_MIN_LENGTH
+            and length >= CORRIDOR_MIN_ELONGATION * width):
+        return "corridor"
     if doors >= 2 and area <= DOORWAY_MAX_AREA and width <= DOORWAY_MAX_WIDTH:
         return "doorway"
-    if width <= CORRIDOR_MAX_WIDTH and length >= CORRIDOR_MIN_LENGTH and length >= CORRIDOR_MIN_ELONGATION * width:
-        return "corridor"
     if area >= HALL_MIN_AREA and width >= HALL_MIN_WIDTH:
         return "hall"
     return "room"
