@@ -1,0 +1,397 @@
+"""Route graphs for the Nav2 Route Server (``nav2_route``), as GeoJSON.
+
+:func:`route_graph` turns the rooms and doors of a segmentation into the
+graph file the Route Server's GeoJSON loader reads; :func:`write_route_graph`
+writes it (atomically). ``topomap export OUT_DIR/rooms.graphml --nav2
+graph.geojson`` does both from a segment output folder.
+
+The file follows the loader of ``nav2_route`` (``GeoJsonGraphFileLoader``):
+
+* a ``FeatureCollection`` whose ``features`` hold every node and edge (at
+  least one of each, or the loader refuses the graph);
+* a node is a Feature with a ``Point`` geometry ``[x, y]`` (metres in the map
+  frame) and ``properties`` ``id`` (a non-negative integer, unique),
+  ``frame`` (the frame the coordinates are in) and ``metadata`` (an object);
+* an edge is a Feature with a ``MultiLineString`` geometry (the loader does
+  not read it; it is the straight line between its nodes, for GIS tools) and
+  ``properties`` ``id`` (a non-negative integer, unique among edges and
+  nodes), ``startid``, ``endid`` (IDs of existing nodes), ``cost`` (the travel
+  length in metres) and ``metadata``; an edge goes one way, so every link is
+  written twice, once each way;
+* ``metadata`` values are numbers, booleans, strings, arrays of those or
+  objects (never ``null``: the loader throws on it).
+
+Nodes: one at each door the robot fits through (the widest point of the
+door's opening), one inside each room (the room's ``interior_x`` /
+``interior_y`` when the graph has them and they have the clearance, else the
+room's cell farthest from any wall), and waypoints inside a room where the
+way between them bends. The ways are the cheapest paths from the room's
+point to each of its doors through the room's cells that keep the robot's
+``clearance`` from every cell that is not free, cells near walls costing more
+(so the paths keep to the middle of the room, as its skeleton does); the
+paths from one room point form a tree, cut at its branch points; each branch
+is straightened into as few straight edges as keep every point of every edge
+``clearance`` metres clear of walls and unknown space (:func:`segment_clear`).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+from pathlib import Path
+
+import numpy as np
+import networkx as nx
+from scipy import ndimage as ndi
+
+from .errors import ParameterError, PlanningError
+
+__all__ = ["route_graph", "write_route_graph", "free_clearance", "segment_clear", "DEFAULT_CLEARANCE",
+           "FRAME", "SAMPLES_PER_CELL"]
+
+log = logging.getLogger("topomap")
+
+#: Default clearance (m): the distance every edge keeps from walls and unknown space. Nav2's sample
+#: robots are 0.1 to 0.22 m in radius (``robot_radius`` of its parameter files), and an interior door
+#: 0.7 m wide in the clear leaves a robot of radius 0.2 m 0.15 m on either side; pass your robot's
+#: radius (or its inscribed radius plus a margin).
+DEFAULT_CLEARANCE = 0.2
+#: The frame the nodes' coordinates are in (``frame`` of every node), as map_server publishes the map.
+FRAME = "map"
+#: Points tested per cell of an edge's length by :func:`segment_clear`.
+SAMPLES_PER_CELL = 10
+#: Width (m) of the band along walls in which a cell costs more to cross (up to 3 times): the paths
+#: keep this far from walls where the room is wide enough.
+_PREFER = 1.0
+
+
+def free_clearance(free: np.ndarray, resolution: float) -> np.ndarray:
+    """Distance (m) from each cell's centre to the nearest cell that is not free (to its edge).
+
+    Parameters
+    ----------
+    free : (M, N) ndarray of bool
+        Free cells (the cells of rooms and fragments: ``labels > 0``).
+    resolution : float
+        Metres per cell.
+
+    Returns
+    -------
+    (M, N) ndarray of float
+        ``0`` outside the free space; the map's border counts as not free.
+    """
+    free = np.pad(np.asarray(free, bool), 1)
+    d = ndi.distance_transform_edt(free)[1:-1, 1:-1] * resolution - resolution / 2
+    return np.maximum(d, 0.0)
+
+
+def segment_clear(ok: np.ndarray, a, b) -> bool:
+    """Whether every point of the segment from pixel ``a`` to pixel ``b`` lies in an ``ok`` cell.
+
+    ``a`` and ``b`` are ``(row, col)`` (cell centres at integers); points are taken every
+    ``1 / SAMPLES_PER_CELL`` cell along the segment and each is tested in the cell it lies in.
+    """
+    (r0, c0), (r1, c1) = a, b
+    n = int(math.ceil(max(abs(r1 - r0), abs(c1 - c0)) * SAMPLES_PER_CELL)) + 1
+    t = np.linspace(0.0, 1.0, n + 1)
+    rr = np.floor(r0 + (r1 - r0) * t + 0.5).astype(np.int64)
+    cc = np.floor(c0 + (c1 - c0) * t + 0.5).astype(np.int64)
+    H, W = ok.shape
+    if rr.min() < 0 or cc.min() < 0 or rr.max() >= H or cc.max() >= W:
+        return False
+    return bool(ok[rr, cc].all())
+
+
+def _straighten(ok, path):
+    """Indices into ``path`` (pixels) of the corners of a polyline from its first to its last pixel
+    whose straight pieces stay in ``ok`` cells: split at the pixel farthest from the chord until every
+    piece is clear (two 4-neighbours always are)."""
+    keep = {0, len(path) - 1}
+    stack = [(0, len(path) - 1)]
+    P = np.asarray(path, float)
+    while stack:
+        i, j = stack.pop()
+        if j - i < 2 or segment_clear(ok, path[i], path[j]):
+            continue
+        a, b = P[i], P[j]
+        d = b - a
+        seg = P[i + 1:j] - a
+        L = math.hypot(*d)
+        dist = np.abs(seg[:, 0] * d[1] - seg[:, 1] * d[0]) / L if L else np.hypot(seg[:, 0], seg[:, 1])
+        k = i + 1 + int(np.argmax(dist))
+        keep.add(k)
+        stack += [(i, k), (k, j)]
+    return sorted(keep)
+
+
+def _door_line(p1, p2, shape):
+    """Cells on the segment between door end points ``p1``, ``p2`` (pixels), in order, without repeats."""
+    (r0, c0), (r1, c1) = p1, p2
+    n = int(math.ceil(max(abs(r1 - r0), abs(c1 - c0)) * 2)) + 1
+    t = np.linspace(0, 1, n + 1)
+    rr = np.clip(np.floor(r0 + (r1 - r0) * t + 0.5).astype(int), 0, shape[0] - 1)
+    cc = np.clip(np.floor(c0 + (c1 - c0) * t + 0.5).astype(int), 0, shape[1] - 1)
+    out = []
+    for p in zip(rr.tolist(), cc.tolist()):
+        if not out or out[-1] != p:
+            out.append(p)
+    return out
+
+
+def _frame(G, labels):
+    """``(resolution, to_world)`` of the room graph's map frame."""
+    from .io import OccupancyGrid
+
+    try:
+        res = float(G.graph["resolution"])
+        origin = tuple(float(v) for v in G.graph["origin"])
+    except (KeyError, TypeError, ValueError):
+        raise ParameterError("room graph lacks the map frame (graph attributes 'resolution', 'origin'); build "
+                             "it with topomap.room_graph or load it with topomap.export.load_graph") from None
+    shape = G.graph.get("shape")
+    if shape is not None and tuple(int(v) for v in shape) != tuple(labels.shape):
+        raise ParameterError(f"labels of shape {tuple(labels.shape)} do not match the room graph's map "
+                             f"(shape {tuple(int(v) for v in shape)})")
+    grid = OccupancyGrid(np.broadcast_to(np.int8(0), labels.shape), res, origin)
+    return res, grid.pixel_to_world
+
+
+def _plain(v):
+    """``v`` as a metadata value the Nav2 loader takes (numbers, strings, booleans, lists of them), or None."""
+    if isinstance(v, (bool, np.bool_)):
+        return bool(v)
+    if isinstance(v, (int, np.integer)):
+        return int(v)
+    if isinstance(v, (float, np.floating)):
+        return float(v) if math.isfinite(v) else None
+    if isinstance(v, str):
+        return v
+    return None
+
+
+def route_graph(seg_or_G, labels=None, *, clearance: float = DEFAULT_CLEARANCE, frame: str = FRAME) -> dict:
+    """The Nav2 Route Server graph of a segmentation, as a GeoJSON dict.
+
+    Parameters
+    ----------
+    seg_or_G : Segmentation or networkx.MultiGraph
+        A segmentation, or its room graph (as :func:`topomap.export.load_graph` reads it), then with
+        ``labels``.
+    labels : (M, N) ndarray of int, optional
+        The label image of the room graph (``labels.pgm`` / ``labels.png``): rooms and fragments are
+        the free space. Required with a graph, ignored with a segmentation.
+    clearance : float
+        Metres every edge keeps from cells that are not free (walls, unknown space, the map's
+        border); doors narrower than twice that get no node.
+    frame : str
+        The ``frame`` of every node.
+
+    Returns
+    -------
+    dict
+        A GeoJSON ``FeatureCollection`` as the module docstring describes: node metadata
+        ``{"type": "room" | "door" | "waypoint", "room": id, "name", "room_kind"}`` (a door:
+        ``"door"``, ``"rooms"``, ``"width"`` in m), edge metadata ``{"room", "name", "room_kind"}``
+        of the room it runs through plus ``"door"`` and ``"door_width"`` (m) when it ends at a door;
+        ``cost`` is the edge's length in metres.
+
+    Raises
+    ------
+    ParameterError
+        Bad ``clearance``, labels missing or of another shape than the graph's map.
+    PlanningError
+        No edge: no door has the clearance, or the map has one room.
+    """
+    from skimage.graph import MCP_Geometric
+
+    try:
+        clearance = float(clearance)
+    except (TypeError, ValueError):
+        raise ParameterError(f"clearance must be a number of metres, got {clearance!r}") from None
+    if not math.isfinite(clearance) or clearance < 0:
+        raise ParameterError(f"clearance must be >= 0 m, got {clearance!r}")
+    if isinstance(seg_or_G, nx.Graph):
+        G = seg_or_G
+        if labels is None:
+            raise ParameterError("a room graph needs its labels (the label image) for a route graph")
+    else:
+        G, labels = seg_or_G.room_graph, seg_or_G.labels
+    labels = np.asarray(labels)
+    if labels.ndim != 2:
+        raise ParameterError(f"labels must be a 2-D array, got shape {labels.shape}")
+    res, to_world = _frame(G, labels)
+    clear = free_clearance(labels > 0, res)
+    ok = clear >= clearance
+    H, W = labels.shape
+
+    nodes = []  # (pixel, metadata)
+    door_node = {}  # door id -> node index
+    edges = []  # (node a, node b, metadata)
+    room_meta = {}
+    for r, d in G.nodes(data=True):
+        m = {"room": _plain(r)}
+        for key in ("name", "room_kind"):
+            v = _plain(d.get(key))
+            if v is not None and v != "":
+                m[key] = v
+        room_meta[r] = m
+
+    doors = {}  # id -> (a, b, width, best cell)
+    for a, b, k, d in G.edges(keys=True, data=True):
+        did = int(d.get("door", k))
+        line = _door_line(tuple(d["p1"]), tuple(d["p2"]), labels.shape)
+        cells = [p for p in line if ok[p]]
+        if not cells:
+            log.info("door %d (%.2f m) is too narrow for a clearance of %.2f m: no node", did, d["width"], clearance)
+            continue
+        best = max(cells, key=lambda p: clear[p])
+        doors[did] = (a, b, float(d["width"]), best, line)
+    for did in sorted(doors):
+        a, b, w, px, _ = doors[did]
+        door_node[did] = len(nodes)
+        nodes.append((px, {"type": "door", "door": did, "rooms": [_plain(a), _plain(b)], "width": w}))
+
+    boxes = ndi.find_objects(np.where(labels > 0, labels, 0).astype(np.int64, copy=False))
+    for r in sorted(G.nodes):
+        ri = int(r)
+        if ri < 1 or ri > len(boxes) or boxes[ri - 1] is None:
+            continue
+        mine = [did for did in sorted(doors) if r in doors[did][:2]]
+        sl = boxes[ri - 1]
+        r0, r1, c0, c1 = sl[0].start, sl[0].stop, sl[1].start, sl[1].stop
+        for did in mine:
+            for p in doors[did][4]:
+                r0, r1, c0, c1 = min(r0, p[0]), max(r1, p[0] + 1), min(c0, p[1]), max(c1, p[1] + 1)
+        win = (slice(r0, r1), slice(c0, c1))
+        region = labels[win] == r
+        for did in mine:
+            for p in doors[did][4]:
+                region[p[0] - r0, p[1] - c0] = True
+        region &= ok[win]
+        if not region.any():
+            log.info("room %s has no cell with a clearance of %.2f m: no node", r, clearance)
+            continue
+        own = region & (labels[win] == r)
+        start = _room_point(G.nodes[r], own, clear[win], (r0, c0), res, G)
+        if start is None:
+            continue
+        meta = dict(room_meta[r], type="room")
+        root = len(nodes)
+        nodes.append(((start[0] + r0, start[1] + c0), meta))
+        if not mine:
+            continue
+        cost = np.where(region, 1.0 + 2.0 * np.clip(1.0 - clear[win] / _PREFER, 0.0, 1.0), np.inf)
+        mcp = MCP_Geometric(cost, fully_connected=False)
+        cum, _ = mcp.find_costs([start])
+        key = {start: root}  # window pixel -> node index
+        targets = []
+        for did in mine:
+            px = doors[did][3]
+            q = (px[0] - r0, px[1] - c0)
+            if not np.isfinite(cum[q]):
+                log.info("door %d cannot be reached from the middle of room %s with a clearance of %.2f m",
+                         did, r, clearance)
+                continue
+            key[q] = door_node[did]
+            targets.append(q)
+        _tree_edges(mcp, start, targets, key, ok[win], nodes, edges, (r0, c0), ri, room_meta[r], doors, door_node)
+    if not edges:
+        raise PlanningError("no route graph: no door has a clearance of "
+                            f"{clearance:g} m on both sides (or the map has a single room)")
+    return _collection(nodes, edges, to_world, res, frame)
+
+
+def _room_point(d, own, clear, off, res, G):
+    """The room's node pixel (window coordinates): its interior point if set and clear, else its
+    cell of largest clearance (the first in row-major order among equals)."""
+    if d.get("interior_x") is not None and d.get("interior_y") is not None:
+        from .io import OccupancyGrid
+
+        grid = OccupancyGrid(np.broadcast_to(np.int8(0), tuple(int(v) for v in G.graph["shape"])), res,
+                             tuple(float(v) for v in G.graph["origin"]))
+        row, col = grid.world_to_pixel(float(d["interior_x"]), float(d["interior_y"]))
+        q = (int(round(float(row))) - off[0], int(round(float(col))) - off[1])
+        if 0 <= q[0] < own.shape[0] and 0 <= q[1] < own.shape[1] and own[q]:
+            return q
+    if not own.any():
+        return None
+    k = int(np.argmax(np.where(own, clear, -1.0)))
+    return divmod(k, own.shape[1])
+
+
+def _tree_edges(mcp, start, targets, key, ok, nodes, edges, off, room, meta, doors, door_node):
+    """Edges of the tree of cheapest paths from ``start`` to ``targets`` (window pixels), cut at its
+    branch points and at ``key`` pixels, each branch straightened (:func:`_straighten`)."""
+    parent, children = {}, {}
+    for t in targets:
+        path = [tuple(p) for p in mcp.traceback(t)]
+        for a, b in zip(path[:-1], path[1:]):
+            if b not in parent:
+                parent[b] = a
+                children.setdefault(a, set()).add(b)
+    door_of = {v: did for did, v in door_node.items()}
+
+    def node_at(p):
+        if p not in key:
+            key[p] = len(nodes)
+            nodes.append(((p[0] + off[0], p[1] + off[1]), dict(meta, type="waypoint")))
+        return key[p]
+
+    # walk down from the root: a branch ends at a key pixel, a branch point or a leaf
+    stack = [start]
+    while stack:
+        top = stack.pop()
+        for c in sorted(children.get(top, ())):
+            branch = [top, c]
+            while c not in key and len(children.get(c, ())) == 1:
+                c = next(iter(children[c]))
+                branch.append(c)
+            stack.append(c)
+            corners = _straighten(ok, branch)
+            ids = [node_at(branch[i]) for i in corners]
+            for a, b in zip(ids[:-1], ids[1:]):
+                em = dict(meta)
+                for n in (a, b):
+                    if n in door_of:
+                        em["door"] = door_of[n]
+                        em["door_width"] = doors[door_of[n]][2]
+                edges.append((a, b, em))
+
+
+def _collection(nodes, edges, to_world, res, frame):
+    """The GeoJSON dict of ``nodes`` (pixel, metadata) and ``edges`` (a, b, metadata), both ways."""
+    px = np.array([p for p, _ in nodes], float)
+    x, y = to_world(px[:, 0], px[:, 1])
+    xy = [(float(a), float(b)) for a, b in zip(np.atleast_1d(x), np.atleast_1d(y))]
+    feats = []
+    for i, (_, m) in enumerate(nodes):
+        feats.append({"type": "Feature", "properties": {"id": i, "frame": frame, "metadata": m},
+                      "geometry": {"type": "Point", "coordinates": list(xy[i])}})
+    eid = len(nodes)
+    for a, b, m in edges:
+        length = math.dist(xy[a], xy[b])
+        for s, e in ((a, b), (b, a)):
+            feats.append({"type": "Feature",
+                          "properties": {"id": eid, "startid": s, "endid": e, "cost": length, "metadata": m},
+                          "geometry": {"type": "MultiLineString", "coordinates": [[list(xy[s]), list(xy[e])]]}})
+            eid += 1
+    return {"type": "FeatureCollection", "name": "graph",
+            "crs": {"type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::3857"}},
+            "features": feats}
+
+
+def write_route_graph(graph: dict, path) -> Path:
+    """Write a :func:`route_graph` dict to ``path`` as JSON (atomically: a temporary renamed into place).
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    from .io import atomic_write
+
+    path = Path(path)
+    text = json.dumps(graph, indent=1, allow_nan=False)
+    with atomic_write(path) as f:
+        f.write(text.encode("utf-8"))
+    return path
