@@ -47,7 +47,7 @@ from scipy import ndimage as ndi
 
 from .errors import ParameterError, PlanningError
 
-__all__ = ["route_graph", "write_route_graph", "free_clearance", "segment_clear", "DEFAULT_CLEARANCE",
+__all__ = ["route_graph", "write_route_graph", "labels_beside", "free_clearance", "segment_clear", "DEFAULT_CLEARANCE",
            "FRAME", "SAMPLES_PER_CELL"]
 
 log = logging.getLogger("topomap")
@@ -395,3 +395,39 @@ def write_route_graph(graph: dict, path) -> Path:
     with atomic_write(path) as f:
         f.write(text.encode("utf-8"))
     return path
+
+
+def labels_beside(graph_path) -> np.ndarray:
+    """The label image ``topomap segment`` wrote beside a room graph file.
+
+    Parameters
+    ----------
+    graph_path : str or os.PathLike
+        ``rooms.graphml`` (or ``.json``, ``.geojson``) in a segment output folder.
+
+    Returns
+    -------
+    (M, N) ndarray of int
+        From ``labels.yaml`` + ``labels.pgm`` (:func:`topomap.export.load_label_map`), else from
+        ``labels.png``.
+
+    Raises
+    ------
+    MapFileNotFoundError
+        Neither file is in the folder.
+    MapError
+        ``labels.png`` cannot be read.
+    """
+    from .errors import MapFileNotFoundError
+    from .export import load_label_map
+
+    folder = Path(graph_path).parent
+    if (folder / "labels.yaml").is_file():
+        return load_label_map(folder / "labels.yaml")[0]
+    png = folder / "labels.png"
+    if not png.is_file():
+        raise MapFileNotFoundError(f"{folder}: no labels.yaml + labels.pgm or labels.png beside the room graph "
+                                   "(the folder topomap segment wrote)")
+    from .datasets import read_label_image
+
+    return read_label_image(png).astype(np.int64)
