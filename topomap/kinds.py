@@ -31,6 +31,7 @@ import numpy as np
 from scipy import ndimage as ndi
 
 __all__ = ["KINDS", "CORRIDOR_MAX_WIDTH", "CORRIDOR_MIN_ELONGATION", "CORRIDOR_MIN_LENGTH", "CORRIDOR_MIN_DOORS",
+           "WIDE_CORRIDOR_MAX_WIDTH", "WIDE_CORRIDOR_MIN_ELONGATION",
            "DOORWAY_MAX_AREA", "DOORWAY_MAX_WIDTH", "HALL_MIN_AREA", "HALL_MIN_WIDTH",
            "room_shape", "room_kind", "annotate_kinds"]
 
@@ -47,7 +48,12 @@ CORRIDOR_MAX_WIDTH = 1.2
 CORRIDOR_MIN_ELONGATION = 3.0
 #: ... and at least this long (m): a shorter strip is the space of a door or a niche.
 CORRIDOR_MIN_LENGTH = 2.0
-#: ... with at least this many doors: a corridor leads somewhere; a narrow strip with one door is
+#: A wider corridor, up to this width (m): office and public corridors are 1.5 to 2 m wide ...
+WIDE_CORRIDOR_MAX_WIDTH = 2.0
+#: ... counts when it is at least this many widths long: a long corridor with rooms along it, not a
+#: wide room of a home (which reaches about 4 widths).
+WIDE_CORRIDOR_MIN_ELONGATION = 6.0
+#: A corridor (of either width) has at least this many doors: a corridor leads somewhere; a narrow strip with one door is
 #: a closet, a washroom or a dead end.
 CORRIDOR_MIN_DOORS = 2
 #: A doorway area (a small space between two doors: a draught lobby, the passage through a thick
@@ -104,15 +110,17 @@ def room_kind(area: float, width: float, length: float, doors: int) -> str:
     Returns
     -------
     str
-        ``"corridor"`` (at most :data:`CORRIDOR_MAX_WIDTH` m wide, at least
-        :data:`CORRIDOR_MIN_LENGTH` m and :data:`CORRIDOR_MIN_ELONGATION` widths long, at least
-        :data:`CORRIDOR_MIN_DOORS` doors), ``"doorway"`` (at most :data:`DOORWAY_MAX_AREA` m²
+        ``"corridor"`` (at least :data:`CORRIDOR_MIN_LENGTH` m long with at least
+        :data:`CORRIDOR_MIN_DOORS` doors, and at most :data:`CORRIDOR_MAX_WIDTH` m wide and
+        :data:`CORRIDOR_MIN_ELONGATION` widths long, or at most :data:`WIDE_CORRIDOR_MAX_WIDTH` m
+        wide and :data:`WIDE_CORRIDOR_MIN_ELONGATION` widths long), ``"doorway"`` (at most :data:`DOORWAY_MAX_AREA` m²
         and :data:`DOORWAY_MAX_WIDTH` m wide, two doors or more), ``"hall"`` (at least
         :data:`HALL_MIN_AREA` m² and :data:`HALL_MIN_WIDTH` m wide), else
         ``"room"``; tested in that order.
     """
-    if (doors >= CORRIDOR_MIN_DOORS and width <= CORRIDOR_MAX_WIDTH and length >= CORRIDOR_MIN_LENGTH
-            and length >= CORRIDOR_MIN_ELONGATION * width):
+    if doors >= CORRIDOR_MIN_DOORS and length >= CORRIDOR_MIN_LENGTH and (
+            (width <= CORRIDOR_MAX_WIDTH and length >= CORRIDOR_MIN_ELONGATION * width)
+            or (width <= WIDE_CORRIDOR_MAX_WIDTH and length >= WIDE_CORRIDOR_MIN_ELONGATION * width)):
         return "corridor"
     if doors >= 2 and area <= DOORWAY_MAX_AREA and width <= DOORWAY_MAX_WIDTH:
         return "doorway"

@@ -64,6 +64,9 @@ SAMPLES_PER_CELL = 10
 #: Width (m) of the band along walls in which a cell costs more to cross (up to 3 times): the paths
 #: keep this far from walls where the room is wide enough.
 _PREFER = 1.0
+#: Cells around a door's cells a room's paths may use (the door line may run a cell or two into the
+#: room on the other side).
+_DOOR_REACH = 2
 
 
 def free_clearance(free: np.ndarray, resolution: float) -> np.ndarray:
@@ -126,16 +129,19 @@ def _straighten(ok, path):
 
 
 def _door_line(p1, p2, shape):
-    """Cells on the segment between door end points ``p1``, ``p2`` (pixels), in order, without repeats."""
+    """Cells the segment between door end points ``p1``, ``p2`` (pixels) runs through or along (the
+    cells on both sides where it runs along cell edges), without repeats."""
     (r0, c0), (r1, c1) = p1, p2
     n = int(math.ceil(max(abs(r1 - r0), abs(c1 - c0)) * 2)) + 1
     t = np.linspace(0, 1, n + 1)
-    rr = np.clip(np.floor(r0 + (r1 - r0) * t + 0.5).astype(int), 0, shape[0] - 1)
-    cc = np.clip(np.floor(c0 + (c1 - c0) * t + 0.5).astype(int), 0, shape[1] - 1)
+    r, c = r0 + (r1 - r0) * t, c0 + (c1 - c0) * t
     out = []
-    for p in zip(rr.tolist(), cc.tolist()):
-        if not out or out[-1] != p:
-            out.append(p)
+    for fr, fc in ((np.floor, np.floor), (np.ceil, np.ceil)):  # a line along cell edges: the cells on both sides
+        rr = np.clip(fr(r).astype(int), 0, shape[0] - 1)
+        cc = np.clip(fc(c).astype(int), 0, shape[1] - 1)
+        for p in zip(rr.tolist(), cc.tolist()):
+            if p not in out:
+                out.append(p)
     return out
 
 
@@ -260,14 +266,17 @@ def route_graph(seg_or_G, labels=None, *, clearance: float = DEFAULT_CLEARANCE, 
         mine = [did for did in sorted(doors) if r in doors[did][:2]]
         sl = boxes[ri - 1]
         r0, r1, c0, c1 = sl[0].start, sl[0].stop, sl[1].start, sl[1].stop
+        g = _DOOR_REACH
         for did in mine:
             for p in doors[did][4]:
-                r0, r1, c0, c1 = min(r0, p[0]), max(r1, p[0] + 1), min(c0, p[1]), max(c1, p[1] + 1)
+                r0, r1 = max(min(r0, p[0] - g), 0), min(max(r1, p[0] + g + 1), H)
+                c0, c1 = max(min(c0, p[1] - g), 0), min(max(c1, p[1] + g + 1), W)
         win = (slice(r0, r1), slice(c0, c1))
         region = labels[win] == r
-        for did in mine:
+        for did in mine:  # the door's cells and the free cells around them: the way through the opening
             for p in doors[did][4]:
-                region[p[0] - r0, p[1] - c0] = True
+                a, b = (slice(max(p[0] - g, 0) - r0, p[0] + g + 1 - r0), slice(max(p[1] - g, 0) - c0, p[1] + g + 1 - c0))
+                region[a, b] |= labels[win][a, b] > 0
         region &= ok[win]
         if not region.any():
             log.info("room %s has no cell with a clearance of %.2f m: no node", r, clearance)
