@@ -89,6 +89,38 @@ def rows_of_case(case: Path, variant: str) -> list:
     return out
 
 
+def rows_of_truth(case: Path) -> list:
+    """One row per true room of ``case``: the kind :func:`topomap.kinds.room_kind` gives its own shape
+    (``gt_rooms.png``) and doors (``gt_doors.json``, the outside's included): what the measure can do
+    on rooms segmented exactly as the plan draws them."""
+    from PIL import Image
+    from scipy import ndimage as ndi
+
+    from topomap.kinds import room_kind, room_shape
+
+    gt = np.asarray(Image.open(case / "gt_rooms.png")).astype(np.int64)
+    res = _resolution(case)
+    doors = json.loads((case / "gt_doors.json").read_text())["doors"]
+    boxes = ndi.find_objects(gt)
+    out = []
+    for r in json.loads((case / "gt_rooms.json").read_text())["rooms"]:
+        k = r["id"]
+        if k > len(boxes) or boxes[k - 1] is None:
+            continue
+        s = room_shape(gt[boxes[k - 1]] == k, res)
+        nd = sum(k in d["rooms"] for d in doors)
+        out.append({"case": case.name, "variant": "truth", "room": k, "truth": true_kind(r["kinds"]),
+                    "kind": room_kind(s["area"], s["width"], s["length"], nd), "area": s["area"],
+                    "width": s["width"], "length": s["length"], "doors": nd})
+    return out
+
+
+def _resolution(case: Path) -> float:
+    import yaml
+
+    return float(yaml.safe_load((case / "plan.yaml").read_text())["resolution"])
+
+
 def score(rows, passage=("corridor",)) -> tuple:
     """(precision %, recall %, true corridors, called corridors) of the rows."""
     called = [r["kind"] in passage for r in rows]
@@ -111,26 +143,28 @@ def main():
     rows = []
     for half, cs in halves.items():
         for c in cs:
-            for v in ("plan", "map"):
-                for r in rows_of_case(c, v):
-                    r["half"] = half
-                    rows.append(r)
+            for r in rows_of_case(c, "plan") + rows_of_case(c, "map") + rows_of_truth(c):
+                r["half"] = half
+                rows.append(r)
     wall = time.time() - t0
     if args.rows:
         args.rows.write_text(json.dumps(rows))
     table = ["| plans | variant | rooms | true corridors | called corridors | corridor P / R (%) | "
              "corridor + doorway P / R (%) |", "| --- | --- | --- | --- | --- | --- | --- |"]
     for half in halves:
-        for v, vname in (("plan", "drawn plan"), ("map", "simulated scan")):
+        for v, vname in (("plan", "drawn plan"), ("map", "simulated scan"), ("truth", "the plan's own rooms")):
             rs = [r for r in rows if r["half"] == half and r["variant"] == v]
             p, rc, nt, nc = score(rs)
             p2, r2, _, _ = score(rs, ("corridor", "doorway"))
             table.append(f"| {half} ({len(halves[half])}) | {vname} | {len(rs)} | {nt} | {nc} | "
                          f"{p:.1f} / {rc:.1f} | {p2:.1f} / {r2:.1f} |")
-    kinds = Counter((r["kind"], r["truth"]) for r in rows)
+    kinds = Counter((r["kind"], r["truth"]) for r in rows if r["variant"] != "truth")
     conf = ["| room_kind | true corridor | true other |", "| --- | --- | --- |"]
     for k in ("corridor", "doorway", "room", "hall"):
         conf.append(f"| {k} | {kinds[(k, 'corridor')]} | {kinds[(k, 'other')]} |")
+    ho = score([r for r in rows if r["half"] == "held out" and r["variant"] == "plan"])
+    verdict = ("meets" if min(ho[0], ho[1]) >= 85 else "does not meet") + \
+        f" the target of 85 % corridor precision and recall on the held-out drawn plans ({ho[0]:.1f} / {ho[1]:.1f})"
     text = "\n".join([
         "## Room kinds against the floor plans",
         "",
@@ -146,9 +180,21 @@ def main():
         "",
         *table,
         "",
+        "*The plan's own rooms*: the kind the same rules give each true room from its own cells "
+        "(`gt_rooms.png`) and its doors in the plan (`gt_doors.json`, the doors to the outside "
+        "included), without a segmentation: what the shape measure can tell on these plans. A found room "
+        "is matched and scored as above; the true rooms are scored against their own labels.",
+        "",
         "Every found room of both halves and both variants, by its `room_kind` and its true kind:",
         "",
         *conf,
+        "",
+        f"The shape measure {verdict}. The homes of these plans are small: most of their rooms "
+        "(bathrooms, washrooms, closets, entrances) are as narrow as their corridors (about 1 to 1.5 m on "
+        "the mean-width measure), and many of their corridors are short stubs with an entrance or stairs; "
+        "even on the plan's own rooms the rules separate corridors from the rest only as the third row of "
+        "each half shows. On found rooms it is lower still: a segmentation joins a short corridor to the "
+        "room it opens into or cuts it at a door, and the scans see fewer doors.",
         "",
     ])
     _section.write(args.out, text, "\n".join(table) + "\n", wall)
