@@ -48,7 +48,7 @@ from scipy import ndimage as ndi
 from .errors import ParameterError, PlanningError
 
 __all__ = ["route_graph", "write_route_graph", "labels_beside", "free_clearance", "segment_clear", "DEFAULT_CLEARANCE",
-           "FRAME", "SAMPLES_PER_CELL"]
+           "FRAME", "SAMPLES_PER_CELL", "REACH"]
 
 log = logging.getLogger("topomap")
 
@@ -64,6 +64,9 @@ SAMPLES_PER_CELL = 10
 #: Width (m) of the band along walls in which a cell costs more to cross (up to 3 times): the paths
 #: keep this far from walls where the room is wide enough.
 _PREFER = 1.0
+#: Metres: every reachable cell of a room is at most this far from its tree of paths; the farthest
+#: cell beyond it becomes a waypoint (a leaf) until none is (a large hall gets a tree through it).
+REACH = 3.0
 #: Cells around a door's cells a room's paths may use (the door line may run a cell or two into the
 #: room on the other side).
 _DOOR_REACH = 2
@@ -304,6 +307,7 @@ def route_graph(seg_or_G, labels=None, *, clearance: float = DEFAULT_CLEARANCE, 
                 continue
             key[q] = door_node[did]
             targets.append(q)
+        targets += _far_points(mcp, cum, start, targets, own, res)
         _tree_edges(mcp, start, targets, key, ok[win], nodes, edges, (r0, c0), ri, room_meta[r], doors, door_node)
     if not edges:
         raise PlanningError("no route graph: no door has a clearance of "
@@ -327,6 +331,33 @@ def _room_point(d, own, clear, off, res, G):
         return None
     k = int(np.argmax(np.where(own, clear, -1.0)))
     return divmod(k, own.shape[1])
+
+
+def _far_points(mcp, cum, start, targets, own, res):
+    """Cells of a large room to add to its tree: the cell of ``own`` (reachable) farthest from the
+    paths to ``targets`` while that is more than :data:`REACH` m, so that the tree reaches within
+    :data:`REACH` m of every part of the room (its way along a long corridor, into the aisles of a hall)."""
+    reach = np.isfinite(cum) & own
+    if not reach.any():
+        return []
+    tree = np.zeros(own.shape, bool)
+    tree[start] = True
+    for t in targets:
+        for p in mcp.traceback(t):
+            tree[tuple(p)] = True
+    out = []
+    limit = int(reach.sum() * res * res / (REACH * REACH)) + 1  # never more than the room has REACH-squares
+    while len(out) < limit:
+        d = ndi.distance_transform_edt(~tree) * res
+        d[~reach] = 0.0
+        k = int(np.argmax(d))
+        if d.flat[k] <= REACH:
+            break
+        q = divmod(k, own.shape[1])
+        out.append(q)
+        for p in mcp.traceback(q):
+            tree[tuple(p)] = True
+    return out
 
 
 def _tree_edges(mcp, start, targets, key, ok, nodes, edges, off, room, meta, doors, door_node):
