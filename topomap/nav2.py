@@ -95,18 +95,23 @@ def free_clearance(free: np.ndarray, resolution: float) -> np.ndarray:
 def segment_clear(ok: np.ndarray, a, b) -> bool:
     """Whether every point of the segment from pixel ``a`` to pixel ``b`` lies in an ``ok`` cell.
 
-    ``a`` and ``b`` are ``(row, col)`` (cell centres at integers); points are taken every
-    ``1 / SAMPLES_PER_CELL`` cell along the segment and each is tested in the cell it lies in.
+    ``a`` and ``b`` are ``(row, col)`` (cell centres at integers). Points are taken every
+    ``1 / SAMPLES_PER_CELL`` cell along the segment, and every cell within half that step of a
+    point (along either axis) is tested: every cell the segment touches is among them.
     """
     (r0, c0), (r1, c1) = a, b
     n = int(math.ceil(max(abs(r1 - r0), abs(c1 - c0)) * SAMPLES_PER_CELL)) + 1
     t = np.linspace(0.0, 1.0, n + 1)
-    rr = np.floor(r0 + (r1 - r0) * t + 0.5).astype(np.int64)
-    cc = np.floor(c0 + (c1 - c0) * t + 0.5).astype(np.int64)
+    r, c = r0 + (r1 - r0) * t, c0 + (c1 - c0) * t
     H, W = ok.shape
-    if rr.min() < 0 or cc.min() < 0 or rr.max() >= H or cc.max() >= W:
-        return False
-    return bool(ok[rr, cc].all())
+    h = 0.5 / SAMPLES_PER_CELL  # every point of the segment is within h (per axis) of a sample
+    for dr in (-h, h):
+        for dc in (-h, h):
+            rr = np.floor(r + dr + 0.5).astype(np.int64)
+            cc = np.floor(c + dc + 0.5).astype(np.int64)
+            if rr.min() < 0 or cc.min() < 0 or rr.max() >= H or cc.max() >= W or not ok[rr, cc].all():
+                return False
+    return True
 
 
 def _straighten(ok, path):
