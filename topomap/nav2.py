@@ -18,6 +18,8 @@ The file follows the loader of ``nav2_route`` (``GeoJsonGraphFileLoader``):
   nodes), ``startid``, ``endid`` (IDs of existing nodes), ``cost`` (the travel
   length in metres) and ``metadata``; an edge goes one way, so every link is
   written twice, once each way;
+* IDs fit 16 bits (the route messages of ``nav2_msgs`` carry them so): at most
+  :data:`MAX_IDS` nodes and edges in all;
 * ``metadata`` values are numbers, booleans, strings, arrays of those or
   objects (never ``null``: the loader throws on it).
 
@@ -48,7 +50,7 @@ from scipy import ndimage as ndi
 from .errors import ParameterError, PlanningError
 
 __all__ = ["route_graph", "write_route_graph", "labels_beside", "free_clearance", "segment_clear", "DEFAULT_CLEARANCE",
-           "FRAME", "SAMPLES_PER_CELL", "REACH"]
+           "FRAME", "SAMPLES_PER_CELL", "REACH", "MAX_IDS"]
 
 log = logging.getLogger("topomap")
 
@@ -59,6 +61,9 @@ log = logging.getLogger("topomap")
 DEFAULT_CLEARANCE = 0.2
 #: The frame the nodes' coordinates are in (``frame`` of every node), as map_server publishes the map.
 FRAME = "map"
+#: Node and edge IDs a route graph may use: ``nav2_msgs`` carries them as 16-bit integers
+#: (``ComputeRoute``'s ``start_id`` / ``goal_id``, ``RouteEdge.edgeid``).
+MAX_IDS = 65536
 #: Points tested per cell of an edge's length by :func:`segment_clear`.
 SAMPLES_PER_CELL = 10
 #: Width (m) of the band along walls in which a cell costs more to cross (up to 3 times): the paths
@@ -215,7 +220,8 @@ def route_graph(seg_or_G, labels=None, *, clearance: float = DEFAULT_CLEARANCE, 
     ParameterError
         Bad ``clearance``, labels missing or of another shape than the graph's map.
     PlanningError
-        No edge: no door has the clearance, or the map has one room.
+        No edge (no door has the clearance and no room is large enough for a way through it), or more than
+        :data:`MAX_IDS` nodes and edges.
     """
     from skimage.graph import MCP_Geometric
 
@@ -296,8 +302,6 @@ def route_graph(seg_or_G, labels=None, *, clearance: float = DEFAULT_CLEARANCE, 
         meta = dict(room_meta[r], type="room")
         root = len(nodes)
         nodes.append(((start[0] + r0, start[1] + c0), meta))
-        if not mine:
-            continue
         cost = np.where(region, 1.0 + 2.0 * np.clip(1.0 - clear[win] / _PREFER, 0.0, 1.0), np.inf)
         mcp = MCP_Geometric(cost, fully_connected=False)
         cum, _ = mcp.find_costs([start])
@@ -315,8 +319,12 @@ def route_graph(seg_or_G, labels=None, *, clearance: float = DEFAULT_CLEARANCE, 
         targets += _far_points(mcp, cum, start, targets, own, res)
         _tree_edges(mcp, start, targets, key, ok[win], nodes, edges, (r0, c0), ri, room_meta[r], doors, door_node)
     if not edges:
-        raise PlanningError("no route graph: no door has a clearance of "
-                            f"{clearance:g} m on both sides (or the map has a single room)")
+        raise PlanningError(f"no route graph: no door has a clearance of {clearance:g} m on both sides and no "
+                            f"room is more than {REACH:g} m across at that clearance")
+    if len(nodes) + 2 * len(edges) > MAX_IDS:
+        raise PlanningError(f"route graph of {len(nodes)} nodes and {2 * len(edges)} edges: more IDs than the "
+                            f"{MAX_IDS} Nav2's messages hold (16-bit node and edge IDs); a larger clearance "
+                            "gives fewer")
     return _collection(nodes, edges, to_world, res, frame)
 
 
@@ -341,27 +349,39 @@ def _room_point(d, own, clear, off, res, G):
 def _far_points(mcp, cum, start, targets, own, res):
     """Cells of a large room to add to its tree: the cell of ``own`` (reachable) farthest from the
     paths to ``targets`` while that is more than :data:`REACH` m, so that the tree reaches within
-    :data:`REACH` m of every part of the room (its way along a long corridor, into the aisles of a hall)."""
+    :data:`REACH` m of every part of the room (its way along a long corridor, into the aisles of a hall).
+
+    Distances are taken on blocks of about 0.25 m (one block of the tree's cells or the room's
+    reachable cells: any of its cells), a tenth of the reach."""
+    from .planning import _block_any
+
     reach = np.isfinite(cum) & own
     if not reach.any():
         return []
-    tree = np.zeros(own.shape, bool)
+    f = max(1, int(round(0.25 / res)))
+    H, W = own.shape
+    Hf, Wf = -(-H // f) * f, -(-W // f) * f
+    tree = np.zeros((Hf, Wf), bool)
     tree[start] = True
     for t in targets:
-        for p in mcp.traceback(t):
-            tree[tuple(p)] = True
+        p = mcp.traceback(t)
+        tree[tuple(np.asarray(p).T)] = True
+    big = np.zeros((Hf, Wf), bool)
+    big[:H, :W] = reach
+    reach_b = _block_any(big, f)
     out = []
     limit = int(reach.sum() * res * res / (REACH * REACH)) + 1  # never more than the room has REACH-squares
     while len(out) < limit:
-        d = ndi.distance_transform_edt(~tree) * res
-        d[~reach] = 0.0
+        d = ndi.distance_transform_edt(~_block_any(tree, f)) * (res * f)
+        d[~reach_b] = 0.0
         k = int(np.argmax(d))
         if d.flat[k] <= REACH:
             break
-        q = divmod(k, own.shape[1])
+        br, bc = divmod(k, d.shape[1])
+        cells = np.argwhere(reach[br * f:(br + 1) * f, bc * f:(bc + 1) * f])
+        q = (int(cells[0][0]) + br * f, int(cells[0][1]) + bc * f)
         out.append(q)
-        for p in mcp.traceback(q):
-            tree[tuple(p)] = True
+        tree[tuple(np.asarray(mcp.traceback(q)).T)] = True
     return out
 
 
