@@ -225,12 +225,9 @@ def route_graph(seg_or_G, labels=None, *, clearance: float = DEFAULT_CLEARANCE, 
     """
     from skimage.graph import MCP_Geometric
 
-    try:
-        clearance = float(clearance)
-    except (TypeError, ValueError):
-        raise ParameterError(f"clearance must be a number of metres, got {clearance!r}") from None
-    if not math.isfinite(clearance) or clearance < 0:
-        raise ParameterError(f"clearance must be >= 0 m, got {clearance!r}")
+    from .options import check_length
+
+    clearance = check_length("clearance", clearance)
     if isinstance(seg_or_G, nx.Graph):
         G = seg_or_G
         if labels is None:
