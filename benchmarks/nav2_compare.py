@@ -3,7 +3,7 @@
 
 Run (not a test)::
 
-    python benchmarks/nav2_compare.py NAV2_DIR [--picture docs/img/nav2_compare.png]
+    python benchmarks/nav2_compare.py NAV2_DIR [--picture docs/img/nav2_compare.png] [--all]
 
 ``NAV2_DIR`` holds Nav2's sample maps and graphs (``depot.yaml``,
 ``depot_graph.geojson``, ``warehouse.yaml``, ``warehouse_graph.geojson``, from
@@ -77,6 +77,9 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("directory", type=Path, help="folder of Nav2's sample maps and graphs")
     ap.add_argument("--picture", type=Path, default=None, help="PNG of both graphs of both maps")
+    ap.add_argument("--all", action="store_true",
+                    help="also make and measure the route graph of every map of ipa_room_segmentation and "
+                         "rose2_real (found as for topomap benchmark)")
     args = ap.parse_args()
 
     import matplotlib
@@ -102,6 +105,16 @@ def main():
     if args.picture:
         fig.savefig(args.picture, dpi=80)
     sys.stdout.write("\n".join(rows) + "\n")
+    if args.all:
+        from topomap.datasets import benchmark_dir, load_benchmark, load_labelled, real_maps_dir
+
+        grids = [bm.load() for v in ("unfurnished", "furnished") for bm in load_benchmark(benchmark_dir(), variant=v)]
+        grids += [bm.load() for bm in load_labelled(real_maps_dir())]
+        n = e = close = 0
+        for grid in grids:
+            m = measure(grid, route_graph(topomap.segment(grid)), DEFAULT_CLEARANCE)
+            n, e, close = n + m["nodes"], e + m["edges"], close + m["close"]
+        print(f"{len(grids)} benchmark maps: {n} nodes, {e} edges, {close} closer than {DEFAULT_CLEARANCE} m to a wall")
 
 
 if __name__ == "__main__":
