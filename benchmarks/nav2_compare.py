@@ -3,7 +3,8 @@
 
 Run (not a test)::
 
-    python benchmarks/nav2_compare.py NAV2_DIR [--picture docs/img/nav2_compare.png] [--all]
+    python benchmarks/nav2_compare.py NAV2_DIR [--picture docs/img/nav2_compare.png]
+        [--kinds-picture docs/img/room_kinds.png --kinds-map WILLOW_FULL.yaml] [--all]
 
 ``NAV2_DIR`` holds Nav2's sample maps and graphs (``depot.yaml``,
 ``depot_graph.geojson``, ``warehouse.yaml``, ``warehouse_graph.geojson``, from
@@ -73,10 +74,42 @@ def draw(ax, grid, m, title):
     ax.set_yticks([])
 
 
+KIND_COLOURS = {"corridor": (0.95, 0.6, 0.1), "doorway": (0.85, 0.2, 0.2), "hall": (0.3, 0.5, 0.9),
+                "room": (0.55, 0.8, 0.55)}
+
+
+def draw_kinds(seg, out, plt):
+    """The rooms of ``seg`` coloured by their ``room_kind``, with their IDs, doors as black lines."""
+    from matplotlib.patches import Patch
+
+    grid, G = seg.grid, seg.room_graph
+    img = np.where(grid.occupied, 0.0, np.where(grid.free, 1.0, 0.8))[..., None].repeat(3, axis=2)
+    for n, k in G.nodes(data="room_kind"):
+        img[seg.room_labels == n] = KIND_COLOURS[k]
+    x0, y0 = grid.pixel_to_world(grid.shape[0] - 0.5, -0.5)
+    x1, y1 = grid.pixel_to_world(-0.5, grid.shape[1] - 0.5)
+    fig, ax = plt.subplots(figsize=(10, 5.4))
+    ax.imshow(img, extent=(x0, x1, y0, y1), interpolation="nearest")
+    for *_, d in G.edges(data=True):
+        ax.plot([d["x1"], d["x2"]], [d["y1"], d["y2"]], "k-", lw=2)
+    for n, d in G.nodes(data=True):
+        ax.text(d["x"], d["y"], f"{n}\n{d['width']:.1f} m", ha="center", va="center", fontsize=7)
+    ax.legend(handles=[Patch(color=c, label=k) for k, c in KIND_COLOURS.items()], loc="upper right", fontsize=8)
+    ax.set_xticks([])
+    ax.set_yticks([])
+    ax.set_title("room_kind of each room (room ID and mean width)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(out, dpi=80)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("directory", type=Path, help="folder of Nav2's sample maps and graphs")
     ap.add_argument("--picture", type=Path, default=None, help="PNG of both graphs of both maps")
+    ap.add_argument("--kinds-picture", type=Path, default=None,
+                    help="PNG of the rooms of --kinds-map coloured by their room_kind")
+    ap.add_argument("--kinds-map", type=Path, default=None,
+                    help="map YAML for --kinds-picture (default: the depot)")
     ap.add_argument("--all", action="store_true",
                     help="also make and measure the route graph of every map of ipa_room_segmentation and "
                          "rose2_real (found as for topomap benchmark)")
@@ -104,6 +137,9 @@ def main():
     fig.tight_layout()
     if args.picture:
         fig.savefig(args.picture, dpi=80)
+    if args.kinds_picture:
+        draw_kinds(topomap.segment(topomap.load_map(args.kinds_map or args.directory / "depot.yaml")),
+                   args.kinds_picture, plt)
     sys.stdout.write("\n".join(rows) + "\n")
     if args.all:
         from topomap.datasets import benchmark_dir, load_benchmark, load_labelled, real_maps_dir

@@ -54,3 +54,40 @@ def test_rooms_of_a_map_get_their_kind_and_keep_it_in_files(tmp_path):
         save_graph(G, tmp_path / f"g.{ext}")
         H = load_graph(tmp_path / f"g.{ext}")
         assert {n: d["room_kind"] for n, d in H.nodes(data=True)} == kinds
+
+
+def _kinds_of(labels, doors, res=0.05):
+    import networkx as nx
+
+    from topomap.kinds import annotate_kinds
+
+    G = nx.MultiGraph()
+    G.add_nodes_from(int(v) for v in np.unique(labels) if v)
+    for k, (a, b) in enumerate(doors):
+        G.add_edge(a, b, key=k)
+    annotate_kinds(G, labels, res)
+    return G
+
+
+def test_furniture_does_not_narrow_a_room_but_a_block_of_walls_does():
+    L = np.zeros((120, 120), np.int32)
+    L[10:110, 10:110] = 1                     # a 5 m x 5 m room ...
+    plain = _kinds_of(L, []).nodes[1]["width"]
+    L[50:70, 40:80] = 0                       # ... with a 1 m x 2 m desk in the middle
+    assert _kinds_of(L, []).nodes[1]["width"] == pytest.approx(plain)
+    # a 1 m wide ring corridor around a 3 m x 3 m block (9 m², not furniture): a corridor
+    R = np.zeros((120, 120), np.int32)
+    R[10:110, 10:110] = 1
+    R[30:90, 30:90] = 0
+    R[0:10, 50:60] = 2                        # rooms outside it, through two doors
+    R[110:120, 50:60] = 3
+    G = _kinds_of(R, [(1, 2), (1, 3)])
+    assert G.nodes[1]["width"] == pytest.approx(1.0, abs=0.1)
+    assert G.nodes[1]["room_kind"] == "corridor"
+    # an enclosed patch that holds another room is never filled, however small
+    C = np.zeros((120, 120), np.int32)
+    C[10:110, 10:110] = 1
+    C[50:70, 50:70] = 0                       # a 1 m x 1 m wall box ...
+    filled = _kinds_of(C, []).nodes[1]["width"]
+    C[55:65, 55:65] = 2                       # ... around a closet of another room
+    assert _kinds_of(C, []).nodes[1]["width"] < filled - 0.1

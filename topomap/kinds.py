@@ -13,7 +13,8 @@ The measures
     The room's mean width from its distance transform: each cell's distance
     to the nearest cell outside the room, averaged over the room, times four
     (a strip of width ``w`` has mean distance ``w / 4`` to its long sides;
-    one cell is taken off for the cell-centre distances). A long strip gives
+    one cell is taken off for the cell-centre distances; enclosed patches of
+    furniture up to :data:`FURNITURE_MAX_AREA` count as floor). A long strip gives
     its width, a square of side ``s`` ``2 s / 3``, an ``a`` × ``b`` rectangle
     ``a - a² / (3 b)``.
 ``length`` (m)
@@ -32,7 +33,7 @@ from scipy import ndimage as ndi
 
 __all__ = ["KINDS", "CORRIDOR_MAX_WIDTH", "CORRIDOR_MIN_ELONGATION", "CORRIDOR_MIN_LENGTH", "CORRIDOR_MIN_DOORS",
            "WIDE_CORRIDOR_MAX_WIDTH", "WIDE_CORRIDOR_MIN_ELONGATION",
-           "DOORWAY_MAX_AREA", "DOORWAY_MAX_WIDTH", "HALL_MIN_AREA", "HALL_MIN_WIDTH",
+           "FURNITURE_MAX_AREA", "DOORWAY_MAX_AREA", "DOORWAY_MAX_WIDTH", "HALL_MIN_AREA", "HALL_MIN_WIDTH",
            "room_shape", "room_kind", "annotate_kinds"]
 
 #: The kinds :func:`room_kind` gives.
@@ -48,8 +49,8 @@ CORRIDOR_MAX_WIDTH = 1.2
 CORRIDOR_MIN_ELONGATION = 3.0
 #: ... and at least this long (m): a shorter strip is the space of a door or a niche.
 CORRIDOR_MIN_LENGTH = 2.0
-#: A wider corridor, up to this width (m): office and public corridors are 1.5 to 2 m wide ...
-WIDE_CORRIDOR_MAX_WIDTH = 2.0
+#: A wider corridor, up to this width (m): office and public corridors are 1.5 to 2.4 m wide ...
+WIDE_CORRIDOR_MAX_WIDTH = 2.5
 #: ... counts when it is at least this many widths long: a long corridor with rooms along it, not a
 #: wide room of a home (which reaches about 4 widths).
 WIDE_CORRIDOR_MIN_ELONGATION = 6.0
@@ -61,6 +62,10 @@ CORRIDOR_MIN_DOORS = 2
 DOORWAY_MAX_AREA = 2.5
 #: ... and at most this wide (m): as wide as a door and its frame.
 DOORWAY_MAX_WIDTH = 1.5
+#: Patches of furniture (desks, tables, pillars: cells of no room enclosed by one room) up to this
+#: area (m²) count as the room's floor for its width and length: a desk makes an office no narrower.
+#: Larger enclosed patches (a block of walls, a court) are kept out.
+FURNITURE_MAX_AREA = 4.0
 #: A hall is at least this large (m²) ...
 HALL_MIN_AREA = 40.0
 #: ... and this wide (m): a large open space (a lobby, an open-plan floor), not a long corridor.
@@ -131,6 +136,22 @@ def room_kind(area: float, width: float, length: float, doors: int) -> str:
     return "room"
 
 
+def _without_furniture(L, n, resolution):
+    """The cells of room ``n`` in its box of labels ``L``, with the enclosed patches of no room's cells
+    (furniture, pillars) of at most :data:`FURNITURE_MAX_AREA` m² filled in."""
+    m = L == n
+    holes, k = ndi.label(~m)
+    if k == 0:
+        return m
+    size = np.bincount(holes.ravel(), minlength=k + 1)
+    fill = size * resolution ** 2 <= FURNITURE_MAX_AREA
+    fill[0] = False
+    edge = np.concatenate([holes[0], holes[-1], holes[:, 0], holes[:, -1]])
+    fill[edge] = False  # reaches the box's border: not enclosed
+    fill[holes[(L != 0) & ~m]] = False  # holds another room's cells
+    return m | fill[holes]
+
+
 def annotate_kinds(G, labels: np.ndarray, resolution: float, *, boxes=None) -> None:
     """Put ``room_kind``, ``width`` and ``length`` on every room node of ``G``.
 
@@ -153,7 +174,7 @@ def annotate_kinds(G, labels: np.ndarray, resolution: float, *, boxes=None) -> N
         sl = boxes[n - 1] if 0 < n <= len(boxes) else None
         if sl is None:
             continue
-        s = room_shape(labels[sl] == n, resolution)
+        s = room_shape(_without_furniture(labels[sl], n, resolution), resolution)
         G.nodes[n]["room_kind"] = room_kind(s["area"], s["width"], s["length"], G.degree(n))
         G.nodes[n]["width"] = s["width"]
         G.nodes[n]["length"] = s["length"]
