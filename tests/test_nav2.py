@@ -261,6 +261,37 @@ def test_write_and_cli(tmp_path):
     assert p.read_text() == text.rstrip("\n")
 
 
+@pytest.mark.parametrize("argv, code, words", [
+    (["--nav2", "{t}/n.geojson", "--clearance", "-1"], 1, "--clearance must be a length >= 0 m, got -1.0"),
+    (["--clearance", "0.3"], 2, "--clearance needs --nav2"),
+    ([], 2, "give OUTPUT, --nav2"),
+    (["--nav2", "{t}/n.geojson", "--clearance", "5"], 1, "no route graph"),
+])
+def test_export_bad_input(tmp_path, argv, code, words):
+    seg = topomap.segment(topomap.from_array(corridor_with_rooms().array))
+    from topomap.cli import write_segmentation
+
+    write_segmentation(seg, tmp_path / "out", overlay=False)
+    (tmp_path / "n.geojson").write_text("earlier")
+    r = CliRunner().invoke(main, ["export", str(tmp_path / "out" / "rooms.graphml"),
+                                  *[a.format(t=tmp_path) for a in argv]])
+    assert r.exit_code == code and words in r.output and r.output.count("\n") == 1, r.output
+    assert (tmp_path / "n.geojson").read_text() == "earlier"
+
+
+def test_export_labels_of_another_map(tmp_path):
+    from topomap.cli import write_segmentation
+
+    write_segmentation(topomap.segment(topomap.from_array(corridor_with_rooms().array)), tmp_path / "a",
+                       overlay=False)
+    write_segmentation(topomap.segment(topomap.from_array(l_corridor())), tmp_path / "b", overlay=False)
+    for name in ("labels.yaml", "labels.pgm"):
+        (tmp_path / "a" / name).write_bytes((tmp_path / "b" / name).read_bytes())
+    r = CliRunner().invoke(main, ["export", str(tmp_path / "a" / "rooms.graphml"), "--nav2", str(tmp_path / "n.geojson")])
+    assert r.exit_code == 1 and "do not match the room graph's map" in r.output and str(tmp_path / "a") in r.output
+    assert not (tmp_path / "n.geojson").exists()
+
+
 def _real_nogt():
     from topomap.datasets import _shared_dataset
 

@@ -657,22 +657,30 @@ def export_cmd(source, target, nav2, clearance):
     """
     from .export import _format, load_graph, save_graph
 
-    if target is None and nav2 is None:
-        click.echo("error: give OUTPUT, --nav2 GEOJSON or both", err=True)
-        sys.exit(EXIT_USAGE)
     if clearance is not None and nav2 is None:
         click.echo("error: --clearance needs --nav2", err=True)
         sys.exit(EXIT_USAGE)
+    if target is None and nav2 is None:
+        click.echo("error: give OUTPUT, --nav2 GEOJSON or both", err=True)
+        sys.exit(EXIT_USAGE)
+    route = None
     try:
+        if clearance is not None:
+            from .options import check_length
+
+            clearance = check_length("--clearance", clearance)
         if target is not None:
             _format(target)
         G = load_graph(source)
-        route = None
         if nav2 is not None:
             from .nav2 import DEFAULT_CLEARANCE, labels_beside, route_graph
 
             route = route_graph(G, labels_beside(source), clearance=DEFAULT_CLEARANCE if clearance is None
                                 else clearance)
+    except Exception as exc:  # noqa: BLE001
+        named = "--clearance" in str(exc) or any(str(p) in str(exc) for p in (target, nav2) if p is not None)
+        sys.exit(_fail(exc, "" if named else _naming(source, exc)))
+    try:
         if target is not None:
             save_graph(G, target)
         if route is not None:
@@ -680,7 +688,7 @@ def export_cmd(source, target, nav2, clearance):
 
             write_route_graph(route, nav2)
     except Exception as exc:  # noqa: BLE001
-        sys.exit(_fail(exc, _naming(source, exc) and _naming(target or nav2, exc)))
+        sys.exit(_fail(exc, _naming(target or nav2, exc) and _naming(nav2 or target, exc)))
     if target is not None:
         click.echo(f"{source} -> {target}: {_count(G.number_of_nodes(), 'room')}, "
                    f"{_count(G.number_of_edges(), 'door')}")
