@@ -279,6 +279,17 @@ def test_export_bad_input(tmp_path, argv, code, words):
     assert (tmp_path / "n.geojson").read_text() == "earlier"
 
 
+def test_graph_without_door_ends_is_a_one_line_error():
+    seg = topomap.segment(topomap.from_array(corridor_with_rooms().array))
+    G = seg.room_graph.copy()
+    for *_, d in G.edges(data=True):
+        del d["p1"]
+    with pytest.raises(PlanningError, match="lacks the attribute 'p1'"):
+        route_graph(G, seg.labels)
+    with pytest.raises(ParameterError, match="needs its labels"):
+        route_graph(G)
+
+
 def test_export_labels_of_another_map(tmp_path):
     from topomap.cli import write_segmentation
 

@@ -256,19 +256,32 @@ def route_graph(seg_or_G, labels=None, *, clearance: float = DEFAULT_CLEARANCE, 
 
     doors = {}  # id -> (a, b, width, best cell)
     for a, b, k, d in G.edges(keys=True, data=True):
-        did = int(d.get("door", k))
-        line = _door_line(tuple(d["p1"]), tuple(d["p2"]), labels.shape)
+        try:
+            did = int(d.get("door", k))
+            p1, p2 = (tuple(float(v) for v in d[key]) for key in ("p1", "p2"))
+            width = float(d["width"])
+            if len(p1) != 2 or len(p2) != 2:
+                raise ValueError("p1 and p2 must be (row, col)")
+        except KeyError as exc:
+            raise PlanningError(f"room graph: door {a}-{b} lacks the attribute {exc.args[0]!r} (doors need p1, "
+                                "p2, width)") from None
+        except (TypeError, ValueError) as exc:
+            raise PlanningError(f"room graph: door {a}-{b} has a bad attribute: {exc}") from None
+        line = _door_line(p1, p2, labels.shape)
         cells = [p for p in line if ok[p]]
         if not cells:
-            log.info("door %d (%.2f m) is too narrow for a clearance of %.2f m: no node", did, d["width"], clearance)
+            log.info("door %d (%.2f m) is too narrow for a clearance of %.2f m: no node", did, width, clearance)
             continue
         best = max(cells, key=lambda p: clear[p])
-        doors[did] = (a, b, float(d["width"]), best, line)
+        doors[did] = (a, b, width, best, line)
     for did in sorted(doors):
         a, b, w, px, _ = doors[did]
         door_node[did] = len(nodes)
         nodes.append((px, {"type": "door", "door": did, "rooms": [_plain(a), _plain(b)], "width": w}))
 
+    if not all(isinstance(r, (int, np.integer)) and not isinstance(r, bool) for r in G.nodes):
+        raise PlanningError("room graph: room IDs must be integers (the labels of the label image), got "
+                            f"{sorted(map(repr, G.nodes))[:5]}")
     boxes = ndi.find_objects(np.where(labels > 0, labels, 0).astype(np.int64, copy=False))
     for r in sorted(G.nodes):
         ri = int(r)
