@@ -298,7 +298,8 @@ def test_export_labels_of_another_map(tmp_path):
     write_segmentation(topomap.segment(topomap.from_array(l_corridor())), tmp_path / "b", overlay=False)
     for name in ("labels.yaml", "labels.pgm"):
         (tmp_path / "a" / name).write_bytes((tmp_path / "b" / name).read_bytes())
-    r = CliRunner().invoke(main, ["export", str(tmp_path / "a" / "rooms.graphml"), "--nav2", str(tmp_path / "n.geojson")])
+    r = CliRunner().invoke(main, ["export", str(tmp_path / "a" / "rooms.graphml"), "--nav2",
+                                  str(tmp_path / "n.geojson")])
     assert r.exit_code == 1 and "do not match the room graph's map" in r.output and str(tmp_path / "a") in r.output
     assert not (tmp_path / "n.geojson").exists()
 

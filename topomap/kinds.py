@@ -54,8 +54,8 @@ WIDE_CORRIDOR_MAX_WIDTH = 2.5
 #: ... counts when it is at least this many widths long: a long corridor with rooms along it, not a
 #: wide room of a home (which reaches about 4 widths).
 WIDE_CORRIDOR_MIN_ELONGATION = 6.0
-#: A corridor (of either width) has at least this many doors: a corridor leads somewhere; a narrow strip with one door is
-#: a closet, a washroom or a dead end.
+#: A corridor (of either width) has at least this many doors: a corridor leads somewhere; a
+#: narrow strip with one door is a closet, a washroom or a dead end.
 CORRIDOR_MIN_DOORS = 2
 #: A doorway area (a small space between two doors: a draught lobby, the passage through a thick
 #: wall, the short stub of hallway a segmentation cuts between two doors) is at most this large (m²).

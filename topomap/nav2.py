@@ -158,24 +158,6 @@ def _door_line(p1, p2, shape):
     return out
 
 
-def _frame(G, labels):
-    """``(resolution, to_world)`` of the room graph's map frame."""
-    from .io import OccupancyGrid
-
-    try:
-        res = float(G.graph["resolution"])
-        origin = tuple(float(v) for v in G.graph["origin"])
-    except (KeyError, TypeError, ValueError):
-        raise ParameterError("room graph lacks the map frame (graph attributes 'resolution', 'origin'); build "
-                             "it with topomap.room_graph or load it with topomap.export.load_graph") from None
-    shape = G.graph.get("shape")
-    if shape is not None and tuple(int(v) for v in shape) != tuple(labels.shape):
-        raise ParameterError(f"labels of shape {tuple(labels.shape)} do not match the room graph's map "
-                             f"(shape {tuple(int(v) for v in shape)})")
-    grid = OccupancyGrid(np.broadcast_to(np.int8(0), labels.shape), res, origin)
-    return res, grid.pixel_to_world
-
-
 def _plain(v):
     """``v`` as a metadata value the Nav2 loader takes (numbers, strings, booleans, lists of them), or None."""
     if isinstance(v, (bool, np.bool_)):
@@ -237,7 +219,13 @@ def route_graph(seg_or_G, labels=None, *, clearance: float = DEFAULT_CLEARANCE, 
     labels = np.asarray(labels)
     if labels.ndim != 2:
         raise ParameterError(f"labels must be a 2-D array, got shape {labels.shape}")
-    res, to_world = _frame(G, labels)
+    from .planning import _Ctx
+
+    ctx = _Ctx(G)  # the map frame and the doors' ends, checked (PlanningError naming what is missing)
+    if ctx.shape != tuple(labels.shape):
+        raise ParameterError(f"labels of shape {tuple(labels.shape)} do not match the room graph's map "
+                             f"(shape {ctx.shape})")
+    res, to_world = ctx.res, ctx.grid.pixel_to_world
     clear = free_clearance(labels > 0, res)
     ok = clear >= clearance
     H, W = labels.shape
@@ -255,18 +243,7 @@ def route_graph(seg_or_G, labels=None, *, clearance: float = DEFAULT_CLEARANCE, 
         room_meta[r] = m
 
     doors = {}  # id -> (a, b, width, best cell)
-    for a, b, k, d in G.edges(keys=True, data=True):
-        try:
-            did = int(d.get("door", k))
-            p1, p2 = (tuple(float(v) for v in d[key]) for key in ("p1", "p2"))
-            width = float(d["width"])
-            if len(p1) != 2 or len(p2) != 2:
-                raise ValueError("p1 and p2 must be (row, col)")
-        except KeyError as exc:
-            raise PlanningError(f"room graph: door {a}-{b} lacks the attribute {exc.args[0]!r} (doors need p1, "
-                                "p2, width)") from None
-        except (TypeError, ValueError) as exc:
-            raise PlanningError(f"room graph: door {a}-{b} has a bad attribute: {exc}") from None
+    for did, (a, b, p1, p2, width, _) in sorted(ctx.doors.items()):
         line = _door_line(p1, p2, labels.shape)
         cells = [p for p in line if ok[p]]
         if not cells:
@@ -299,14 +276,15 @@ def route_graph(seg_or_G, labels=None, *, clearance: float = DEFAULT_CLEARANCE, 
         region = labels[win] == r
         for did in mine:  # the door's cells and the free cells around them: the way through the opening
             for p in doors[did][4]:
-                a, b = (slice(max(p[0] - g, 0) - r0, p[0] + g + 1 - r0), slice(max(p[1] - g, 0) - c0, p[1] + g + 1 - c0))
+                a = slice(max(p[0] - g, 0) - r0, p[0] + g + 1 - r0)
+                b = slice(max(p[1] - g, 0) - c0, p[1] + g + 1 - c0)
                 region[a, b] |= labels[win][a, b] > 0
         region &= ok[win]
         if not region.any():
             log.info("room %s has no cell with a clearance of %.2f m: no node", r, clearance)
             continue
         own = region & (labels[win] == r)
-        start = _room_point(G.nodes[r], own, clear[win], (r0, c0), res, G)
+        start = _room_point(G.nodes[r], own, clear[win], (r0, c0), ctx.grid)
         if start is None:
             continue
         meta = dict(room_meta[r], type="room")
@@ -338,14 +316,10 @@ def route_graph(seg_or_G, labels=None, *, clearance: float = DEFAULT_CLEARANCE, 
     return _collection(nodes, edges, to_world, res, frame)
 
 
-def _room_point(d, own, clear, off, res, G):
+def _room_point(d, own, clear, off, grid):
     """The room's node pixel (window coordinates): its interior point if set and clear, else its
     cell of largest clearance (the first in row-major order among equals)."""
     if d.get("interior_x") is not None and d.get("interior_y") is not None:
-        from .io import OccupancyGrid
-
-        grid = OccupancyGrid(np.broadcast_to(np.int8(0), tuple(int(v) for v in G.graph["shape"])), res,
-                             tuple(float(v) for v in G.graph["origin"]))
         row, col = grid.world_to_pixel(float(d["interior_x"]), float(d["interior_y"]))
         q = (int(round(float(row))) - off[0], int(round(float(col))) - off[1])
         if 0 <= q[0] < own.shape[0] and 0 <= q[1] < own.shape[1] and own[q]:
