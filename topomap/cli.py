@@ -677,22 +677,61 @@ def simulate_cmd(plans, outdir, seed, explore, glass, closed_doors, no_drift, no
 
 @main.command("export")
 @click.argument("source", metavar="INPUT", type=click.Path(path_type=Path))
-@click.argument("target", metavar="OUTPUT", type=click.Path(path_type=Path))
-def export_cmd(source, target):
-    """Convert a room graph between GraphML, JSON and GeoJSON.
+@click.argument("target", metavar="OUTPUT", required=False, type=click.Path(path_type=Path))
+@click.option("--nav2", "nav2", type=click.Path(path_type=Path), default=None, metavar="GEOJSON",
+              help="Write the Nav2 Route Server graph of INPUT's rooms to this file (needs labels.yaml + "
+                   "labels.pgm or labels.png beside INPUT, as topomap segment writes them).")
+@click.option("--clearance", type=float, default=None, metavar="M",
+              help="With --nav2: metres every edge keeps from walls and unknown space (default 0.2; "
+                   "your robot's radius).")
+def export_cmd(source, target, nav2, clearance):
+    """Convert a room graph between GraphML, JSON and GeoJSON, or export a Nav2 route graph.
 
     The formats follow the extensions: .graphml (or .xml), .json (node-link
-    data) and .geojson (map-frame metres).
+    data) and .geojson (map-frame metres). With --nav2, writes the route
+    graph Nav2's Route Server loads (OUTPUT may then be left out).
     """
     from .export import _format, load_graph, save_graph
 
+    if clearance is not None and nav2 is None:
+        click.echo("error: --clearance needs --nav2", err=True)
+        sys.exit(EXIT_USAGE)
+    if target is None and nav2 is None:
+        click.echo("error: give OUTPUT, --nav2 GEOJSON or both", err=True)
+        sys.exit(EXIT_USAGE)
+    route = None
     try:
-        _format(target)
+        if clearance is not None:
+            from .options import check_length
+
+            clearance = check_length("--clearance", clearance)
+        if target is not None:
+            _format(target)
         G = load_graph(source)
-        save_graph(G, target)
+        if nav2 is not None:
+            from .nav2 import DEFAULT_CLEARANCE, labels_beside, route_graph
+
+            route = route_graph(G, labels_beside(source), clearance=DEFAULT_CLEARANCE if clearance is None
+                                else clearance)
     except Exception as exc:  # noqa: BLE001
-        sys.exit(_fail(exc, _naming(source, exc) and _naming(target, exc)))
-    click.echo(f"{source} -> {target}: {_count(G.number_of_nodes(), 'room')}, {_count(G.number_of_edges(), 'door')}")
+        named = "--clearance" in str(exc) or any(str(p) in str(exc) for p in (target, nav2) if p is not None)
+        sys.exit(_fail(exc, "" if named else _naming(source, exc)))
+    try:
+        if target is not None:
+            save_graph(G, target)
+        if route is not None:
+            from .nav2 import write_route_graph
+
+            write_route_graph(route, nav2)
+    except Exception as exc:  # noqa: BLE001
+        sys.exit(_fail(exc, _naming(target or nav2, exc) and _naming(nav2 or target, exc)))
+    if target is not None:
+        click.echo(f"{source} -> {target}: {_count(G.number_of_nodes(), 'room')}, "
+                   f"{_count(G.number_of_edges(), 'door')}")
+    if route is not None:
+        n = sum(f["geometry"]["type"] == "Point" for f in route["features"])
+        click.echo(f"{source} -> {nav2}: Nav2 route graph, {_count(n, 'node')}, "
+                   f"{_count(len(route['features']) - n, 'edge')}")
 
 
 class _EditCommand(click.Command):

@@ -583,7 +583,8 @@ GRAPH_TYPES = {"resolution": float, "origin": _float_tuple, "method": _opt(str),
 #: Types of the room (node) attributes.
 NODE_TYPES = {"area": float, "cells": int, "x": float, "y": float, "row": float, "col": float,
               "interior_x": float, "interior_y": float, "interior_row": float, "interior_col": float,
-              "polygon": _opt(_geometry), "door_distances": _door_distances}
+              "polygon": _opt(_geometry), "door_distances": _door_distances,
+              "room_kind": str, "width": float, "length": float}
 #: Types of the door (edge) attributes.
 EDGE_TYPES = {"door": int, "width": float, "x": float, "y": float, "x1": float, "y1": float, "x2": float,
               "y2": float, "p1": _float_tuple, "p2": _float_tuple, "rooms": _int_pair}

@@ -17,6 +17,7 @@ from scipy import ndimage as ndi
 
 from ._fast import lookup
 from .geometry import label_rings, mask_rings
+from .kinds import annotate_kinds
 
 __all__ = ["room_graph", "room_polygons", "interior_points", "OUTLINE_MIN_RINGS", "OUTLINE_CELLS_PER_RING"]
 
@@ -393,4 +394,5 @@ def room_graph(seg) -> nx.MultiGraph:
         G.add_edge(a, b, key=d.id, door=d.id, width=float(d.width), x=float(mx), y=float(my),
                    x1=float(d.xy1[0]), y1=float(d.xy1[1]), x2=float(d.xy2[0]), y2=float(d.xy2[1]),
                    p1=tuple(d.p1), p2=tuple(d.p2))
+    annotate_kinds(G, labels, grid.resolution, boxes=objs)
     return G

@@ -1,0 +1,180 @@
+"""What kind of space each room is: corridor, room, hall or doorway, from its shape.
+
+:func:`room_shape` measures a room from its cells alone; :func:`room_kind` turns
+the measures and the room's number of doors into a kind; :func:`annotate_kinds`
+puts both on every node of a room graph (:func:`topomap.roomgraph.room_graph`
+calls it). Every threshold is a physical quantity (m, m²) or a ratio of
+lengths; the "Graph attributes" page of the documentation gives the reason of
+each.
+
+The measures
+------------
+``width`` (m)
+    The room's mean width from its distance transform: each cell's distance
+    to the nearest cell outside the room, averaged over the room, times four
+    (a strip of width ``w`` has mean distance ``w / 4`` to its long sides;
+    one cell is taken off for the cell-centre distances; enclosed patches of
+    furniture up to :data:`FURNITURE_MAX_AREA` count as floor). A long strip gives
+    its width, a square of side ``s`` ``2 s / 3``, an ``a`` × ``b`` rectangle
+    ``a - a² / (3 b)``.
+``length`` (m)
+    ``area / width``: the length of the strip of that width and area — the
+    length of the room's skeleton for a strip, however it bends.
+``elongation``
+    ``length / width`` (``area / width²``): about the ratio of the sides plus
+    0.8 for a rectangle, 2.25 for a square, the length over the width for a
+    long corridor.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import ndimage as ndi
+
+__all__ = ["KINDS", "CORRIDOR_MAX_WIDTH", "CORRIDOR_MIN_ELONGATION", "CORRIDOR_MIN_LENGTH", "CORRIDOR_MIN_DOORS",
+           "WIDE_CORRIDOR_MAX_WIDTH", "WIDE_CORRIDOR_MIN_ELONGATION",
+           "FURNITURE_MAX_AREA", "DOORWAY_MAX_AREA", "DOORWAY_MAX_WIDTH", "HALL_MIN_AREA", "HALL_MIN_WIDTH",
+           "room_shape", "room_kind", "annotate_kinds"]
+
+#: The kinds :func:`room_kind` gives.
+KINDS = ("corridor", "room", "hall", "doorway")
+
+#: A corridor is at most this wide (m, mean width): hallways of homes are 0.9 to 1.2 m wide (a
+#: wheelchair needs 0.9 m, two people pass in 1.2 m); a strip wider than that is a room (a long
+#: kitchen, a gallery), and small rooms of homes (a bathroom, a washroom) are 1.2 to 1.5 m wide on
+#: this measure, so a wider limit calls them corridors.
+CORRIDOR_MAX_WIDTH = 1.2
+#: ... and at least this many widths long (length / width): a square has 2.25 and a 2:1
+#: rectangle 2.9 on this measure; a passage longer than about three times its width is a corridor.
+CORRIDOR_MIN_ELONGATION = 3.0
+#: ... and at least this long (m): a shorter strip is the space of a door or a niche.
+CORRIDOR_MIN_LENGTH = 2.0
+#: A wider corridor, up to this width (m): office and public corridors are 1.5 to 2.4 m wide ...
+WIDE_CORRIDOR_MAX_WIDTH = 2.5
+#: ... counts when it is at least this many widths long: a long corridor with rooms along it, not a
+#: wide room of a home (which reaches about 4 widths).
+WIDE_CORRIDOR_MIN_ELONGATION = 6.0
+#: A corridor (of either width) has at least this many doors: a corridor leads somewhere; a
+#: narrow strip with one door is a closet, a washroom or a dead end.
+CORRIDOR_MIN_DOORS = 2
+#: A doorway area (a small space between two doors: a draught lobby, the passage through a thick
+#: wall, the short stub of hallway a segmentation cuts between two doors) is at most this large (m²).
+DOORWAY_MAX_AREA = 2.5
+#: ... and at most this wide (m): as wide as a door and its frame.
+DOORWAY_MAX_WIDTH = 1.5
+#: Patches of furniture (desks, tables, pillars: cells of no room enclosed by one room) up to this
+#: area (m²) count as the room's floor for its width and length: a desk makes an office no narrower.
+#: Larger enclosed patches (a block of walls, a court) are kept out.
+FURNITURE_MAX_AREA = 4.0
+#: A hall is at least this large (m²) ...
+HALL_MIN_AREA = 40.0
+#: ... and this wide (m): a large open space (a lobby, an open-plan floor), not a long corridor.
+HALL_MIN_WIDTH = 3.0
+
+
+def room_shape(mask: np.ndarray, resolution: float) -> dict:
+    """Shape measures of one room.
+
+    Parameters
+    ----------
+    mask : (M, N) ndarray of bool
+        The room's cells (any box around them).
+    resolution : float
+        Metres per cell.
+
+    Returns
+    -------
+    dict
+        ``area`` (m²), ``width`` (m, mean width), ``length`` (m, ``area / width``) and
+        ``elongation`` (``length / width``), as the module docstring defines them.
+    """
+    m = np.pad(np.asarray(mask, bool), 1)
+    n = int(np.count_nonzero(m))
+    if n == 0:
+        return {"area": 0.0, "width": 0.0, "length": 0.0, "elongation": 0.0}
+    # exact Euclidean distances in float64 (OpenCV's precise transform is faster, but its float32
+    # values change with its number of threads: the same map would give other widths)
+    dt = ndi.distance_transform_edt(m)
+    mean = float(dt[m].mean())
+    width = max(4.0 * mean - 2.0, 1.0) * resolution  # cell-centre distances: a strip of k cells has mean (k + 2) / 4
+    area = n * resolution ** 2
+    length = area / width
+    return {"area": area, "width": width, "length": length, "elongation": length / width}
+
+
+def room_kind(area: float, width: float, length: float, doors: int) -> str:
+    """The kind of a room of these measures (:func:`room_shape`) and number of doors.
+
+    Parameters
+    ----------
+    area : float
+        m².
+    width, length : float
+        m.
+    doors : int
+        Number of the room's doors.
+
+    Returns
+    -------
+    str
+        ``"corridor"`` (at least :data:`CORRIDOR_MIN_LENGTH` m long with at least
+        :data:`CORRIDOR_MIN_DOORS` doors, and at most :data:`CORRIDOR_MAX_WIDTH` m wide and
+        :data:`CORRIDOR_MIN_ELONGATION` widths long, or at most :data:`WIDE_CORRIDOR_MAX_WIDTH` m
+        wide and :data:`WIDE_CORRIDOR_MIN_ELONGATION` widths long), ``"doorway"`` (at most :data:`DOORWAY_MAX_AREA` m²
+        and :data:`DOORWAY_MAX_WIDTH` m wide, two doors or more), ``"hall"`` (at least
+        :data:`HALL_MIN_AREA` m² and :data:`HALL_MIN_WIDTH` m wide), else
+        ``"room"``; tested in that order.
+    """
+    if doors >= CORRIDOR_MIN_DOORS and length >= CORRIDOR_MIN_LENGTH and (
+            (width <= CORRIDOR_MAX_WIDTH and length >= CORRIDOR_MIN_ELONGATION * width)
+            or (width <= WIDE_CORRIDOR_MAX_WIDTH and length >= WIDE_CORRIDOR_MIN_ELONGATION * width)):
+        return "corridor"
+    if doors >= 2 and area <= DOORWAY_MAX_AREA and width <= DOORWAY_MAX_WIDTH:
+        return "doorway"
+    if area >= HALL_MIN_AREA and width >= HALL_MIN_WIDTH:
+        return "hall"
+    return "room"
+
+
+def _without_furniture(L, n, resolution):
+    """The cells of room ``n`` in its box of labels ``L``, with the enclosed patches of no room's cells
+    (furniture, pillars) of at most :data:`FURNITURE_MAX_AREA` m² filled in."""
+    m = L == n
+    holes, k = ndi.label(~m)
+    if k == 0:
+        return m
+    size = np.bincount(holes.ravel(), minlength=k + 1)
+    fill = size * resolution ** 2 <= FURNITURE_MAX_AREA
+    fill[0] = False
+    edge = np.concatenate([holes[0], holes[-1], holes[:, 0], holes[:, -1]])
+    fill[edge] = False  # reaches the box's border: not enclosed
+    fill[holes[(L != 0) & ~m]] = False  # holds another room's cells
+    return m | fill[holes]
+
+
+def annotate_kinds(G, labels: np.ndarray, resolution: float, *, boxes=None) -> None:
+    """Put ``room_kind``, ``width`` and ``length`` on every room node of ``G``.
+
+    Parameters
+    ----------
+    G : networkx.MultiGraph
+        Room graph: its nodes are labels of ``labels``, its edges doors.
+    labels : (M, N) ndarray of int
+        The room labels.
+    resolution : float
+        Metres per cell.
+    boxes : list of tuple of slice, optional
+        ``ndi.find_objects(labels)``: the box of label ``i`` at ``boxes[i - 1]`` (found when not given).
+    """
+    if G.number_of_nodes() == 0:
+        return
+    if boxes is None:
+        boxes = ndi.find_objects(labels, max_label=max(G.nodes))
+    for n in G.nodes:
+        sl = boxes[n - 1] if 0 < n <= len(boxes) else None
+        if sl is None:
+            continue
+        s = room_shape(_without_furniture(labels[sl], n, resolution), resolution)
+        G.nodes[n]["room_kind"] = room_kind(s["area"], s["width"], s["length"], G.degree(n))
+        G.nodes[n]["width"] = s["width"]
+        G.nodes[n]["length"] = s["length"]
