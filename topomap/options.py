@@ -278,6 +278,19 @@ class TopomapOptions(_Options):
         room (a WC). A shallower space behind a gap in a wall — a niche, an
         alcove, a recess for a radiator or a cupboard — belongs to the room
         or corridor it opens onto.
+    closet_depth : float
+        An opening whose space on one side is shallower than
+        ``alcove_depth`` is still cut where that space is at least this deep
+        (m) and runs on behind the wall past an end of the opening
+        (``closet_behind``): 0.6 m, the depth of a wardrobe closet; a
+        balcony behind a sliding door is 0.9-1.5 m deep. A niche or an
+        alcove is as wide as its mouth; a closet or a balcony is wider than
+        its door. 0 turns this off.
+    closet_behind : float
+        How far (m) the shallow space must run on past an end of the
+        opening, along the wall: 0.5 m, beyond the width of a door frame
+        and the slack of a scanned wall's end. 0 turns ``closet_depth``
+        off.
     long_wall : float
         With ``openings``, a straight wall at least this long (m) whose
         pieces cover at least half of it is a structural wall — a
@@ -439,6 +452,8 @@ class TopomapOptions(_Options):
     openings: bool = _opt(True, "bool")
     beside_wall: float = _opt(1.0, "length")
     alcove_depth: float = _opt(1.2, "length")
+    closet_depth: float = _opt(0.6, "length")
+    closet_behind: float = _opt(0.5, "length")
     long_wall: float = _opt(4.0, "length")
     wall_wander: float = _opt(0.2, "length")
     face_gap: float = _opt(0.25, "length")

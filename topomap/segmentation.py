@@ -806,7 +806,8 @@ class _Walls:
         ops = W.wall_openings(self.obstacle, self.free, min_wall_px=opts.min_wall_length / res,
                               min_gap_px=opts.min_door_width / res, max_gap_px=opts.max_door_width / res,
                               side_px=opts.min_door_width / res, depth_px=opts.alcove_depth / res, faces=self.faces,
-                              lines=self.lines, beside_px=opts.beside_wall / res)
+                              lines=self.lines, beside_px=opts.beside_wall / res,
+                              closet_px=opts.closet_depth / res, behind_px=opts.closet_behind / res)
         if self.lw:
             # long straight walls: the gaps in them are openings, and an
             # opening from one of them to another spans a corridor

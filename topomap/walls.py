@@ -150,20 +150,38 @@ def _face_runs(faces, starts, dirs, n, offsets):
     return (np.take(faces, at) & inside).any(axis=1).mean(axis=1) >= 0.7
 
 
-def _depth_ok(obstacle, p, q, depth_px):
+def _depth_ok(obstacle, p, q, depth_px, *, closet_px: float = 0.0, behind_px: float = 0.0):
     """Whether the space on both sides of each segment ``p``-``q`` (rows of
     ``(E, 2)`` arrays) reaches at least ``depth_px`` from it, perpendicular
     to it, along one of three probes (at a quarter, half and three quarters
-    of its length): ``(E,)`` bool."""
+    of its length): ``(E,)`` bool.
+
+    With ``closet_px`` and ``behind_px``, a side at least ``closet_px`` deep
+    counts too where the space there runs on past an end of the segment, along
+    it, for at least ``behind_px``: a closet or a balcony behind a door, wider
+    than its door, rather than a niche as wide as its mouth.
+    """
     p, q = np.atleast_2d(np.asarray(p, float)), np.atleast_2d(np.asarray(q, float))
     v = q - p
-    n = _perp(v / np.maximum(np.hypot(*v.T), 1e-9)[:, None])
+    L = np.hypot(*v.T)
+    d = v / np.maximum(L, 1e-9)[:, None]
+    n = _perp(d)
     k = max(int(np.ceil(depth_px)), 1)
     # the six probes (two sides, three points) of every segment in one call
     starts = np.concatenate([p + f * v for _ in (n, -n) for f in (0.25, 0.5, 0.75)])
     dirs = np.concatenate([side for side in (n, -n) for _ in (0.25, 0.5, 0.75)])
-    deep = (_free_runs(obstacle, starts, dirs, k) == k).reshape(2, 3, len(p))
-    return deep.any(axis=1).all(axis=0)
+    runs = _free_runs(obstacle, starts, dirs, k).reshape(2, 3, len(p))
+    deep = (runs == k).any(axis=1)
+    if closet_px > 0 and behind_px > 0 and not deep.all():
+        # a shallow side: along the segment, half the closet's depth behind its middle, both ways
+        mid = (p + q) / 2
+        h = 0.5 * closet_px
+        reach = int(np.ceil(L.max() / 2 + behind_px)) + 1
+        along = np.concatenate([mid + h * side for side in (n, -n) for _ in (1, -1)])
+        ways = np.concatenate([sign * d for _ in (n, -n) for sign in (1, -1)])
+        wide = (_free_runs(obstacle, along, ways, reach).reshape(2, 2, len(p)) >= (L / 2 + behind_px)).any(axis=1)
+        deep |= (runs.max(axis=1) >= closet_px) & wide
+    return deep.all(axis=0)
 
 
 def _spans_passage(obstacle, p, q, depth_px, slack: float = 1.25):
@@ -258,7 +276,7 @@ def _gaps(obstacle, free, segs, back, n_gap, offsets, min_gap_px, max_gap_px, ch
 def wall_openings(obstacle: np.ndarray, free: np.ndarray, *, min_wall_px: float, min_gap_px: float,
                   max_gap_px: float, side_px: float, depth_px: float = 0.0, band_px: int = 1,
                   faces: np.ndarray | None = None, lines: np.ndarray | None = None,
-                  beside_px: float = 0.0) -> list:
+                  beside_px: float = 0.0, closet_px: float = 0.0, behind_px: float = 0.0) -> list:
     """Openings between collinear pieces of straight walls.
 
     From each end of every straight wall face (:func:`wall_lines`, at least
@@ -301,6 +319,11 @@ def wall_openings(obstacle: np.ndarray, free: np.ndarray, *, min_wall_px: float,
         A gap at most this long that ends on a wall face crossing the line
         (instead of the same wall going on) is an opening too: a door beside
         a wall. 0 (default): none.
+    closet_px, behind_px : float
+        A side shallower than ``depth_px`` is deep enough where it is at
+        least ``closet_px`` deep and the space there runs on past an end of
+        the gap for ``behind_px`` (:func:`_depth_ok`): a closet or a balcony
+        behind a door. 0 (default): never.
     faces, lines : ndarray, optional
         :func:`wall_faces` of ``obstacle`` and ``free`` and their
         :func:`wall_lines` (at least ``min_wall_px`` long), when the caller
@@ -339,7 +362,7 @@ def wall_openings(obstacle: np.ndarray, free: np.ndarray, *, min_wall_px: float,
     ok = ~crossed[0] & np.where(goes_on, ~crossed[1], crossed[1] & (gap <= beside_px))
     if depth_px > 0 and ok.any():
         k = np.flatnonzero(ok)
-        ok[k] = _depth_ok(obstacle, p[k], far[k], depth_px)
+        ok[k] = _depth_ok(obstacle, p[k], far[k], depth_px, closet_px=closet_px, behind_px=behind_px)
         k = np.flatnonzero(ok)
         if k.size:
             ok[k] = ~_spans_passage(obstacle, p[k], far[k], depth_px)
