@@ -812,7 +812,8 @@ class _Walls:
             # long straight walls: the gaps in them are openings, and an
             # opening from one of them to another spans a corridor
             ops = ops + W.long_wall_gaps(self.obstacle, self.free, self.lw, min_gap_px=opts.min_door_width / res,
-                                         max_gap_px=opts.max_door_width / res, depth_px=opts.alcove_depth / res)
+                                         max_gap_px=opts.max_door_width / res, depth_px=opts.alcove_depth / res,
+                                         closet_px=opts.closet_depth / res, behind_px=opts.closet_behind / res)
         if opts.partition_wall > 0:
             # partitions mapped in part: the gap from a partition's end to the
             # wall it points at, with laser hits along it

@@ -854,13 +854,14 @@ def across_walls_many(P, Q, walls, *, tol_px: float, min_angle: float = np.deg2r
 
 
 def long_wall_gaps(obstacle: np.ndarray, free: np.ndarray, walls: list, *, min_gap_px: float,
-                   max_gap_px: float, depth_px: float) -> list:
+                   max_gap_px: float, depth_px: float, closet_px: float = 0.0, behind_px: float = 0.0) -> list:
     """Openings in long straight walls (:func:`long_walls`).
 
     Every gap of ``min_gap_px`` to ``max_gap_px`` between two pieces of a
     long wall, free along at least half of the wall's line across it, with
-    space at least ``depth_px`` deep on both sides (no niche), is an
-    opening: a corridor's side wall or a façade runs on past its doorways,
+    space at least ``depth_px`` deep on both sides (no niche; or, with
+    ``closet_px`` and ``behind_px``, a closet or balcony wider than the gap:
+    :func:`_depth_ok`), is an opening: a corridor's side wall or a façade runs on past its doorways,
     so a gap in it is a way through it even where the laser saw a speck in
     the doorway (an open door leaf, a person) or did not see the wall's
     end. The opening spans the free cells of the gap.
@@ -902,5 +903,5 @@ def long_wall_gaps(obstacle: np.ndarray, free: np.ndarray, walls: list, *, min_g
     if not wide.size:
         return []
     p, q = p[wide], q[wide]
-    deep = _depth_ok(obstacle, p, q, depth_px)
+    deep = _depth_ok(obstacle, p, q, depth_px, closet_px=closet_px, behind_px=behind_px)
     return [(p[i], q[i]) for i in np.flatnonzero(deep)]
