@@ -253,9 +253,10 @@ def test_format_table(all_rows):
         ["furnished"] * len(METHODS)
     assert [ln.split("|")[1].strip() for ln in body[: len(METHODS)]] == list(METHODS)
     assert "±" in body[0]
-    # watershed reports no doors: no door score
+    # watershed cuts no doors of its own; its rooms that touch are joined by doors where they meet
+    # (rooms.join_touching_rooms), and those are scored
     ws = [ln for ln in body if ln.startswith("| watershed | unfurnished")][0]
-    assert ws.split("|")[11].strip() == "–"
+    assert 0 <= float(ws.split("|")[11]) <= 100
 
 
 def test_format_table_by_hand():

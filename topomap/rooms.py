@@ -662,10 +662,18 @@ def _doorless_contacts(labels: np.ndarray, n_rooms: int, doors):
     if n_rooms < 2 or H == 0 or W == 0:
         return None
     ii, jj = [], []
+    fragments = int(labels.max()) > n_rooms
     for dr, dc in _FORWARD:
         a = labels[:H - dr, max(0, -dc):W - max(0, dc)]
         b = labels[dr:, max(0, dc):W - max(0, -dc)]
-        r, c = np.nonzero((a != b) & (a > 0) & (b > 0) & (a <= n_rooms) & (b <= n_rooms))
+        m = a != b  # in place from here on: one mask of the image's size at a time, and a test's
+        m &= a > 0
+        m &= b > 0
+        if fragments:
+            m &= a <= n_rooms
+            m &= b <= n_rooms
+        r, c = np.nonzero(m)
+        del m
         c = c + max(0, -dc)
         ii.append(r * W + c)
         jj.append((r + dr) * W + c + dc)
