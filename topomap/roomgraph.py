@@ -302,9 +302,15 @@ def interior_points(labels: np.ndarray, n: int, centroids=None):
     r0, r1, c0, c1 = box
     L = L[r0:r1, c0:c1]
     L = np.where(L <= n, L, 0) if L.max() > n else L
-    P = np.pad(L, 1)
-    inner = ((L > 0) & (P[:-2, 1:-1] == L) & (P[2:, 1:-1] == L) & (P[1:-1, :-2] == L) & (P[1:-1, 2:] == L))
-    del P
+    # cells whose 4 neighbours are of their own room (in place: one more mask at a time); the
+    # cells on the map's border are on their room's edge
+    inner = L > 0
+    inner[1:] &= L[1:] == L[:-1]
+    inner[:-1] &= L[:-1] == L[1:]
+    inner[:, 1:] &= L[:, 1:] == L[:, :-1]
+    inner[:, :-1] &= L[:, :-1] == L[:, 1:]
+    inner[[0, -1], :] = False
+    inner[:, [0, -1]] = False
     clear = edt(inner, exact=False)  # 0 on the rooms' edges, else the distance to the nearest edge cell
     del inner
     flat, val = L.ravel(), clear.ravel()

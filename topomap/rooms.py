@@ -509,12 +509,11 @@ def doors_between_rooms(grid: OccupancyGrid, labels: np.ndarray, segments) -> li
 
     A segment's rooms are the two labels most frequent among the 8-neighbours
     of its pixels on free space; a segment with fewer than two labels around it separates
-    nothing and is dropped, and so is a repeat of a kept segment. Every label
-    is a room: two rooms whose cells touch and that no segment joins get a
-    door where they touch (:func:`join_touching_rooms`, never merged).
+    nothing and is dropped, and so is a repeat of a kept segment. (Only the
+    method's own segments: rooms that touch where no segment lies get no door
+    here; :func:`join_touching_rooms` adds them.)
     """
-    doors = _doors_between(grid, labels, segments, [line_pixels(p, q, labels.shape) for p, q in segments])
-    return join_touching_rooms(grid, labels, doors, int(labels.max(initial=0)))[1]
+    return _doors_between(grid, labels, segments, [line_pixels(p, q, labels.shape) for p, q in segments])
 
 
 def _doors_between(grid: OccupancyGrid, labels: np.ndarray, segments, lines) -> list:
@@ -573,6 +572,10 @@ def _doors_between(grid: OccupancyGrid, labels: np.ndarray, segments, lines) -> 
 def join_touching_rooms(grid: OccupancyGrid, labels: np.ndarray, doors: list, n_rooms: int, *,
                         max_door_width=None):
     """Join every two rooms whose cells touch: by a door between them, or as one room.
+
+    :func:`cut_rooms` (the methods ``"topomap"`` and ``"paper"``) ends with it;
+    the baselines keep the doors of their own segments only (the watershed
+    has none), as the methods they reproduce do.
 
     Rooms are cut apart along door segments, yet two rooms can still touch
     where no door joins them: two cuts across the two faces of a doorway in a
@@ -662,10 +665,18 @@ def _doorless_contacts(labels: np.ndarray, n_rooms: int, doors):
     if n_rooms < 2 or H == 0 or W == 0:
         return None
     ii, jj = [], []
+    fragments = int(labels.max()) > n_rooms
     for dr, dc in _FORWARD:
         a = labels[:H - dr, max(0, -dc):W - max(0, dc)]
         b = labels[dr:, max(0, dc):W - max(0, -dc)]
-        r, c = np.nonzero((a != b) & (a > 0) & (b > 0) & (a <= n_rooms) & (b <= n_rooms))
+        m = a != b  # in place from here on: one mask of the image's size at a time, and a test's
+        m &= a > 0
+        m &= b > 0
+        if fragments:
+            m &= a <= n_rooms
+            m &= b <= n_rooms
+        r, c = np.nonzero(m)
+        del m
         c = c + max(0, -dc)
         ii.append(r * W + c)
         jj.append((r + dr) * W + c + dc)
