@@ -4,7 +4,8 @@
 Run (not a test)::
 
     python benchmarks/simulated.py CORPUS [--jobs 2] [--maps 'a*,b*'] [--split dev]
-        [--methods topomap,paper] [--csv rows.csv] [--out benchmarks/sections/89_simulated.md]
+        [--methods topomap,paper] [--csv rows.csv] [--rows rows.csv]
+        [--out benchmarks/sections/89_simulated.md]
 
 ``CORPUS`` is what ``topomap simulate PLAN... -o CORPUS`` writes: one folder
 per case with the simulated robot map (``map.yaml``), the floor plan drawn
@@ -29,7 +30,8 @@ true rooms (summed over the cases), and door precision / recall pooled
 over the cases (detected doors within 0.5 m of a true door between two
 rooms, matched one to one: the true positives of every case over all
 detections, resp. over all true doors). ``--maps`` takes a fixed subset
-(names or shell patterns), for a run that fits the time at hand.
+(names or shell patterns), for a run that fits the time at hand. ``--rows``
+writes the section again from the rows a run saved with ``--csv``.
 """
 
 from __future__ import annotations
@@ -101,6 +103,8 @@ def main(argv=None) -> int:
                     help="only the cases of this half of the plans (topomap.datasets.plan_split; default both)")
     ap.add_argument("--methods", default=METHODS)
     ap.add_argument("--csv", type=Path, default=None, help="also save the per-case rows here")
+    ap.add_argument("--rows", type=Path, default=None,
+                    help="write the section from the rows a run saved with --csv (give that run's options)")
     a = ap.parse_args(argv)
     if a.directory is None or not Path(a.directory).is_dir():
         sys.exit(f"error: no corpus directory {a.directory or ''} (pass the folder topomap simulate wrote)")
@@ -121,8 +125,14 @@ def main(argv=None) -> int:
         maps = [n for n in select_names(found, a.maps, a.directory) if plan_split(n) == a.split]
         if not maps:
             sys.exit(f"error: no case of the {a.split} plans in {a.directory}")
-    rows = run_benchmark(a.directory, methods=a.methods, variants="both", jobs=a.jobs, maps=maps,
-                         progress=progress)
+    if a.rows is not None:
+        import csv
+
+        with open(a.rows, newline="", encoding="utf-8") as fh:
+            rows = list(csv.DictReader(fh))
+    else:
+        rows = run_benchmark(a.directory, methods=a.methods, variants="both", jobs=a.jobs, maps=maps,
+                             progress=progress)
     if a.csv is not None:
         write_rows(rows, a.csv)
     n_cases = len({r["map"] for r in rows})
@@ -134,6 +144,15 @@ def main(argv=None) -> int:
     if a.methods != METHODS:
         cmd += f" --methods {a.methods}"
     tab = table(rows)
+    subset = ""
+    if a.maps or a.split:
+        from topomap.datasets import _simulated_cases, plan_split
+
+        n_all = len(_simulated_cases(Path(a.directory)))
+        halves = [plan_split(m) for m in {r["map"] for r in rows}]
+        subset = (f" A fixed subset, for the time at hand: the cases named by `--maps`"
+                  f"{' and `--split`' if a.split else ''}, {n_cases} of the corpus's {n_all} "
+                  f"({halves.count('dev')} dev, {halves.count('held-out')} held-out).")
     errors = sorted({f"{r['map']} ({r['variant']}): {r['error']}" for r in rows if r.get("error")})
     err_text = ("\nFailed runs:\n\n" + "\n".join(f"- {e}" for e in errors[:10]) + "\n") if errors else ""
     text = f"""## Simulated maps of home floor plans
@@ -158,7 +177,7 @@ laser did not reach); free-cells: the protocol that restricts the true rooms
 to the map's free cells too. Rooms: reported (room-graph nodes) / true, summed over the
 cases. Door P / R: detected doors within 0.5 m of a true door between two
 rooms, matched one to one, pooled over the cases (–: the method reports
-no doors). Runtimes with {a.jobs} parallel jobs.
+no doors). Runtimes with {a.jobs} parallel jobs.{subset}
 
 {tab}{err_text}"""
     _section.write(a.out, text, tab, time.perf_counter() - t0)

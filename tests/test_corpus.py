@@ -62,9 +62,11 @@ def test_a_case_holds_every_file_on_one_grid(plans, tmp_path):
 def test_the_same_seed_gives_the_same_map_another_seed_another(plans, tmp_path):
     for name, seed in (("a", 5), ("b", 5), ("c", 6)):
         assert _run("simulate", plans[0], "-o", tmp_path / name, "--seed", seed).exit_code == 0
-    read = lambda n: (tmp_path / n / "map.pgm").read_bytes()  # noqa: E731
+    read = lambda n, f="map.pgm": (tmp_path / n / f).read_bytes()  # noqa: E731
     assert read("a") == read("b")
     assert read("a") != read("c")
+    for f in ("gt_rooms_scan.png", "gt_doors_scan.json", "gt_rooms.json"):  # the scan's truth as well
+        assert read("a", f) == read("b", f)
 
 
 def test_an_up_to_date_case_is_skipped_and_other_options_run_again(plans, tmp_path):

@@ -230,6 +230,10 @@ def test_the_section_script(corpus, tmp_path):
     assert "| watershed | scan | held-out | 2 | " in text and "| – | 0.0 |" in text
     assert "| dev |" not in text
     assert rows.read_text().count("\n") == 1 + 2 * 2 * 2
+    again = tmp_path / "again.md"  # the section written again from the saved rows
+    assert simulated.main([str(corpus), "--methods", "topomap,watershed", "--jobs", "1", "--rows", str(rows),
+                           "--out", str(again)]) == 0
+    assert again.read_text().split("| method |")[1] == text.split("| method |")[1]
     assert simulated.main([str(corpus), "--maps", "house_a", "--methods", "topomap", "--jobs", "1",
                            "--out", str(out)]) == 0
     assert "`CORPUS`), 1 case, commit" in out.read_text() and "--maps 'house_a'" in out.read_text()
@@ -238,6 +242,7 @@ def test_the_section_script(corpus, tmp_path):
                            "--out", str(out)]) == 0
     text = out.read_text()
     assert "--split dev" in text and "`CORPUS`), 1 case, commit" in text
+    assert "1 of the corpus's 3 (1 dev, 0 held-out)" in text
     assert "| topomap | plan | dev | 1 | " in text and "held-out" not in text.split("| --- |")[-1]
     with pytest.raises(SystemExit, match="no case of the dev plans"):
         simulated.main([str(corpus), "--split", "dev", "--maps", "house_a", "--out", str(out)])
