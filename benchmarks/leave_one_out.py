@@ -314,6 +314,8 @@ class Scorer:
         self.errors = {}
         self.seconds = 0.0
         self.n_segmented = 0
+        self.from_disk = set()
+        self.used = set()
         self.cache_path = None
         self._pool = None
         if cache_dir is not None:
@@ -321,6 +323,7 @@ class Scorer:
             if self.cache_path.is_file():
                 for k, v in json.loads(self.cache_path.read_text(encoding="utf-8")).items():
                     self.memo[k] = tuple(v)
+            self.from_disk = set(self.memo)
 
     @staticmethod
     def _mkey(ref: MapRef, key: tuple) -> str:
@@ -334,6 +337,7 @@ class Scorer:
         for ref in maps:
             for key in keys:
                 self.requests.append((ref.key, key))
+                self.used.add(self._mkey(ref, key))
                 if self._mkey(ref, key) not in self.memo:
                     todo.setdefault(ref, [])
                     if key not in todo[ref]:
@@ -565,16 +569,26 @@ def command(a) -> str:
     return cmd
 
 
+def _cpu_minutes() -> float:
+    """CPU time (min) of this process and its finished worker processes."""
+    import os
+
+    t = os.times()
+    return (t.user + t.system + t.children_user + t.children_system) / 60
+
+
 def section(a, results, whole, space, scorer, wall, skipped) -> tuple:
     ftab, etab, ttab = fold_table(results), everything_table(whole), tuned_table(results, space)
     n_err = len(scorer.errors)
     err = (f"\n{n_err} segmentation{'s' if n_err != 1 else ''} failed (scored 0 / 0), e.g. "
            f"{next(iter(scorer.errors.values()))}.\n") if n_err else ""
     skip = "".join(f"\n{s}\n" for s in skipped)
+    n_disk = len(scorer.used & scorer.from_disk)
+    cached = f"; {n_disk} scores read from the disk cache of an earlier run" if n_disk else ""
     text = f"""## Leave-one-out: options tuned on some maps, scored on others
 
-`{command(a)}`, commit `{_commit()}`; {_machine()}; {wall / 60:.1f} min with {a.jobs} jobs
-({scorer.n_segmented} segmentations).
+`{command(a)}`, commit `{_commit()}`; {_machine()}; {wall / 60:.1f} min with {a.jobs} jobs,
+{_cpu_minutes():.1f} min of CPU ({scorer.n_segmented} segmentations{cached}).
 
 A guard against rules that fit the files they were developed on. Each data
 set is split into two sides; the default method's options are tuned on one

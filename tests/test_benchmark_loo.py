@@ -170,3 +170,24 @@ def test_bad_space_is_one_line_error(sites, tmp_path):
         loo.main(["--real", str(sites), "--no-defaults", "--space", '{"wall_gap": ["wide"]}',
                   "--out", str(tmp_path / "s.md")])
     assert not (tmp_path / "s.md").exists()
+
+
+def test_disk_cache_scores_each_map_and_options_once(tmp_path, monkeypatch):
+    calls = []
+
+    def fake(ref, keys):
+        calls.extend((ref.name, k) for k in keys)
+        return [(0.5, 0.75, 0.0, "") for _ in keys]
+
+    monkeypatch.setattr(loo, "score_task", fake)
+    maps = [loo.MapRef("d", "nowhere", "map", n) for n in ("m1", "m2")]
+    first = loo.Scorer(jobs=1, cache_dir=tmp_path)
+    assert first.scores(maps, [{}, {"wall_gap": 0.4}, {}]) == [[(0.5, 0.75)] * 2] * 3
+    first.save()
+    assert len(calls) == 4
+    again = loo.Scorer(jobs=1, cache_dir=tmp_path)
+    assert again.scores(maps, [{"wall_gap": 0.4}]) == [[(0.5, 0.75)] * 2]
+    assert len(calls) == 4 and again.n_segmented == 0
+    assert len(again.used & again.from_disk) == 2
+    # the cache file is named after the code that scored: another version of topomap starts afresh
+    assert [p.name for p in tmp_path.iterdir()] == [f"scores_{loo.code_version()}.json"]
