@@ -565,7 +565,7 @@ def command(a) -> str:
             cmd += f" {flag} {flag[2:].upper()}_DIR"
     if a.space:
         cmd += f" --space {Path(a.space).name if Path(a.space).is_file() else repr(a.space)}"
-    cmd += f" --sweeps {a.sweeps} --corpus-cases {a.corpus_cases} --jobs {a.jobs}"
+    cmd += f" --sweeps {a.sweeps}" + (f" --corpus-cases {a.corpus_cases}" if a.corpus else "") + f" --jobs {a.jobs}"
     return cmd
 
 
@@ -587,7 +587,7 @@ def section(a, results, whole, space, scorer, wall, skipped) -> tuple:
     cached = f"; {n_disk} scores read from the disk cache of an earlier run" if n_disk else ""
     text = f"""## Leave-one-out: options tuned on some maps, scored on others
 
-`{command(a)}`, commit `{_commit()}`; {_machine()}; {wall / 60:.1f} min with {a.jobs} jobs,
+`{command(a)}`, commit `{_commit()}`; {_machine()}; {wall / 60:.1f} min with {a.jobs} job{"s" if a.jobs > 1 else ""},
 {_cpu_minutes():.1f} min of CPU ({scorer.n_segmented} segmentations{cached}).
 
 A guard against rules that fit the files they were developed on. Each data
