@@ -72,6 +72,8 @@ from pathlib import Path
 
 import numpy as np
 
+# the topomap of this checkout (the commit the section names), not another installed copy
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _section  # noqa: E402
 from _section import _commit, _machine  # noqa: E402
