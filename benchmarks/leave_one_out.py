@@ -131,8 +131,11 @@ class Fold:
 
 
 def plan_split(name: str) -> int:
-    """The half (0 or 1) a corpus case belongs to: a stable hash of its name (not Python's salted ``hash``)."""
-    return int(hashlib.sha1(name.encode("utf-8", "surrogateescape")).hexdigest(), 16) % 2
+    """The half (0: dev, 1: held-out) a corpus case belongs to: :func:`topomap.datasets.plan_split`,
+    the split every user of a corpus makes."""
+    from topomap.datasets import SPLITS, plan_split as split
+
+    return SPLITS.index(split(name))
 
 
 def _hash_order(name: str) -> str:
@@ -179,8 +182,8 @@ def corpus_folds(directory, per_half=None) -> list:
 
     halves = corpus_halves(_simulated_cases(Path(directory)), per_half)
     refs = [_refs("corpus", directory, SIMULATED_VARIANTS, h) for h in halves]
-    return [Fold("corpus", "half 0", "half 1", refs[0], refs[1]),
-            Fold("corpus", "half 1", "half 0", refs[1], refs[0])]
+    return [Fold("corpus", "dev half", "held-out half", refs[0], refs[1]),
+            Fold("corpus", "held-out half", "dev half", refs[1], refs[0])]
 
 
 # --------------------------------------------------------------------------
