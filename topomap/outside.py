@@ -142,9 +142,13 @@ def enclosure(free: np.ndarray, occupied: np.ndarray, resolution: float, *, open
 
     free = np.asarray(free, bool)
     H, W = free.shape
+    ring = np.ones((3, 3), np.uint8)
+    enclosed = np.where(free, 8.0, 0.0).astype(np.float32)
+    if not (cv2.dilate(unknown_cells(free, occupied, gray).view(np.uint8), ring).view(bool) & free).any():
+        return enclosed  # no free cell meets the unknown (a drawn plan): nothing is open
     opened = open_unknown(free, occupied, resolution, min_area=open_area, gray=gray)
-    if not (cv2.dilate(opened.view(np.uint8), np.ones((3, 3), np.uint8)).view(bool) & free).any():
-        return np.where(free, 8.0, 0.0).astype(np.float32)  # no free cell meets the open unknown: all enclosed
+    if not (cv2.dilate(opened.view(np.uint8), ring).view(bool) & free).any():
+        return enclosed  # no free cell meets the open unknown: all enclosed
     hit = cv2.dilate((~free & ~opened).view(np.uint8), np.ones((3, 3), np.uint8)).view(bool)
     k = max(1, int(round(cell / resolution)))
     inner, hit = _blocks(free & ~hit, k, np.logical_and), _blocks(hit, k, np.logical_or)
