@@ -9,8 +9,9 @@ segmentation that are outside.
 
 The measure, :func:`enclosure`: from each free cell, look along the eight
 grid directions (the axes and the diagonals) to the first cell that is not
-free. Where that cell is an obstacle (occupied, or a small patch of unknown
-inside free space: clutter seen in part) the direction is *enclosed*; where
+free. Where that cell is an obstacle (occupied, a wall a map draws in a
+gray the thresholds leave unknown, or a small patch of unknown inside free
+space: clutter seen in part) the direction is *enclosed*; where
 it is the open unknown (unknown cells of a large region, or the map's edge),
 it is not. The count, 0 to 8, is averaged over a small window of free
 cells, since a scanned wall has gaps a single ray slips through.
@@ -73,7 +74,11 @@ def open_unknown(free: np.ndarray, occupied: np.ndarray, resolution: float, *, m
     -------
     (M, N) ndarray of bool
     """
-    unknown = unknown_cells(free, occupied, gray)
+    return _open(unknown_cells(free, occupied, gray), resolution, min_area)
+
+
+def _open(unknown: np.ndarray, resolution: float, min_area: float) -> np.ndarray:
+    """The cells of ``unknown`` in a region of at least ``min_area`` m² or at the map's edge."""
     n, lab, stats, _ = label_stats(unknown, connectivity=8)
     H, W = unknown.shape
     x, y, w, h, area = stats.T
@@ -144,12 +149,13 @@ def enclosure(free: np.ndarray, occupied: np.ndarray, resolution: float, *, open
     H, W = free.shape
     ring = np.ones((3, 3), np.uint8)
     enclosed = np.where(free, 8.0, 0.0).astype(np.float32)
-    if not (cv2.dilate(unknown_cells(free, occupied, gray).view(np.uint8), ring).view(bool) & free).any():
+    unknown = unknown_cells(free, occupied, gray)
+    if not (cv2.dilate(unknown.view(np.uint8), ring).view(bool) & free).any():
         return enclosed  # no free cell meets the unknown (a drawn plan): nothing is open
-    opened = open_unknown(free, occupied, resolution, min_area=open_area, gray=gray)
+    opened = _open(unknown, resolution, open_area)
     if not (cv2.dilate(opened.view(np.uint8), ring).view(bool) & free).any():
         return enclosed  # no free cell meets the open unknown: all enclosed
-    hit = cv2.dilate((~free & ~opened).view(np.uint8), np.ones((3, 3), np.uint8)).view(bool)
+    hit = cv2.dilate((~free & ~opened).view(np.uint8), ring).view(bool)
     k = max(1, int(round(cell / resolution)))
     inner, hit = _blocks(free & ~hit, k, np.logical_and), _blocks(hit, k, np.logical_or)
     count = np.zeros(inner.shape, np.float32)
