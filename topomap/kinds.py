@@ -31,6 +31,8 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage as ndi
 
+from ._fast import edt
+
 __all__ = ["KINDS", "CORRIDOR_MAX_WIDTH", "CORRIDOR_MIN_ELONGATION", "CORRIDOR_MIN_LENGTH", "CORRIDOR_MIN_DOORS",
            "WIDE_CORRIDOR_MAX_WIDTH", "WIDE_CORRIDOR_MIN_ELONGATION",
            "FURNITURE_MAX_AREA", "DOORWAY_MAX_AREA", "DOORWAY_MAX_WIDTH", "HALL_MIN_AREA", "HALL_MIN_WIDTH",
@@ -92,9 +94,11 @@ def room_shape(mask: np.ndarray, resolution: float) -> dict:
     n = int(np.count_nonzero(m))
     if n == 0:
         return {"area": 0.0, "width": 0.0, "length": 0.0, "elongation": 0.0}
-    # exact Euclidean distances in float64 (OpenCV's precise transform is faster, but its float32
-    # values change with its number of threads: the same map would give other widths)
-    dt = ndi.distance_transform_edt(m)
+    # OpenCV's 5 x 5 chamfer distances: a sequential two-pass transform, the same values whatever
+    # the number of threads (its "precise" transform is parallel, and its float32 values change
+    # with the threads), 18 times faster than scipy's exact one on the rooms of a 4.7 M-cell map,
+    # the mean within 0.1 % of it
+    dt = edt(m, exact=False)
     mean = float(dt[m].mean())
     width = max(4.0 * mean - 2.0, 1.0) * resolution  # cell-centre distances: a strip of k cells has mean (k + 2) / 4
     area = n * resolution ** 2
