@@ -115,14 +115,17 @@ def test_first_hit_matches_walking_each_ray(shape):
 
 
 def test_blocks_reduce_like_the_definition():
+    from topomap.skeleton import downsample
+
     rng = np.random.default_rng(5)
     m = rng.random((13, 10)) < 0.6
     for k in (2, 3):
         pad = np.zeros((-(-13 // k) * k, -(-10 // k) * k), bool)
         pad[:13, :10] = m
         blocks = pad.reshape(pad.shape[0] // k, k, pad.shape[1] // k, k)
-        assert np.array_equal(O._blocks(m, k, np.logical_and), blocks.all(axis=(1, 3)))
-        assert np.array_equal(O._blocks(m, k, np.logical_or), blocks.any(axis=(1, 3)))
+        assert np.array_equal(downsample(m, k, keep="all"), blocks.all(axis=(1, 3)))
+        assert np.array_equal(downsample(m, k, keep="any"), blocks.any(axis=(1, 3)))
+
 
 
 def test_no_building_no_outside():

@@ -31,6 +31,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._fast import label_stats
+from .skeleton import downsample
 
 __all__ = ["DIRECTIONS", "unknown_cells", "open_unknown", "enclosure", "outside_regions", "drop_outside"]
 
@@ -157,10 +158,11 @@ def enclosure(free: np.ndarray, occupied: np.ndarray, resolution: float, *, open
         return enclosed  # no free cell meets the open unknown: all enclosed
     hit = cv2.dilate((~free & ~opened).view(np.uint8), ring).view(bool)
     k = max(1, int(round(cell / resolution)))
-    inner, hit = _blocks(free & ~hit, k, np.logical_and), _blocks(hit, k, np.logical_or)
+    inner, hit = downsample(free & ~hit, k, keep="all"), downsample(hit, k, keep="any")
     count = np.zeros(inner.shape, np.float32)
-    for d in DIRECTIONS:
-        count += _first_hit(inner, hit, d)
+    inner_t, hit_t = np.ascontiguousarray(inner.T), np.ascontiguousarray(hit.T)  # once, for both ways along rows
+    for dr, dc in DIRECTIONS:
+        count += _first_hit(inner_t, hit_t, (dc, 0)).T if dr == 0 else _first_hit(inner, hit, (dr, dc))
     count[~inner] = 0
     w = max(1, int(round(window / (resolution * k)))) | 1
     num = cv2.boxFilter(count, -1, (w, w), normalize=False, borderType=cv2.BORDER_CONSTANT)
@@ -169,22 +171,6 @@ def enclosure(free: np.ndarray, occupied: np.ndarray, resolution: float, *, open
     if k > 1:
         mean = np.repeat(np.repeat(mean, k, axis=0), k, axis=1)[:H, :W]
     return np.where(free, mean, 0).astype(np.float32)
-
-
-def _blocks(mask: np.ndarray, k: int, reduce) -> np.ndarray:
-    """``mask`` reduced over ``k`` x ``k`` blocks by ``reduce`` (``np.logical_and`` or
-    ``np.logical_or``; the map padded with False)."""
-    if k == 1:
-        return mask
-    H, W = mask.shape
-    pad = np.zeros((-(-H // k) * k, -(-W // k) * k), bool)
-    pad[:H, :W] = mask
-    out = pad[0::k, 0::k].copy()
-    for i in range(k):
-        for j in range(k):
-            if i or j:
-                reduce(out, pad[i::k, j::k], out=out)
-    return out
 
 
 def outside_regions(labels: np.ndarray, n_rooms: int, encl: np.ndarray, *, threshold: float) -> np.ndarray:
