@@ -151,3 +151,11 @@ def test_walls_drawn_in_gray_are_obstacles_not_the_unknown():
     assert e_no_gray[free].max() == 0                           # without the grays: nothing bounds it
     seg = topomap.segment(OccupancyGrid(c, 0.05, gray=gray))
     assert seg.n_rooms == 1 and seg.outside == ()
+
+
+def test_the_command_line_says_how_much_of_the_fragments_is_outside():
+    from topomap.cli import _summary
+
+    row = {"rooms": 2, "doors": 1, "fragments": 3, "fragment_area_m2": 45.5, "outside_area_m2": 45.27}
+    assert _summary(row) == "2 rooms, 1 door, 3 fragments (45.5 m², 45.27 m² of it outside the building)"
+    assert _summary({**row, "outside_area_m2": 0.0}) == "2 rooms, 1 door, 3 fragments (45.5 m²)"

@@ -245,14 +245,15 @@ def _count(n, noun) -> str:
 
 def _summary(row) -> str:
     """"12 rooms, 11 doors", and ", 40 fragments (1.3 m²)" when free regions
-    too small to be a room (scan specks) were set apart (``row``: a summary row of
-    :func:`topomap.segment_many`)."""
+    too small to be a room (scan specks) were set apart, ", 4 fragments (15.2 m²,
+    13.8 m² of it outside the building)" when some of them lie outside the
+    building (``row``: a summary row of :func:`topomap.segment_many`)."""
     text = f"{_count(row['rooms'], 'room')}, {_count(row['doors'], 'door')}"
     nf = row.get("fragments") or 0
     if nf:
-        text += f", {_count(nf, 'fragment')} ({row['fragment_area_m2']:.4g} m²)"
-    if row.get("outside_area_m2"):
-        text += f", outside the building {row['outside_area_m2']:.4g} m²"
+        outside = row.get("outside_area_m2") or 0
+        of_it = f", {outside:.4g} m² of it outside the building" if outside else ""
+        text += f", {_count(nf, 'fragment')} ({row['fragment_area_m2']:.4g} m²{of_it})"
     return text
 
 
