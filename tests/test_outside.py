@@ -127,7 +127,6 @@ def test_blocks_reduce_like_the_definition():
         assert np.array_equal(downsample(m, k, keep="any"), blocks.any(axis=(1, 3)))
 
 
-
 def test_no_building_no_outside():
     """Free space and nothing else (no wall anywhere): every direction ends at the map's edge, yet
     there is no building to be outside of."""
