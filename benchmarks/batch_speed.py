@@ -6,7 +6,7 @@ Run (not a test)::
     python benchmarks/batch_speed.py [DATASET_DIR] [--maps 12] [--rounds 3] [--section]
 
 Takes the first ``--maps`` floor plans ``NAME.png`` of DATASET_DIR (default
-:func:`topomap.datasets.benchmark_dir`; every image that is not a
+:func:`topomap.bench.datasets.benchmark_dir`; every image that is not a
 ``*_furnitures`` or ``*_gt_segmentation`` one), loaded as ``topomap segment
 NAME.png --resolution 0.05`` loads them, and segments the whole batch with
 ``jobs=1``, ``jobs=2`` and on a 2-worker ``distributed.LocalCluster`` (one
@@ -70,7 +70,7 @@ def main(argv=None):
     args = ap.parse_args(argv)
     from distributed import Client, LocalCluster
 
-    from topomap.datasets import benchmark_dir
+    from topomap.bench.datasets import benchmark_dir
 
     directory = args.dataset_dir or benchmark_dir()
     if directory is None:

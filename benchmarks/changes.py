@@ -10,7 +10,7 @@ one untimed warm-up call, and saves labels, door segments and the wall time
 of the ``segment`` call to ``OUT/<commit>/<variant>__<map>.npz``.
 
 All saved results are then scored by *this* checkout's
-``topomap.evaluation.evaluate`` exactly as ``topomap.benchmark.run_map``
+``topomap.bench.evaluation.evaluate`` exactly as ``topomap.bench.benchmark.run_map``
 does (true doors from the unfurnished map in both variants), so every row
 uses the same metric. Printed: a Markdown table, per variant the mean over
 maps of the Bormann et al. precision and recall (micro, the original
@@ -74,7 +74,7 @@ from topomap.io import from_array
 # the pipeline module was renamed from topomap/segment.py to topomap/segmentation.py;
 # choose by the worktree's own files (an editable install of main must not answer)
 if os.path.exists(os.path.join(os.environ["PYTHONPATH"], "topomap", "segmentation.py")):
-    import topomap.segmentation as S
+    import topomap.core.segmentation as S
 else:
     import topomap.segment as S
 
@@ -177,8 +177,8 @@ def run_commit(spec: str, data: Path, out_root: Path, wt_root: Path, keep: bool)
 
 def score_commit(out: Path, data: Path) -> list:
     sys.path.insert(0, str(REPO))
-    from topomap.datasets import load_benchmark
-    from topomap.evaluation import evaluate
+    from topomap.bench.datasets import load_benchmark
+    from topomap.bench.evaluation import evaluate
 
     rows = []
     for variant in ("unfurnished", "furnished"):
@@ -233,7 +233,7 @@ def table(results: list) -> str:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--data", type=Path, default=None,
-                    help="benchmark directory (default: topomap.datasets.benchmark_dir())")
+                    help="benchmark directory (default: topomap.bench.datasets.benchmark_dir())")
     ap.add_argument("--commits", default=",".join(c for c, _ in CHANGES),
                     help="comma-separated commits, oldest first (default: every change of the default method)")
     ap.add_argument("--out", type=Path, default=Path("/tmp/wt_out"), help="where results are saved")
@@ -245,7 +245,7 @@ def main(argv=None) -> int:
 
     sys.path.insert(0, str(REPO))
     if a.data is None:
-        from topomap.datasets import benchmark_dir
+        from topomap.bench.datasets import benchmark_dir
         a.data = Path(benchmark_dir())
     data = a.data.resolve()
     what = dict(CHANGES)
@@ -269,7 +269,7 @@ def main(argv=None) -> int:
         results.append((shown, label, method, rows))
         per_map += [dict(commit=_out_name(short, params), **r) for r in rows]
     print()
-    print(f"# scored with topomap.evaluation at {_git('rev-parse', '--short=7', 'HEAD')}; data {data}")
+    print(f"# scored with topomap.bench.evaluation at {_git('rev-parse', '--short=7', 'HEAD')}; data {data}")
     print(table(results))
     if a.csv:
         with open(a.csv, "w", newline="") as fh:

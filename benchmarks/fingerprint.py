@@ -97,7 +97,7 @@ def _r(v, nd=6):
 
 
 def fingerprint(seg) -> dict:
-    """The fingerprint of one :class:`topomap.segmentation.Segmentation`."""
+    """The fingerprint of one :class:`topomap.core.segmentation.Segmentation`."""
     lab = np.ascontiguousarray(seg.labels)
     h = hashlib.sha256()
     h.update(repr((lab.shape, lab.dtype.str)).encode())

@@ -3,8 +3,8 @@
 On each exploration sequence of the real maps (ROSE² data: freiburg079_partial_02..15,
 bremen_cartesium_partial_03..17, each map a later state of the same run), every map
 is segmented three ways: ``topomap.segment(grid, previous=...)`` with the previous
-map's result (its doors are a prior of the door stage, ``topomap.identity.DoorPrior``,
-then its rooms' IDs are given by ``topomap.identity.match_rooms``); a fresh
+map's result (its doors are a prior of the door stage, ``topomap.core.identity.DoorPrior``,
+then its rooms' IDs are given by ``topomap.core.identity.match_rooms``); a fresh
 ``topomap.segment(grid)`` whose rooms are matched to the previous map's
 (``match_rooms`` only); and fresh numbering. A ground-truth room present in two
 consecutive maps (the same true room: one-to-one, overlapping by at least half of
@@ -14,7 +14,7 @@ room covering most of it carries the same ID in both maps; an ID change is
 change *between two kept rooms* is one where both rooms are in both maps (a
 boundary moved and the true room's larger share with it). The
 room F1 (harmonic mean of the mean precision and recall over the maps, free cells
-scored, :func:`topomap.evaluation.score_segmentation`) shows what the segmentation
+scored, :func:`topomap.bench.evaluation.score_segmentation`) shows what the segmentation
 gives up for steadier doors.
 
 The data set's YAML files give every map the origin (0, 0), although the Bremen
@@ -99,7 +99,7 @@ def room_of(labels, top, gt, g):
 
 def _score(seg, gt, grid):
     """``(precision, recall)`` of ``seg``'s rooms against the ground truth (free cells scored)."""
-    from topomap.evaluation import score_segmentation
+    from topomap.bench.evaluation import score_segmentation
 
     sc = score_segmentation(seg.room_labels, gt, scored=grid.free)
     return sc["precision"], sc["recall"]
@@ -139,7 +139,7 @@ def run_sequence(directory, name):
     to the previous map's: ``match_rooms``) and fresh numbering."""
     import topomap
     from PIL import Image
-    from topomap.identity import match_rooms
+    from topomap.core.identity import match_rooms
 
     pattern, rng = SEQUENCES[name]
     st = dict(sequence=name, maps=0, fresh_kept=0, fresh_n=0, t_segment=0.0, t_prior=0.0, t_match=0.0,
@@ -230,7 +230,7 @@ def main(argv=None):
     ap = _section.parser(__doc__, "real maps directory", "70_identity.md")
     ap.add_argument("--jobs", type=int, default=1, help="run the two sequences in this many processes")
     args = ap.parse_args(argv)
-    from topomap.datasets import real_maps_dir
+    from topomap.bench.datasets import real_maps_dir
 
     directory = _section.directory(args.directory, real_maps_dir, "TOPOMAP_REAL_MAPS_DIR")
     t0 = time.perf_counter()
@@ -253,7 +253,7 @@ Each exploration sequence of the real maps (ROSE² data; every map a later state
 run) segmented map by map, three ways: *previous doors kept* is `topomap.segment(grid,
 previous=...)` with the previous map's result (the previous doors are a prior of the door
 stage, then the rooms get the previous IDs); *matched only* segments every map afresh and
-gives its rooms the previous map's IDs (`topomap.identity.match_rooms`); *fresh* numbers rooms
+gives its rooms the previous map's IDs (`topomap.core.identity.match_rooms`); *fresh* numbers rooms
 by a row-major scan. A ground-truth room present in two consecutive maps
 (the same true room: overlapping by at least half of the smaller in the map frame, both over
 100 cells) *keeps its ID* when the room covering most of it has the same ID in both maps. An ID change

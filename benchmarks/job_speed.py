@@ -14,7 +14,7 @@ Every job is a fresh subprocess given all maps at once, as a user runs it:
 * ``watershed``: a plain script (this file with ``--_job watershed``): per
   map ``topomap.load_map``, :func:`scipy.ndimage.distance_transform_edt`,
   markers from :func:`skimage.feature.peak_local_max` (1.75 m apart, as
-  :func:`topomap.baselines.watershed`), :func:`skimage.segmentation.watershed`
+  :func:`topomap.core.baselines.watershed`), :func:`skimage.segmentation.watershed`
   on ``-dist``, a 16-bit label PNG written with Pillow;
 * ``floor`` (the physical floor): per map ``topomap.load_map``, one OpenCV
   distance transform, the 16-bit PNG of the connected components written.
@@ -30,7 +30,7 @@ synthetic building of ``benchmarks/speed.py --scaling`` (the example office
 tiled 15 x 15), whole command, time and peak memory. Writes
 ``benchmarks/sections/50_job_speed.md`` (``--section`` to change) and prints it.
 
-DATASET_DIR defaults to :func:`topomap.datasets.benchmark_dir`.
+DATASET_DIR defaults to :func:`topomap.bench.datasets.benchmark_dir`.
 """
 
 from __future__ import annotations
@@ -161,7 +161,7 @@ def _scaled(path, k, tmp):
 
 
 def _synthetic(tmp):
-    from topomap._example import make_example_office
+    from topomap.io.example import make_example_office
     from topomap.io import FREE, OCCUPIED, save_map
 
     gray = np.tile(make_example_office().gray, SYNTH_TILES)
@@ -198,7 +198,7 @@ def _load():
 # the report
 # --------------------------------------------------------------------------
 
-#: Every stage --profile reports (topomap.batch's list), but the sums (segment/total, write, job).
+#: Every stage --profile reports (topomap.run.batch's list), but the sums (segment/total, write, job).
 WRITES = ["write_labels", "write_label_map_pgm", "write_label_map", "write_graphml", "write_json", "write_geojson",
           "write_overlay"]
 TOPO_STAGES = ["start", "import", "warmup", "load", "preprocess", "walls", "furniture", "skeletons", "graphs", "doors",
@@ -220,7 +220,7 @@ def main(argv=None):
         kind, out, res, *maps = a._job
         _job(kind, out, float(res), maps)
         return 0
-    from topomap.datasets import benchmark_dir
+    from topomap.bench.datasets import benchmark_dir
 
     directory = a.directory or benchmark_dir()
     if directory is None:

@@ -9,7 +9,7 @@ Run (not a test)::
 one folder per plan with ``plan.yaml``, ``map.yaml``, ``gt_rooms.png`` and
 ``gt_rooms.json``). The plans are split in two halves by name: a plan whose
 name starts with two hex digits of even value is **training** (the kind
-thresholds of :mod:`topomap.kinds` were chosen looking at these), every other
+thresholds of :mod:`topomap.core.kinds` were chosen looking at these), every other
 plan is **held out** (scored once, with the thresholds fixed). ``--per-half``
 plans of each half (the first in name order) are segmented twice: the drawn
 plan (``plan.yaml``) and the simulated scan (``map.yaml``), with
@@ -90,13 +90,13 @@ def rows_of_case(case: Path, variant: str) -> list:
 
 
 def rows_of_truth(case: Path) -> list:
-    """One row per true room of ``case``: the kind :func:`topomap.kinds.room_kind` gives its own shape
+    """One row per true room of ``case``: the kind :func:`topomap.core.kinds.room_kind` gives its own shape
     (``gt_rooms.png``) and doors (``gt_doors.json``, the outside's included): what the measure can do
     on rooms segmented exactly as the plan draws them."""
     from PIL import Image
     from scipy import ndimage as ndi
 
-    from topomap.kinds import room_kind, room_shape
+    from topomap.core.kinds import room_kind, room_shape
 
     gt = np.asarray(Image.open(case / "gt_rooms.png")).astype(np.int64)
     res = _resolution(case)
@@ -174,7 +174,7 @@ def main():
         "Protocol **largest overlap, corridor vs the rest**: each found room is matched to the true room "
         "holding most of its cells; the true room is a corridor when its plan labels are `corridor` and "
         "nothing but `entrance` and storage besides. **Training** plans (name starting with an even hex "
-        "byte) are the ones the thresholds of `topomap.kinds` were chosen on; the **held-out** plans were "
+        "byte) are the ones the thresholds of `topomap.core.kinds` were chosen on; the **held-out** plans were "
         f"scored once with them fixed. {args.per_half} plans of each half, each as the drawn plan and as "
         "the simulated scan, segmented at the defaults.",
         "",

@@ -131,9 +131,9 @@ class Fold:
 
 
 def plan_split(name: str) -> int:
-    """The half (0: dev, 1: held-out) a corpus case belongs to: :func:`topomap.datasets.plan_split`,
+    """The half (0: dev, 1: held-out) a corpus case belongs to: :func:`topomap.bench.datasets.plan_split`,
     the split every user of a corpus makes."""
-    from topomap.datasets import SPLITS, plan_split as split
+    from topomap.bench.datasets import SPLITS, plan_split as split
 
     return SPLITS.index(split(name))
 
@@ -148,7 +148,7 @@ def _refs(dataset, directory, variants, names) -> list:
 
 def real_folds(directory) -> list:
     """The two leave-one-building-out folds of ``rose2_real`` (see :data:`BUILDINGS`)."""
-    from topomap.datasets import LABELLED_VARIANT, load_labelled
+    from topomap.bench.datasets import LABELLED_VARIANT, load_labelled
 
     names = {}
     for label, pattern in BUILDINGS:
@@ -160,7 +160,7 @@ def real_folds(directory) -> list:
 
 def ipa_folds(directory) -> list:
     """Two folds of the ipa plans: the even and the odd maps in name order (both variants each)."""
-    from topomap.datasets import VARIANTS, load_benchmark
+    from topomap.bench.datasets import VARIANTS, load_benchmark
 
     names = [bm.name for bm in load_benchmark(directory, variant=VARIANTS[0])]
     halves = [names[0::2], names[1::2]]
@@ -178,7 +178,7 @@ def corpus_halves(names, per_half=None) -> list:
 
 def corpus_folds(directory, per_half=None) -> list:
     """Two folds of the simulated corpus: tuned on one half of the cases, scored on the other."""
-    from topomap.datasets import SIMULATED_VARIANTS, _simulated_cases
+    from topomap.bench.datasets import SIMULATED_VARIANTS, _simulated_cases
 
     halves = corpus_halves(_simulated_cases(Path(directory)), per_half)
     refs = [_refs("corpus", directory, SIMULATED_VARIANTS, h) for h in halves]
@@ -256,7 +256,7 @@ _LOADED_CELLS = 80_000_000  # cells of loaded maps one process keeps
 
 def _load(ref: MapRef):
     """``(bm, grid)``: the benchmark map and its grid loaded as a user loads it (kept per process)."""
-    from topomap.datasets import load_dataset
+    from topomap.bench.datasets import load_dataset
 
     got = _LOADED.get(ref)
     if got is None:
@@ -271,12 +271,12 @@ def _load(ref: MapRef):
 def score_task(ref: MapRef, keys) -> list:
     """Segment ``ref`` with each options key of ``keys``: ``[(precision, recall, seconds, error)]``.
 
-    The scores are the original protocol's (:func:`topomap.evaluation.score_segmentation` of the rooms
+    The scores are the original protocol's (:func:`topomap.bench.evaluation.score_segmentation` of the rooms
     a user gets, on the free cells of the grid as loaded, the true rooms whole); a failure scores 0 / 0
     with its one-line error.
     """
-    from topomap.evaluation import score_segmentation
-    from topomap.segmentation import segment
+    from topomap.bench.evaluation import score_segmentation
+    from topomap.core.segmentation import segment
 
     out = []
     try:
@@ -693,7 +693,7 @@ def _sensitivity_groups(folds) -> dict:
 # --------------------------------------------------------------------------
 
 def main(argv=None) -> int:
-    from topomap.datasets import benchmark_dir, real_maps_dir
+    from topomap.bench.datasets import benchmark_dir, real_maps_dir
     from topomap.errors import TopomapError
 
     import argparse

@@ -9,7 +9,7 @@ Run (not a test)::
 ``NAV2_DIR`` holds Nav2's sample maps and graphs (``depot.yaml``,
 ``depot_graph.geojson``, ``warehouse.yaml``, ``warehouse_graph.geojson``, from
 ``nav2_bringup``). Each map is segmented at the defaults and its route graph
-made with :func:`topomap.nav2.route_graph` at the default clearance; both
+made with :func:`topomap.planning.nav2.route_graph` at the default clearance; both
 graphs are measured the same way: nodes, edges (one per direction, as the
 files hold them), the share of the map's free cells within 1 m of an edge,
 and the edges that come closer than the clearance to a cell that is not free
@@ -121,7 +121,7 @@ def main():
     import matplotlib.pyplot as plt
 
     import topomap
-    from topomap.nav2 import DEFAULT_CLEARANCE, route_graph
+    from topomap.planning.nav2 import DEFAULT_CLEARANCE, route_graph
 
     rows = ["| map | graph | nodes | edges | free space within 1 m of an edge | edges closer than "
             f"{DEFAULT_CLEARANCE} m to a wall |", "| --- | --- | --- | --- | --- | --- |"]
@@ -142,7 +142,7 @@ def main():
                    args.kinds_picture, plt)
     sys.stdout.write("\n".join(rows) + "\n")
     if args.all:
-        from topomap.datasets import benchmark_dir, load_benchmark, load_labelled, real_maps_dir
+        from topomap.bench.datasets import benchmark_dir, load_benchmark, load_labelled, real_maps_dir
 
         grids = [bm.load() for v in ("unfurnished", "furnished") for bm in load_benchmark(benchmark_dir(), variant=v)]
         grids += [bm.load() for bm in load_labelled(real_maps_dir())]

@@ -53,7 +53,7 @@ def turn_back(a: np.ndarray, k: int, mirror: bool) -> np.ndarray:
 
 def run(task):
     from topomap import load_map, segment
-    from topomap.evaluation import evaluate
+    from topomap.bench.evaluation import evaluate
     from topomap.io import save_map
 
     bm, k, mirror, tmp, options = task
@@ -73,7 +73,7 @@ def _pose(k, mirror):
 
 
 def main(argv=None) -> int:
-    from topomap.datasets import benchmark_dir, load_benchmark, load_labelled, real_maps_dir
+    from topomap.bench.datasets import benchmark_dir, load_benchmark, load_labelled, real_maps_dir
 
     ap = _section.parser(__doc__, "the rose2_real directory", "87_orientation.md")
     ap.add_argument("--ipa", default=None, help="the ipa_room_segmentation directory (default: found as for "

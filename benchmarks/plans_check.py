@@ -7,8 +7,8 @@ Run (not a test)::
 
 ``DATA_DIR`` is the R2V / LIFULL plan directory (holding ``plans/NAME.txt``,
 or the ``plans`` folder itself). Each plan goes through
-:func:`topomap.floorplan.read_plan` with its defaults and
-:func:`topomap.floorplan.ground_truth_problems`; printed (Markdown):
+:func:`topomap.bench.floorplan.read_plan` with its defaults and
+:func:`topomap.bench.floorplan.ground_truth_problems`; printed (Markdown):
 
 * the plans that fail, and why (the error's one line, or the broken
   invariants);
@@ -35,7 +35,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from topomap.errors import TopomapError, first_line  # noqa: E402
-from topomap.floorplan import ground_truth_problems, read_plan  # noqa: E402
+from topomap.bench.floorplan import ground_truth_problems, read_plan  # noqa: E402
 
 _PRIVATE = ("bathroom", "restroom")
 
@@ -47,7 +47,7 @@ def _suspect(kinds) -> bool:
 
 
 def _room_boxes(path: Path) -> int:
-    from topomap.floorplan import ROOM_KINDS
+    from topomap.bench.floorplan import ROOM_KINDS
 
     n = 0
     for line in path.read_text(encoding="utf-8").splitlines():

@@ -26,9 +26,9 @@ from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
-from topomap.datasets import benchmark_dir, load_benchmark, load_labelled, load_simulated, real_maps_dir
-from topomap.evaluation import evaluate
-from topomap.segmentation import segment
+from topomap.bench.datasets import benchmark_dir, load_benchmark, load_labelled, load_simulated, real_maps_dir
+from topomap.bench.evaluation import evaluate
+from topomap.core.segmentation import segment
 
 GROUPS = [
     ("freiburg079_partial_*", lambda r: r["map"].startswith("freiburg079_partial")),

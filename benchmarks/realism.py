@@ -121,7 +121,7 @@ def wall_thickness(occupied, resolution, *, min_area_m2=SPECK_AREA_M2) -> float:
 
 def unknown_share(free, occupied) -> float:
     """Share (0..1) of unknown cells in the bounding box of the known cells; NaN on a map with none known."""
-    from topomap.geometry import true_bbox
+    from topomap.core.geometry import true_bbox
 
     known = free | occupied
     box = true_bbox(known)
@@ -137,7 +137,7 @@ def outline(occupied, resolution, *, gap_m=OUTLINE_GAP_M) -> np.ndarray:
     import cv2
     from scipy import ndimage as ndi
 
-    from topomap.geometry import disk
+    from topomap.core.geometry import disk
 
     k = disk(max(1, int(round(gap_m / 2 / resolution))))
     grown = cv2.dilate(occupied.astype(np.uint8), k, borderType=cv2.BORDER_CONSTANT, borderValue=0)
@@ -170,7 +170,7 @@ def spoke_share(free, unknown, resolution, *, width_m=SPOKE_WIDTH_M) -> float:
         return float("nan")
     import cv2
 
-    from topomap.geometry import disk
+    from topomap.core.geometry import disk
 
     k = disk(max(1, int(round(width_m / 2 / resolution))))
     # nothing beyond the map's edge is free
@@ -257,7 +257,7 @@ def _panel(path, title, height=360):
     from PIL import Image, ImageDraw, ImageFont
 
     from topomap import load_map
-    from topomap.geometry import true_bbox
+    from topomap.core.geometry import true_bbox
 
     g = load_map(path)
     img = np.full(g.shape, 205, np.uint8)
@@ -306,7 +306,7 @@ def main(argv=None) -> int:
 
     import _section
     from _section import _commit, _machine
-    from topomap.datasets import real_maps_dir
+    from topomap.bench.datasets import real_maps_dir
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("simulated", nargs="*", help="simulated corpus folders, folders of maps or YAML files")

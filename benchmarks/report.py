@@ -2,7 +2,7 @@
 
     python benchmarks/report.py --ipa IPA_DIR --real REAL_DIR --out-dir results/ > docs/benchmarks.md
 
-runs ``topomap.benchmark.run_benchmark`` once on the ipa_room_segmentation
+runs ``topomap.bench.benchmark.run_benchmark`` once on the ipa_room_segmentation
 maps (both variants) and once on the labelled real maps (ROSE² data), saves
 the per-map rows (``ipa.csv``, ``real.csv``) and the run's metadata
 (``meta.json``: command, commit, machine, times, load) in ``--out-dir``,
@@ -28,8 +28,8 @@ from pathlib import Path
 
 import numpy as np
 
-from topomap.benchmark import format_table, run_benchmark, write_rows
-from topomap.datasets import VARIANTS, benchmark_dir, real_maps_dir
+from topomap.bench.benchmark import format_table, run_benchmark, write_rows
+from topomap.bench.datasets import VARIANTS, benchmark_dir, real_maps_dir
 
 IPA_METHODS = "topomap,paper,voronoi,watershed,morphological,distance"
 REAL_METHODS = "topomap,paper"
@@ -182,7 +182,7 @@ Every figure on this page comes from **one run** of
 
 (`IPA_DIR`: the `ipa_room_segmentation` maps of Bormann et al. 2016;
 `REAL_DIR`: the labelled real maps of ROSE², Luperto et al. 2022; neither
-is shipped with topomap. The script runs `topomap.benchmark.run_benchmark`,
+is shipped with topomap. The script runs `topomap.bench.benchmark.run_benchmark`,
 the code behind `topomap benchmark`, saves the per-map rows in `results/`
 and prints this page; `--from-csv` re-renders it from saved rows.) The
 only other figures are other methods' reference figures, quoted from their
@@ -372,9 +372,9 @@ def readme_table(rows) -> str:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--ipa", type=Path, default=None,
-                    help="ipa_room_segmentation maps (default: topomap.datasets.benchmark_dir())")
+                    help="ipa_room_segmentation maps (default: topomap.bench.datasets.benchmark_dir())")
     ap.add_argument("--real", type=Path, default=None,
-                    help="labelled real maps (default: topomap.datasets.real_maps_dir())")
+                    help="labelled real maps (default: topomap.bench.datasets.real_maps_dir())")
     ap.add_argument("--methods", default=IPA_METHODS, help=f"ipa methods (default {IPA_METHODS})")
     ap.add_argument("--real-methods", default=REAL_METHODS,
                     help=f"real-map methods (default {REAL_METHODS})")

@@ -71,7 +71,7 @@ def back(labels: np.ndarray, k: int, shape) -> np.ndarray:
 
 def run(task):
     from topomap import load_map, segment
-    from topomap.evaluation import evaluate
+    from topomap.bench.evaluation import evaluate
     from topomap.io import save_map
 
     bm, k, options, tmp = task
@@ -87,7 +87,7 @@ def run(task):
 
 
 def main(argv=None) -> int:
-    from topomap.datasets import load_labelled, real_maps_dir
+    from topomap.bench.datasets import load_labelled, real_maps_dir
 
     ap = _section.parser(__doc__, "the rose2_real directory", "85_resolution.md")
     ap.add_argument("--jobs", type=int, default=2)

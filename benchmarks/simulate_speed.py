@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Speed of :func:`topomap.simulate.simulate_scan` on synthetic homes.
+"""Speed of :func:`topomap.bench.simulate.simulate_scan` on synthetic homes.
 
 Run (not a test)::
 
@@ -7,7 +7,7 @@ Run (not a test)::
 
 Each case is a grid of 4 m x 4 m rooms along corridors (``NXxNY`` rooms,
 drawn by ``tests/_floorplans.big_home`` at 0.05 m per cell), scanned with
-the default :class:`~topomap.simulate.ScanOptions` but no door closed (every
+the default :class:`~topomap.bench.simulate.ScanOptions` but no door closed (every
 room is scanned), in a fresh subprocess:
 wall time of the ``simulate_scan`` call and peak memory (``ru_maxrss``
 after the call minus the resident size before it). The bar: under 2 s for
@@ -32,7 +32,7 @@ def _one(nx: int, ny: int, seed: int) -> dict:
     sys.path.insert(0, os.path.join(ROOT, "tests"))
     sys.path.insert(0, ROOT)
     from _floorplans import big_home
-    from topomap.simulate import ScanOptions, simulate_scan
+    from topomap.bench.simulate import ScanOptions, simulate_scan
 
     plan = big_home(nx, ny)
     before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss

@@ -10,7 +10,7 @@ Run (not a test)::
 ``CORPUS`` is what ``topomap simulate PLAN... -o CORPUS`` writes: one folder
 per case with the simulated robot map (``map.yaml``), the floor plan drawn
 on the same grid (``plan.yaml``), the room labels (``gt_rooms.png``) and the
-doors (``gt_doors.json``). One :func:`topomap.benchmark.run_benchmark` call
+doors (``gt_doors.json``). One :func:`topomap.bench.benchmark.run_benchmark` call
 (``topomap benchmark CORPUS --variant both``) scores every method on both
 variants:
 
@@ -19,7 +19,7 @@ variants:
   scored against its own ground truth (``gt_rooms_scan.png``,
   ``gt_doors_scan.json``: the rooms the scan shows, whole, and their doors).
 
-The table is given per half of the plans (:func:`topomap.datasets.plan_split`,
+The table is given per half of the plans (:func:`topomap.bench.datasets.plan_split`,
 a fixed rule on the plan's name: ``dev`` to tune on, ``held-out`` to report
 on); ``--split`` runs one half only.
 
@@ -49,7 +49,7 @@ from _section import _commit, _machine  # noqa: E402
 
 log = logging.getLogger("benchmarks.simulated")
 
-#: topomap's methods and the baselines of topomap.segmentation.METHODS (voronoi about 1 s a map).
+#: topomap's methods and the baselines of topomap.core.segmentation.METHODS (voronoi about 1 s a map).
 METHODS = "topomap,paper,voronoi,watershed,morphological,distance"
 
 
@@ -66,7 +66,7 @@ def _ratio(num, den) -> str:
 def table(rows) -> str:
     """The section's table, one line per method, variant and half of the plans (:func:`plan_split`):
     the plan variant first, dev before held-out, methods in the order of the rows."""
-    from topomap.datasets import SPLITS, plan_split
+    from topomap.bench.datasets import SPLITS, plan_split
 
     groups = {}
     for r in rows:
@@ -94,13 +94,13 @@ def table(rows) -> str:
 
 
 def main(argv=None) -> int:
-    from topomap.benchmark import run_benchmark, write_rows
+    from topomap.bench.benchmark import run_benchmark, write_rows
 
     ap = _section.parser(__doc__, "the simulated corpus (one folder per case)", "89_simulated.md")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--maps", default=None, help="comma-separated case names or shell patterns (default all)")
     ap.add_argument("--split", choices=("dev", "held-out"), default=None,
-                    help="only the cases of this half of the plans (topomap.datasets.plan_split; default both)")
+                    help="only the cases of this half of the plans (topomap.bench.datasets.plan_split; default both)")
     ap.add_argument("--methods", default=METHODS)
     ap.add_argument("--csv", type=Path, default=None, help="also save the per-case rows here")
     ap.add_argument("--rows", type=Path, default=None,
@@ -119,7 +119,7 @@ def main(argv=None) -> int:
 
     maps = a.maps
     if a.split:
-        from topomap.datasets import _simulated_cases, plan_split, select_names
+        from topomap.bench.datasets import _simulated_cases, plan_split, select_names
 
         found = _simulated_cases(Path(a.directory))
         maps = [n for n in select_names(found, a.maps, a.directory) if plan_split(n) == a.split]
@@ -146,7 +146,7 @@ def main(argv=None) -> int:
     tab = table(rows)
     subset = ""
     if a.maps or a.split:
-        from topomap.datasets import _simulated_cases, plan_split
+        from topomap.bench.datasets import _simulated_cases, plan_split
 
         n_all = len(_simulated_cases(Path(a.directory)))
         halves = [plan_split(m) for m in {r["map"] for r in rows}]
@@ -167,7 +167,7 @@ the map; a room behind a closed door or never reached is not drawn by a
 person labelling the map), each whole, and the doors between them. Each
 map is loaded as `topomap segment CASE/plan.yaml` (or `CASE/map.yaml`)
 loads it. Plans: the half of the plans a case belongs to
-(`topomap.datasets.plan_split`, a fixed rule on the plan's name: tune on
+(`topomap.bench.datasets.plan_split`, a fixed rule on the plan's name: tune on
 **dev**, report on **held-out**). P / R: mean precision / recall of Bormann
 et al. over the cases, **original protocol** (true rooms whole; segments on
 the free cells of the map as loaded; segments and rooms of 100 cells or

@@ -8,7 +8,7 @@ Run (not a test)::
 
 Default mode: in one process and one run, times ``segment(grid,
 method=DEFAULT_METHOD)`` and ``segment(grid, method="watershed")`` (distance
-transform, peaks, ``skimage.segmentation.watershed``: ``topomap.baselines.
+transform, peaks, ``skimage.segmentation.watershed``: ``topomap.core.baselines.
 watershed``) on every benchmark map, the two calls back to back per map, after
 one untimed warm-up call per method. Timings are the ``segment(...)`` call
 only (maps are read and classified before). Prints per-map times, the ratio of
@@ -24,7 +24,7 @@ the memory the segmentation needed on top of the map) against the area;
 prints a table and a least-squares exponent ``time ~ cells^k`` per method
 (k <= 1: no worse than linear).
 
-DATASET_DIR defaults to :func:`topomap.datasets.benchmark_dir`.
+DATASET_DIR defaults to :func:`topomap.bench.datasets.benchmark_dir`.
 """
 
 from __future__ import annotations
@@ -56,7 +56,7 @@ def _grid_from_gray(gray, resolution, name):
 
 def _warm(method):
     from topomap.io import from_array
-    from topomap.segmentation import segment
+    from topomap.core.segmentation import segment
 
     free = np.zeros((80, 120), bool)
     free[5:75, 5:58] = True
@@ -68,7 +68,7 @@ def _warm(method):
 def _timed(grid, method):
     import gc
 
-    from topomap.segmentation import segment
+    from topomap.core.segmentation import segment
 
     gc.collect()
     t0 = time.perf_counter()
@@ -106,9 +106,9 @@ def _commit():
 # --------------------------------------------------------------------------
 
 def compare(directory, variant):
-    from topomap.benchmark import benchmark_grid
-    from topomap.datasets import load_benchmark
-    from topomap.segmentation import DEFAULT_METHOD
+    from topomap.bench.benchmark import benchmark_grid
+    from topomap.bench.datasets import load_benchmark
+    from topomap.core.segmentation import DEFAULT_METHOD
 
     maps = load_benchmark(directory, variant=variant)
     grids = [(bm.name, benchmark_grid(bm)) for bm in maps]
@@ -160,12 +160,12 @@ SYNTH_TILES = (15, 15)  # 280 x 400 example office tiled: 4200 x 6000 = 25.2 M c
 def _case_gray(spec):
     """(gray, resolution, label) of a scaling case."""
     if spec["map"] == "synthetic":
-        from topomap._example import make_example_office
+        from topomap.io.example import make_example_office
 
         ex = make_example_office()
         gray = np.tile(ex.gray, SYNTH_TILES)
         return gray, 0.05, f"synthetic office x{SYNTH_TILES[0]}x{SYNTH_TILES[1]}"
-    from topomap.datasets import load_benchmark
+    from topomap.bench.datasets import load_benchmark
 
     (bm,) = load_benchmark(spec["dir"], variant=spec["variant"], names=[spec["map"]])
     k = int(spec["scale"])
@@ -196,7 +196,7 @@ def run_case(spec):
 
 
 def scaling(directory, variant, names, max_cells, methods, scales):
-    from topomap.datasets import load_benchmark
+    from topomap.bench.datasets import load_benchmark
 
     maps = load_benchmark(directory, variant=variant, names=names)
     specs = []
@@ -268,8 +268,8 @@ def main(argv=None):
     if a._case:
         run_case(json.loads(a._case))
         return 0
-    from topomap.datasets import benchmark_dir
-    from topomap.segmentation import DEFAULT_METHOD
+    from topomap.bench.datasets import benchmark_dir
+    from topomap.core.segmentation import DEFAULT_METHOD
 
     directory = a.directory or benchmark_dir()
     if directory is None:

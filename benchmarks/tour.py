@@ -3,7 +3,7 @@
 For every floor plan of ipa_room_segmentation (``NAME.png`` at 0.05 m/px, as
 ``topomap segment`` loads it): segment with the default method, take the travel
 distances between the largest room's point and every room's point
-(``topomap.tour.stop_distances``, the distances ``plan_tour`` uses), and compare
+(``topomap.planning.tour.stop_distances``, the distances ``plan_tour`` uses), and compare
 
 * the full tour (every reachable room, open, from the largest room): the heuristic
   ``plan_tour`` uses above 12 rooms (nearest neighbour + 2-opt + Or-opt), plain
@@ -32,9 +32,9 @@ from _section import _commit, _machine  # noqa: E402
 
 
 def run_map(bm, subsets, rng):
-    from topomap.benchmark import benchmark_grid
-    from topomap.segmentation import segment
-    from topomap.tour import (EXACT_LIMIT, _nearest_neighbour, solve_order, stop_distances, tour_length,
+    from topomap.bench.benchmark import benchmark_grid
+    from topomap.core.segmentation import segment
+    from topomap.planning.tour import (EXACT_LIMIT, _nearest_neighbour, solve_order, stop_distances, tour_length,
                               tour_lower_bound)
 
     seg = segment(benchmark_grid(bm))
@@ -103,7 +103,7 @@ def main(argv=None):
     ap = _section.parser(__doc__, "ipa_room_segmentation maps", "75_tour.md")
     ap.add_argument("--subsets", type=int, default=10, help="random 12-room tours per map (default 10)")
     args = ap.parse_args(argv)
-    from topomap.datasets import benchmark_dir, load_benchmark
+    from topomap.bench.datasets import benchmark_dir, load_benchmark
 
     directory = _section.directory(args.directory, benchmark_dir, "TOPOMAP_BENCHMARK_DIR")
     load0 = os.getloadavg()[0]
@@ -115,7 +115,7 @@ def main(argv=None):
         print(f"{bm.name}: {rows[-1]['n']} rooms", file=sys.stderr, flush=True)
     wall = time.perf_counter() - t0
     tab, tot = table(rows)
-    from topomap.tour import KICKS
+    from topomap.planning.tour import KICKS
     t_exact = np.nanmedian([r["t_exact"] for r in rows])
     t_heur = max(r["t_heur"] for r in rows)
     t_dist = np.median([r["t_dist"] for r in rows])

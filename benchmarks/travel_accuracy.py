@@ -38,7 +38,7 @@ TOLERANCE = 0.05
 def measure(path):
     from topomap import planning as P
     from topomap.io import load_map
-    from topomap.segmentation import segment
+    from topomap.core.segmentation import segment
 
     seg = segment(load_map(path, resolution=0.05))
     seg.room_graph
@@ -65,7 +65,7 @@ def main(argv=None):
     ap.add_argument("--variant", choices=["unfurnished", "furnished", "both"], default="both")
     ap.add_argument("--section", default=str(HERE / "sections" / "55_travel_accuracy.md"))
     a = ap.parse_args(argv)
-    from topomap.datasets import benchmark_dir
+    from topomap.bench.datasets import benchmark_dir
 
     directory = a.directory or benchmark_dir()
     if directory is None:

@@ -32,7 +32,7 @@ def main(out: Path) -> Path:
 
     import topomap
     from topomap.cli import main as cli
-    from topomap.export import load_graph
+    from topomap.io.export import load_graph
 
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp) / "office"

@@ -9,7 +9,7 @@ Every picture is drawn from ``topomap/data/example_office.yaml`` (the
 synthetic example office shipped with topomap) and nothing else: no
 benchmark map may be pictured in the repository.
 
-The small private helpers below draw what :mod:`topomap.plot` has no
+The small private helpers below draw what :mod:`topomap.io.plot` has no
 function for yet (the preprocessed free / occupied masks, the candidates with
 their status, the threshold histogram), from what the methods ran: the
 masks and clearances are ``seg.intermediates``, nothing is re-computed.
@@ -43,13 +43,13 @@ def _imports():
 
     import topomap
     from topomap import planning
-    from topomap.plot import _extent, plot_map, plot_route, plot_segmentation, plot_skeletons
-    from topomap.segmentation import METHODS, segment
+    from topomap.io.plot import _extent, plot_map, plot_route, plot_segmentation, plot_skeletons
+    from topomap.core.segmentation import METHODS, segment
 
 
 def _status_colors():
-    """Colour per candidate status (:data:`topomap.doors.STATUSES`; anything else: gray)."""
-    from topomap import doors as D
+    """Colour per candidate status (:data:`topomap.core.doors.STATUSES`; anything else: gray)."""
+    from topomap.core import doors as D
 
     return {
         D.DOOR: "red",
@@ -124,7 +124,7 @@ def plot_candidates(seg, ax, *, legend=True):
 
 
 def _endpoints(seg, ax):
-    from topomap.skeleton import graph_endpoints
+    from topomap.core.skeleton import graph_endpoints
 
     e = graph_endpoints(seg.occupied_graph)
     x, y = seg.grid.pixel_to_world(e[:, 0], e[:, 1])
@@ -149,7 +149,7 @@ def _wall_half_thickness(seg):
     """Distance to free space (m) on every occupied-skeleton pixel: the
     values the threshold is the (doubled) mean of, as the method measured
     them (``seg.intermediates.occupied_clearance``)."""
-    from topomap import skeleton as S
+    from topomap.core import skeleton as S
 
     d = seg.intermediates.occupied_clearance * seg.grid.resolution
     px = S.graph_pixels(seg.occupied_graph)

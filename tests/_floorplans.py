@@ -1,4 +1,4 @@
-"""Small hand-drawn :class:`topomap.floorplan.FloorPlan` homes for the simulator's tests.
+"""Small hand-drawn :class:`topomap.bench.floorplan.FloorPlan` homes for the simulator's tests.
 
 A plan is drawn from room rectangles (interiors, world metres) and doors
 (centre, width, the axis the door's wall runs along): every cell within
@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage as ndi
 
-from topomap.floorplan import FloorPlan, PlanDoor
+from topomap.bench.floorplan import FloorPlan, PlanDoor
 
 RES = 0.05
 

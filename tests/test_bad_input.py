@@ -28,7 +28,7 @@ from topomap.errors import (
     TopomapError,
 )
 from topomap.io import from_array, load_map
-from topomap.segmentation import METHODS, Segmentation, segment
+from topomap.core.segmentation import METHODS, Segmentation, segment
 
 
 # --------------------------------------------------------------------------
@@ -424,7 +424,7 @@ def test_array_over_the_limit_refused(monkeypatch):
 
 def test_thin_corridor_protrusion_does_not_grow_with_its_length():
     """A 3-cell-high corridor: the door-judging kernel is cut to the map (it used to be (2r+1)**2, r ~ length)."""
-    from topomap.doors import protrusion, protrusion_at
+    from topomap.core.doors import protrusion, protrusion_at
 
     free = np.zeros((3, 4000), bool)
     free[1, 1:-1] = True

@@ -1,11 +1,11 @@
-"""Tests of the baseline segmentations (topomap.baselines) on hand-drawn maps."""
+"""Tests of the baseline segmentations (topomap.core.baselines) on hand-drawn maps."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from topomap import baselines
+from topomap.core import baselines
 from topomap.errors import MapError, ParameterError
 
 RES = 0.05  # m / px

@@ -21,8 +21,9 @@ from PIL import Image
 
 import _testdata as T
 from test_bad_input import png
-from topomap import batch, cli
-from topomap.batch import RECORD, output_dirs, read_summary, segment_many
+from topomap.run import batch
+from topomap import cli
+from topomap.run.batch import RECORD, output_dirs, read_summary, segment_many
 from topomap.cli import main
 from topomap.errors import MissingDependencyError, OutputExistsError, ParameterError
 from topomap.io import from_array, save_map
@@ -165,7 +166,7 @@ def test_internal_error_in_a_batch_exits_3(tmp_path, monkeypatch):
     def bug(*a, **k):
         raise ZeroDivisionError("oops")
 
-    monkeypatch.setattr("topomap.segmentation.segment", bug)
+    monkeypatch.setattr("topomap.core.segmentation.segment", bug)
     maps = [png(tmp_path, f"{s}.png", T.gray(T.two_rooms().array)) for s in "ab"]
     r = invoke("segment", *maps, "-o", tmp_path / "out")
     assert r.exit_code == 3
@@ -233,7 +234,7 @@ def test_single_map_rerun_is_skipped(tmp_path):
 
 _KILLER = textwrap.dedent("""
     import os, signal, sys
-    from topomap import export
+    from topomap.io import export
     from topomap.cli import main
 
     real, seen = export.save_json, []
@@ -279,7 +280,7 @@ def test_progress_is_a_line_per_map_without_a_terminal(tmp_path):
     p = subprocess.run([sys.executable, "-m", "topomap.cli", "segment", *map(str, maps), "-o", str(tmp_path / "o")],
                        capture_output=True, text=True, timeout=300)
     assert p.returncode == 0, p.stderr
-    lines = [ln for ln in p.stderr.splitlines() if "topomap.batch" in ln]
+    lines = [ln for ln in p.stderr.splitlines() if "topomap.run.batch" in ln]
     assert len(lines) == 3 and all(f"[{i}/3]" in ln for i, ln in enumerate(lines, 1))
     assert "\r" not in p.stderr  # no bar
 

@@ -1,4 +1,4 @@
-"""The benchmark runner (topomap.benchmark) and the ``topomap benchmark`` command.
+"""The benchmark runner (topomap.bench.benchmark) and the ``topomap benchmark`` command.
 
 A tiny data set in the benchmark's layout is drawn with numpy into a tmp
 directory: NAME.png (walls 0, free 255), NAME_furnitures.png (the same with
@@ -17,12 +17,12 @@ import pytest
 from click.testing import CliRunner
 from PIL import Image
 
-from topomap.benchmark import (ROW_COLUMNS, TABLE_CAPTION, benchmark_grid, format_table,
+from topomap.bench.benchmark import (ROW_COLUMNS, TABLE_CAPTION, benchmark_grid, format_table,
                                run_benchmark, run_map, write_rows)
 from topomap.cli import main
-from topomap.datasets import benchmark_dir, load_benchmark
+from topomap.bench.datasets import benchmark_dir, load_benchmark
 from topomap.errors import ParameterError
-from topomap.segmentation import DEFAULT_METHOD, METHODS, Segmentation
+from topomap.core.segmentation import DEFAULT_METHOD, METHODS, Segmentation
 
 # --------------------------------------------------------------------------
 # the synthetic data set

@@ -46,9 +46,9 @@ def sites(tmp_path):
 
 def _direct(refs, options):
     """Mean P / R of ``refs`` segmented with ``options``, computed here without the script's scorer."""
-    from topomap.datasets import load_labelled
-    from topomap.evaluation import score_segmentation
-    from topomap.segmentation import segment
+    from topomap.bench.datasets import load_labelled
+    from topomap.bench.evaluation import score_segmentation
+    from topomap.core.segmentation import segment
 
     p, r = [], []
     for ref in refs:

@@ -15,11 +15,11 @@ import pytest
 from click.testing import CliRunner
 from PIL import Image
 
-from topomap.benchmark import run_benchmark, segment_map
+from topomap.bench.benchmark import run_benchmark, segment_map
 from topomap.cli import main
-from topomap.datasets import (BenchmarkNotFoundError, benchmark_dir, load_benchmark,
+from topomap.bench.datasets import (BenchmarkNotFoundError, benchmark_dir, load_benchmark,
                               load_labelled, real_maps_dir)
-from topomap.segmentation import METHODS, Segmentation
+from topomap.core.segmentation import METHODS, Segmentation
 
 
 def _plan():

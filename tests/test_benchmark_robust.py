@@ -8,9 +8,9 @@ import pytest
 from click.testing import CliRunner
 from PIL import Image
 
-from topomap.benchmark import run_benchmark
+from topomap.bench.benchmark import run_benchmark
 from topomap.cli import main
-from topomap.datasets import read_gray, read_label_image
+from topomap.bench.datasets import read_gray, read_label_image
 from topomap.errors import MapTooLargeError
 
 from test_benchmark_paths import _labelled

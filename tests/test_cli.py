@@ -104,7 +104,7 @@ def test_internal_error_exit_3(tmp_path, monkeypatch):
     def bug(*a, **k):
         raise KeyError("oops")
 
-    monkeypatch.setattr("topomap.segmentation.segment", bug)
+    monkeypatch.setattr("topomap.core.segmentation.segment", bug)
     r = invoke("segment", path, "-o", tmp_path / "out")
     assert r.exit_code == 3
     lines = stderr_lines(r)
@@ -155,7 +155,7 @@ def test_failed_overlay_leaves_no_partial_file_and_keeps_earlier_outputs(tmp_pat
             fh.write(data[:6])
         raise OSError("disk full")
 
-    monkeypatch.setattr("topomap.export.save_bytes", broken_overlay)
+    monkeypatch.setattr("topomap.io.export.save_bytes", broken_overlay)
     second = png(tmp_path, "second.png", T.gray(T.corridor_with_rooms().array))
     r = invoke("segment", second, "-o", out, "--overwrite")
     assert r.exit_code == 1
@@ -173,7 +173,7 @@ def test_failed_overlay_drawing_writes_nothing(tmp_path, monkeypatch):
     def broken(seg, **kw):
         raise OSError("no display")
 
-    monkeypatch.setattr("topomap.plot.overlay_png", broken)
+    monkeypatch.setattr("topomap.io.plot.overlay_png", broken)
     r = invoke("segment", png(tmp_path, "second.png", T.gray(T.one_room().array)), "-o", out, "--overwrite")
     assert r.exit_code == 1 and "no display" in r.stderr
     assert _snapshot(out) == before
@@ -181,7 +181,7 @@ def test_failed_overlay_drawing_writes_nothing(tmp_path, monkeypatch):
 
 @pytest.mark.parametrize("victim", ["save_labels", "save_graphml", "save_json"])
 def test_any_failed_writer_keeps_earlier_outputs(tmp_path, monkeypatch, victim):
-    from topomap import export
+    from topomap.io import export
 
     out = tmp_path / "out"
     assert invoke("segment", png(tmp_path, "first.png", T.gray(T.two_rooms().array)), "-o", out).exit_code == 0
@@ -197,7 +197,7 @@ def test_any_failed_writer_keeps_earlier_outputs(tmp_path, monkeypatch, victim):
 
 
 def test_batch_with_failed_write_goes_on(tmp_path, monkeypatch):
-    from topomap import export
+    from topomap.io import export
 
     real = export.save_json
 
@@ -250,7 +250,7 @@ def test_subprocess_batch_and_debug(tmp_path):
 def test_cli_method_choices_match_library():
     """The CLI lists the methods without importing the library; it must not drift."""
     from topomap.cli import _method_names
-    from topomap.segmentation import METHODS
+    from topomap.core.segmentation import METHODS
 
     assert sorted(_method_names()) == sorted(METHODS)
     assert _method_names()[0] == "topomap"
@@ -259,7 +259,7 @@ def test_cli_method_choices_match_library():
 def test_segment_with_each_method_name(tmp_path):
     from click.testing import CliRunner
 
-    from topomap._example import example_map_path
+    from topomap.io.example import example_map_path
     from topomap.cli import main
 
     r = CliRunner().invoke(main, ["segment", str(example_map_path()), "-o", str(tmp_path / "o"),
@@ -271,7 +271,7 @@ def test_segment_with_each_method_name(tmp_path):
 def test_segment_profile_prints_every_stage(tmp_path):
     from click.testing import CliRunner
 
-    from topomap._example import example_map_path
+    from topomap.io.example import example_map_path
     from topomap.cli import main
 
     r = CliRunner().invoke(main, ["segment", str(example_map_path()), "-o", str(tmp_path / "o"), "--profile"])
@@ -307,8 +307,8 @@ def test_optional_outputs_can_be_left_out(tmp_path, flags, absent):
     out = tmp_path / "out"
     r = invoke("segment", png(tmp_path, "m.png", T.gray(T.two_rooms().array)), "-o", out, *flags)
     assert r.exit_code == 0, r.stderr
-    from topomap.batch import RECORD
-    from topomap.export import OUTPUT_FILES
+    from topomap.run.batch import RECORD
+    from topomap.io.export import OUTPUT_FILES
 
     every = set(OUTPUT_FILES.values()) | {RECORD}
     assert {p.name for p in out.iterdir()} == every - absent
@@ -319,7 +319,7 @@ def test_no_overlay_does_not_draw(tmp_path, monkeypatch):
     def broken(seg, **kw):
         raise OSError("no display")
 
-    monkeypatch.setattr("topomap.plot.overlay_png", broken)
+    monkeypatch.setattr("topomap.io.plot.overlay_png", broken)
     r = invoke("segment", png(tmp_path, "m.png", T.gray(T.one_room().array)), "-o", tmp_path / "o", "--no-overlay")
     assert r.exit_code == 0, r.stderr
 

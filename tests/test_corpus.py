@@ -10,7 +10,7 @@ from click.testing import CliRunner
 from PIL import Image
 
 from topomap.cli import main
-from topomap.corpus import CASE_FILES, case_seed, scan_options
+from topomap.bench.corpus import CASE_FILES, case_seed, scan_options
 from topomap.errors import ParameterError
 from topomap.io import load_map
 

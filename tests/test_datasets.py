@@ -1,4 +1,4 @@
-"""Tests of topomap.datasets: synthetic files in a tmp dir, and the real
+"""Tests of topomap.bench.datasets: synthetic files in a tmp dir, and the real
 benchmark when its directory is present (skipped otherwise; the data set is
 never part of the repository)."""
 
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from topomap.datasets import (
+from topomap.bench.datasets import (
     FREE_GRAY,
     LABELLED_VARIANT,
     VARIANTS,
@@ -26,7 +26,7 @@ from topomap.datasets import (
     read_label_image,
 )
 from topomap.errors import MapError, MapFileError, ParameterError
-from topomap.evaluation import gt_doors_from_images, gt_rooms_from_image, score_segmentation
+from topomap.bench.evaluation import gt_doors_from_images, gt_rooms_from_image, score_segmentation
 
 BENCH = benchmark_dir()
 needs_benchmark = pytest.mark.skipif(BENCH is None, reason="benchmark maps not available")
@@ -171,8 +171,8 @@ def test_labelled_size_mismatch(tmp_path):
 
 
 def test_constants_have_one_home():
-    import topomap.benchmark as B
-    import topomap.evaluation as E
+    import topomap.bench.benchmark as B
+    import topomap.bench.evaluation as E
     import topomap.io as IO
 
     assert IO.FREE_GRAY == FREE_GRAY == E.FREE_GRAY == 250

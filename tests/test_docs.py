@@ -59,7 +59,7 @@ def actual():
     """Attributes the code puts on every kind of graph, over the example map."""
     import topomap
     from topomap import planning
-    from topomap.segmentation import METHODS, segment
+    from topomap.core.segmentation import METHODS, segment
 
     grid = topomap.load_map(topomap.example_map_path())
     room = [set(), set(), set()]
@@ -110,8 +110,8 @@ def test_mkdocs_build_strict(tmp_path):
 
 def test_statuses_are_named_constants_only():
     """No module compares or sets a candidate status with a string literal:
-    the statuses are the constants of :mod:`topomap.doors`."""
-    from topomap import doors
+    the statuses are the constants of :mod:`topomap.core.doors`."""
+    from topomap.core import doors
 
     for path in sorted((ROOT / "topomap").glob("*.py")):
         src = path.read_text(encoding="utf-8")
@@ -122,7 +122,7 @@ def test_statuses_are_named_constants_only():
 
 def test_every_candidate_status_is_explained():
     """Each ``status`` string the code gives a candidate is on how-it-works.md."""
-    from topomap import doors
+    from topomap.core import doors
 
     page = (ROOT / "docs" / "how-it-works.md").read_text(encoding="utf-8")
     statuses = set(doors.STATUSES) - {doors.CANDIDATE}

@@ -1,11 +1,11 @@
-"""Door-finding building blocks of the default method (topomap.doors)."""
+"""Door-finding building blocks of the default method (topomap.core.doors)."""
 
 import cv2
 import numpy as np
 import pytest
 
-from topomap import doors as D
-from topomap import skeleton as S
+from topomap.core import doors as D
+from topomap.core import skeleton as S
 from topomap._fast import edt
 
 
@@ -108,9 +108,9 @@ def test_unknown_margin_does_not_change_the_result():
     """The default method works on the free space's bounding box; a wide
     unknown margin around the map must not change rooms, doors or world
     coordinates."""
-    from topomap._example import example_map_path
+    from topomap.io.example import example_map_path
     from topomap.io import UNKNOWN, OccupancyGrid, load_map
-    from topomap.segmentation import segment
+    from topomap.core.segmentation import segment
 
     g = load_map(example_map_path())
     pad = 64
@@ -130,7 +130,7 @@ def test_unknown_margin_does_not_change_the_result():
 
 
 def test_a_door_needs_a_laser_hit_at_one_post_at_least():
-    from topomap.doors import UNEXPLORED_POSTS, Candidate, seen_posts
+    from topomap.core.doors import UNEXPLORED_POSTS, Candidate, seen_posts
 
     seen = np.zeros((20, 20), bool)
     seen[5, 2] = True                                  # a hit at the first door's upper post
@@ -145,7 +145,7 @@ def test_a_door_needs_a_laser_hit_at_one_post_at_least():
 
 def test_posts_on_unexplored_edges_only_on_maps_whose_walls_are_hits():
     from topomap.io import from_array
-    from topomap.segmentation import _near_hits
+    from topomap.core.segmentation import _near_hits
 
     free = np.zeros((40, 40), bool)
     free[5:35, 5:35] = True
@@ -219,7 +219,7 @@ def test_strip_cells_are_the_edge_of_the_half_plane():
 def test_window_faces_are_the_faces_of_each_window(n):
     """Both ways of ``_window_faces`` (a few windows far apart on a large map,
     many windows): the faces of each window on its own, in row-major order."""
-    from topomap.walls import wall_faces
+    from topomap.core.walls import wall_faces
 
     rng = np.random.default_rng(n)
     obstacle = rng.random((900, 700)) > 0.6
@@ -244,7 +244,7 @@ def test_prune_spurs_in_place_prunes_as_a_copy_does():
     # the same nodes and branches as a pruned copy (merged paths may run the other way)
     import networkx as nx
 
-    from topomap.skeleton import prune_spurs, skeleton_graph, skeletonize
+    from topomap.core.skeleton import prune_spurs, skeleton_graph, skeletonize
 
     free = np.zeros((60, 90), bool)
     free[5:55, 5:85] = True
@@ -275,7 +275,7 @@ def test_pixel_graph_components_are_those_of_its_adjacency():
     from scipy import sparse
     from scipy.sparse import csgraph
 
-    from topomap.skeleton import _PixelGraph
+    from topomap.core.skeleton import _PixelGraph
 
     rng = np.random.default_rng(3)
     for _ in range(30):

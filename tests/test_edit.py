@@ -1,4 +1,4 @@
-"""Editing rooms (topomap.edit, ``topomap edit``): merges, splits, names and no-go marks keep the
+"""Editing rooms (topomap.core.edit, ``topomap edit``): merges, splits, names and no-go marks keep the
 labels, the doors and the room graph consistent; bad edits change nothing; edits last through
 ``--previous``."""
 
@@ -11,12 +11,12 @@ import pytest
 from click.testing import CliRunner
 
 from _testdata import corridor_with_rooms
-from topomap import edit as E
+from topomap.core import edit as E
 from topomap.errors import EditError, GraphFormatError, MapFileNotFoundError
-from topomap.export import load_graph, load_label_map, save_graph
-from topomap.identity import match_rooms
+from topomap.io.export import load_graph, load_label_map, save_graph
+from topomap.core.identity import match_rooms
 from topomap.io import from_array, save_map
-from topomap.segmentation import segment
+from topomap.core.segmentation import segment
 
 SPECKS = [(2, 20), (3, 100), (125, 40), (124, 200)]  # free 3 x 3 specks outside the building: fragments
 
@@ -411,7 +411,7 @@ def test_cli_edit_usage_and_missing_folder(tmp_path):
 
 
 def test_failed_write_leaves_files_and_record(out_dir, monkeypatch):
-    import topomap.export as X
+    import topomap.io.export as X
 
     old = _snapshot(out_dir)
 

@@ -1,4 +1,4 @@
-"""Tests of topomap.evaluation on small hand-made label images.
+"""Tests of topomap.bench.evaluation on small hand-made label images.
 
 Every expected value is worked out by hand in the comments.
 """
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from topomap.errors import ParameterError
-from topomap.evaluation import (
+from topomap.bench.evaluation import (
     PROTOCOLS,
     ceiling,
     door_distance_matrix,

@@ -5,7 +5,7 @@ import pytest
 import yaml
 from scipy import ndimage as ndi
 
-from topomap import _example
+from topomap.io import example as _example
 from topomap.io import FREE, OCCUPIED, UNKNOWN, load_map
 
 
@@ -18,7 +18,7 @@ def test_files_on_disk_match_generator():
     path = _example.example_map_path()
     assert path.name == "example_office.yaml" and path.is_file()
     for fname, data in _example.example_file_bytes().items():
-        assert (path.parent / fname).read_bytes() == data, f"{fname} is stale: run python -m topomap._example"
+        assert (path.parent / fname).read_bytes() == data, f"{fname} is stale: run python -m topomap.io.example"
 
 
 def test_write_example_files(tmp_path):

@@ -7,11 +7,11 @@ import networkx as nx
 import pytest
 from click.testing import CliRunner
 
-from topomap import export as E
+from topomap.io import export as E
 from topomap import planning as P
 from topomap.errors import GraphFormatError, TopomapError
 from topomap.io import FREE, OCCUPIED, OccupancyGrid, load_map
-from topomap.segmentation import Segmentation, cut_rooms, segment
+from topomap.core.segmentation import Segmentation, cut_rooms, segment
 
 RES = 0.05
 
@@ -37,7 +37,7 @@ def hand():
 
 @pytest.fixture(scope="module")
 def example():
-    from topomap._example import example_map_path
+    from topomap.io.example import example_map_path
 
     return segment(load_map(example_map_path()))
 
@@ -454,7 +454,7 @@ def test_json_writes_non_finite_numbers_as_null(tmp_path):
     import math
 
     import topomap
-    from topomap.export import load_json, save_json
+    from topomap.io.export import load_json, save_json
 
     G = topomap.segment(topomap.load_map(topomap.example_map_path())).room_graph.copy()
     n = next(iter(G.nodes))
@@ -468,7 +468,7 @@ def test_json_writes_non_finite_numbers_as_null(tmp_path):
 
 def test_graphml_of_a_non_utf8_source_name_loads(tmp_path):
     import networkx as nx
-    from topomap.export import load_graphml, save_graphml
+    from topomap.io.export import load_graphml, save_graphml
 
     G = nx.MultiGraph(source=b"caf\xe9\x01.png".decode("utf-8", "surrogateescape"))
     G.add_node(1, area=1.0)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from topomap.errors import MapFileNotFoundError, ParameterError, PlanFormatError
-from topomap.floorplan import ground_truth_problems, read_plan
+from topomap.bench.floorplan import ground_truth_problems, read_plan
 from topomap.io import FREE, OCCUPIED, UNKNOWN
 
 # two rooms and a corridor (units: 1 = 1 cm once the doors are scaled to 0.8 m), an entrance,
@@ -139,7 +139,7 @@ def test_missing_file(tmp_path):
 
 
 def test_real_plans():
-    from topomap.datasets import _shared_dataset
+    from topomap.bench.datasets import _shared_dataset
     d = _shared_dataset("r2v_floorplans")
     if d is None or not (d / "plans").is_dir():
         pytest.skip("r2v_floorplans not present")

@@ -30,7 +30,7 @@ def _one_error_line(res, name):
 # --------------------------------------------------------------------------
 
 def test_many_fragments_fit_the_label_files(tmp_path):
-    from topomap.export import load_label_map
+    from topomap.io.export import load_label_map
 
     a = np.zeros((600, 600), bool)
     a[1:513:2, 1:513:2] = True  # 256 x 256 = 65,536 free cells, each alone: fragments
@@ -52,7 +52,7 @@ def test_many_fragments_fit_the_label_files(tmp_path):
 
 def test_label_array_beyond_16_bits_is_one_line(tmp_path):
     from topomap.errors import ParameterError
-    from topomap.export import save_labels
+    from topomap.io.export import save_labels
 
     import io as pyio
 

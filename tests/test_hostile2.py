@@ -49,7 +49,7 @@ def _maps(tmp_path, names=("a", "b", "c")):
 
 _HOLDER = textwrap.dedent("""
     import sys
-    import topomap.batch as b
+    import topomap.run.batch as b
     run = b._run_one
     def held(task):  # the batch is running: it waits here until told to go on
         print("running", flush=True)
@@ -94,7 +94,7 @@ def _tree(folder):
 
 def test_a_bag_that_fails_writes_no_other_output(tmp_path):
     pytest.importorskip("rosbags")
-    from topomap.batch import FAILED, OK, SKIPPED, segment_many
+    from topomap.run.batch import FAILED, OK, SKIPPED, segment_many
 
     (m,) = _maps(tmp_path, ["a"])
     out = tmp_path / "out"
@@ -117,8 +117,8 @@ def test_a_bag_that_fails_writes_no_other_output(tmp_path):
 
 def test_outputs_that_fail_write_no_bag(tmp_path, monkeypatch):
     pytest.importorskip("rosbags")
-    from topomap import export
-    from topomap.batch import FAILED, segment_many
+    from topomap.io import export
+    from topomap.run.batch import FAILED, segment_many
 
     (m,) = _maps(tmp_path, ["a"])
 
@@ -182,7 +182,7 @@ def test_previous_next_room_id_is_bounded(tmp_path, bad):
 
 def test_previous_graph_with_the_largest_ids_still_matches(tmp_path):
     """IDs up to the bound work, and cost nothing of their size: a new room gets next_room_id."""
-    from topomap.export import MAX_ROOM_ID
+    from topomap.io.export import MAX_ROOM_ID
 
     def edit(d):
         _renumber(d, 2, MAX_ROOM_ID - 1)
@@ -201,8 +201,8 @@ def test_previous_graph_with_the_largest_ids_still_matches(tmp_path):
 def test_previous_graph_claiming_a_huge_frame_costs_the_map_size(tmp_path):
     """40 room polygons over a 7000 x 7000 frame (a few KB): rasterised only where the map is."""
     import shapely
-    from topomap.export import load_graph
-    from topomap.identity import _Previous
+    from topomap.io.export import load_graph
+    from topomap.core.identity import _Previous
 
     def edit(d):
         d["graph"]["shape"] = [7000, 7000]
@@ -238,22 +238,23 @@ def test_previous_graph_of_a_much_finer_frame_is_refused(tmp_path):
 # --------------------------------------------------------------------------
 
 def test_the_size_limit_follows_the_memory(monkeypatch):
+    from topomap import grid
     from topomap.errors import MapTooLargeError, ParameterError
 
     assert io.MAX_CELLS is None  # no fixed limit by default
     monkeypatch.delenv("TOPOMAP_MAX_CELLS", raising=False)
     # the decision: 150 bytes per cell + 250 MB (measured worst case) against the memory available
     assert io.cells_for_memory(24e9) == int((24e9 - 250e6) // 150)
-    monkeypatch.setattr(io, "available_memory", lambda: 22_000_000_000)  # this 24 GB machine, idle
-    io._check_size("warehouse.png", 8000, 8000)  # 400 m at 5 cm: 64 M cells, about 9.9 GB: accepted
-    monkeypatch.setattr(io, "available_memory", lambda: 8_000_000_000)
+    monkeypatch.setattr(grid, "available_memory", lambda: 22_000_000_000)  # this 24 GB machine, idle
+    grid.check_image_size("warehouse.png", 8000, 8000)  # 400 m at 5 cm: 64 M cells, about 9.9 GB: accepted
+    monkeypatch.setattr(grid, "available_memory", lambda: 8_000_000_000)
     with pytest.raises(MapTooLargeError, match=r"^warehouse.png: image is 8000 x 8000 px = 64,000,000 cells, more "
                                                r"than the 51,666,666 cells the free memory allows \(8.0 GB"):
-        io._check_size("warehouse.png", 8000, 8000)
-    monkeypatch.setattr(io, "_MEMORY_SHARERS", 2)  # two maps at once share it
+        grid.check_image_size("warehouse.png", 8000, 8000)
+    monkeypatch.setattr(grid, "MEMORY_SHARERS", 2)  # two maps at once share it
     assert io.cell_limit()[0] == io.cells_for_memory(4e9)
-    monkeypatch.setattr(io, "_MEMORY_SHARERS", 1)
-    monkeypatch.setattr(io, "available_memory", lambda: None)  # unreadable: the 8 GiB assumption
+    monkeypatch.setattr(grid, "MEMORY_SHARERS", 1)
+    monkeypatch.setattr(grid, "available_memory", lambda: None)  # unreadable: the 8 GiB assumption
     assert io.cell_limit()[0] == io.FALLBACK_MAX_CELLS
     # the overrides: the environment, then topomap.io.MAX_CELLS
     monkeypatch.setenv("TOPOMAP_MAX_CELLS", "100")
@@ -293,7 +294,7 @@ def test_the_size_limit_env_reaches_the_command(tmp_path):
 def test_jobs_are_capped_by_the_maps_and_the_cores(tmp_path, monkeypatch):
     import concurrent.futures as cf
 
-    from topomap.batch import segment_many, worker_count
+    from topomap.run.batch import segment_many, worker_count
 
     started = []
 
@@ -348,7 +349,7 @@ def test_map_size_is_read_from_the_message_header():
     pytest.importorskip("rosbags")
     from rosbags.typesys import Stores, get_typestore
 
-    from topomap.ros import _map_size
+    from topomap.io.ros import _map_size
 
     ts2, ts1 = get_typestore(Stores.ROS2_HUMBLE), get_typestore(Stores.ROS1_NOETIC)
     for frame in ("", "m", "ma", "map", "mapx", "a_longer_frame_name"):
@@ -382,7 +383,7 @@ def test_compressed_bag_that_expands_hugely_is_refused(tmp_path, monkeypatch, st
     pytest.importorskip("rosbags")
     import tempfile
 
-    from topomap import ros
+    from topomap.io import ros
     from topomap.errors import BagError
 
     bag = _bag(tmp_path / "bomb", 2000, 2000, storage=storage, compression=compression)  # 4 MB of zeros

@@ -1,4 +1,4 @@
-"""Stable room IDs across map updates: topomap.identity and segment(previous=...)."""
+"""Stable room IDs across map updates: topomap.core.identity and segment(previous=...)."""
 
 import json
 
@@ -9,11 +9,11 @@ from click.testing import CliRunner
 
 import topomap
 from topomap.errors import ParameterError
-from topomap.export import load_graph, save_graph
-from topomap.identity import TrackedSegmentation, match_rooms
+from topomap.io.export import load_graph, save_graph
+from topomap.core.identity import TrackedSegmentation, match_rooms
 from topomap.io import FREE, OCCUPIED, OccupancyGrid
 from topomap.planning import room_at
-from topomap.segmentation import Segmentation, segment
+from topomap.core.segmentation import Segmentation, segment
 
 RES = 0.05
 
@@ -335,7 +335,7 @@ def test_a_wall_piece_in_a_previous_doorway_leaves_both_openings_cut():
 
 def _adjusted(segments):
     """DoorPrior.adjust on the two rooms with the door of a first run as the prior."""
-    from topomap.identity import DoorPrior
+    from topomap.core.identity import DoorPrior
     from topomap.options import TopomapOptions
 
     grid = _two_rooms()
@@ -362,7 +362,7 @@ def test_a_previous_door_is_added_unless_a_new_cut_closes_it():
 
 
 def test_same_door_needs_each_through_the_middle_of_the_other():
-    from topomap.identity import _same_doors
+    from topomap.core.identity import _same_doors
 
     P, Q = np.array([[0.0, 0.0]]), np.array([[20.0, 0.0]])  # a previous door, 20 px
     cuts = [((0.0, 3.0), (20.0, 3.0)),    # the same door redrawn 3 px away
@@ -394,7 +394,7 @@ def test_a_piece_of_a_room_is_a_link_from_a_room_area_up():
 
 
 def test_a_post_redrawn_beside_the_door_line_is_still_a_post():
-    from topomap.identity import _passage_along
+    from topomap.core.identity import _passage_along
 
     walls = np.zeros((30, 40), bool)
     walls[:, :6] = walls[:, 20:] = True  # the door: row 10 from col 5 to col 20
@@ -407,7 +407,7 @@ def test_a_post_redrawn_beside_the_door_line_is_still_a_post():
 
 
 def test_a_door_ending_on_clutter_goes_on_to_the_wall():
-    from topomap.identity import _through_clutter
+    from topomap.core.identity import _through_clutter
 
     walls = np.zeros((40, 40), bool)
     walls[:, :3] = walls[:, 37:] = True

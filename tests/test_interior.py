@@ -10,11 +10,11 @@ from hypothesis import HealthCheck, given, settings
 
 import _testdata as T
 from test_whole_graph import fuzzed
-from topomap import export as E
-from topomap import planning as P
+from topomap.io import export as E
+from topomap.planning import paths as P
 from topomap.io import FREE, OCCUPIED, OccupancyGrid, from_array
-from topomap.roomgraph import interior_points
-from topomap.segmentation import Segmentation, cut_rooms, segment
+from topomap.core.roomgraph import interior_points
+from topomap.core.segmentation import Segmentation, cut_rooms, segment
 
 RES = 0.05
 
@@ -99,7 +99,7 @@ def test_plan_from_room_id_starts_at_the_interior_point():
 
 
 def test_overlay_label_drawn_inside_its_room():
-    from topomap.plot import _BOX, _overlay_indexed
+    from topomap.io.plot import _BOX, _overlay_indexed
 
     seg = _seg_of(_l_shape())
     idx, _ = _overlay_indexed(seg)

@@ -36,7 +36,7 @@ from hypothesis import strategies as st
 
 import _testdata as T
 from topomap.io import from_array
-from topomap.segmentation import DEFAULT_METHOD, METHODS, segment
+from topomap.core.segmentation import DEFAULT_METHOD, METHODS, segment
 
 SETTINGS = settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 

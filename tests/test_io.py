@@ -483,7 +483,7 @@ def test_save_failure_leaves_nothing(tmp_path, monkeypatch):
 
     def boom(src, dst):
         raise PermissionError(13, "Permission denied")
-    monkeypatch.setattr(tio.os, "replace", boom)
+    monkeypatch.setattr(os, "replace", boom)
     with pytest.raises(MapFileError, match="cannot write map") as ei:
         save_map(CELLS3, tmp_path / "m")
     assert_one_line(ei, "m")
@@ -561,9 +561,9 @@ def test_messages_name_the_file_in_one_line_even_with_weird_exceptions(tmp_path)
 
 def _saved_graph(tmp_path, name="g.json"):
     import _testdata as T
-    from topomap.export import save_graph
+    from topomap.io.export import save_graph
     from topomap.planning import travel_graph
-    from topomap.segmentation import segment
+    from topomap.core.segmentation import segment
 
     G = travel_graph(segment(from_array(T.two_rooms().array, resolution=T.RES)))
     return save_graph(G, tmp_path / name), G
@@ -581,7 +581,7 @@ def _edit_json(path, edit):
 @pytest.mark.parametrize("fmt", ["json", "graphml", "geojson"])
 def test_graph_claiming_a_huge_map_refused_before_planning(tmp_path, fmt):
     from topomap.errors import MapTooLargeError
-    from topomap.export import load_graph, save_graph
+    from topomap.io.export import load_graph, save_graph
 
     _, G = _saved_graph(tmp_path)
     G.graph["shape"] = (1_000_000, 1_000_000)
@@ -593,7 +593,7 @@ def test_graph_claiming_a_huge_map_refused_before_planning(tmp_path, fmt):
 
 def test_deeply_nested_json_graph_is_a_format_error(tmp_path):
     from topomap.errors import GraphFormatError
-    from topomap.export import load_graph
+    from topomap.io.export import load_graph
 
     p = tmp_path / "deep.json"
     p.write_text("[" * 200_000 + "]" * 200_000)
@@ -604,7 +604,7 @@ def test_deeply_nested_json_graph_is_a_format_error(tmp_path):
 
 def test_graphml_with_entities_refused(tmp_path):
     from topomap.errors import GraphFormatError
-    from topomap.export import load_graph
+    from topomap.io.export import load_graph
 
     p = tmp_path / "lol.graphml"
     p.write_text('<?xml version="1.0"?><!DOCTYPE g [<!ENTITY a "lol"><!ENTITY b "&a;&a;&a;">]>'
@@ -619,7 +619,7 @@ def test_graphml_entity_behind_a_long_comment_refused(tmp_path, lead):
     """A DOCTYPE is refused wherever it stands, not only in the first 64 KB: behind a long
     comment an internal entity would otherwise reach the room names."""
     from topomap.errors import GraphFormatError
-    from topomap.export import load_graph
+    from topomap.io.export import load_graph
 
     p = tmp_path / "late.graphml"
     p.write_text('<?xml version="1.0"?><!--' + "x" * lead + '--><!DOCTYPE g [<!ENTITY a "INJECTED">]>'
@@ -631,7 +631,7 @@ def test_graphml_entity_behind_a_long_comment_refused(tmp_path, lead):
 
 
 def test_graphml_without_namespace_still_reads(tmp_path):
-    from topomap.export import load_graph
+    from topomap.io.export import load_graph
 
     p = tmp_path / "bare.graphml"
     p.write_text('<?xml version="1.0"?><graphml><graph edgedefault="undirected">'
@@ -646,7 +646,7 @@ def test_odd_geojson_is_a_format_error(tmp_path, bad):
     import json
 
     from topomap.errors import GraphFormatError
-    from topomap.export import load_graph
+    from topomap.io.export import load_graph
 
     p = tmp_path / "odd.geojson"
     p.write_text(json.dumps(bad))
@@ -657,7 +657,7 @@ def test_odd_geojson_is_a_format_error(tmp_path, bad):
 
 def test_door_without_p1_is_a_planning_error_naming_the_door(tmp_path):
     from topomap.errors import PlanningError
-    from topomap.export import load_graph
+    from topomap.io.export import load_graph
     from topomap.planning import plan_path
 
     p, G = _saved_graph(tmp_path)
@@ -671,7 +671,7 @@ def test_nan_written_as_null_and_read_back(tmp_path):
     import json
     import math
 
-    from topomap.export import load_graph, save_graph
+    from topomap.io.export import load_graph, save_graph
 
     _, G = _saved_graph(tmp_path)
     u, v, k = next(iter(G.edges(keys=True)))

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import topomap
-from topomap.export import load_graph, save_graph
-from topomap.kinds import KINDS, room_kind, room_shape
+from topomap.io.export import load_graph, save_graph
+from topomap.core.kinds import KINDS, room_kind, room_shape
 
 from _testdata import corridor_with_rooms
 
@@ -59,7 +59,7 @@ def test_rooms_of_a_map_get_their_kind_and_keep_it_in_files(tmp_path):
 def _kinds_of(labels, doors, res=0.05):
     import networkx as nx
 
-    from topomap.kinds import annotate_kinds
+    from topomap.core.kinds import annotate_kinds
 
     G = nx.MultiGraph()
     G.add_nodes_from(int(v) for v in np.unique(labels) if v)

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy import ndimage as ndi
 
-from topomap.segmentation import clutter_mask
+from topomap.core.segmentation import clutter_mask
 
 
 def _reference(free, max_extent_px, furniture_px, wall_thickness_px):
@@ -46,7 +46,7 @@ def test_clutter_mask_is_its_definition(seed):
 def test_clutter_mask_keep_and_shared_parts(seed):
     # with keep: the clutter components touching a kept cell are none; the parts made once
     # (the furniture stage asks with and without keep) give the same masks
-    from topomap.segmentation import clutter_parts
+    from topomap.core.segmentation import clutter_parts
 
     rng = np.random.default_rng(seed)
     free = np.ones((150, 170), bool)
@@ -71,8 +71,8 @@ def test_clutter_mask_keep_and_shared_parts(seed):
 
 @pytest.mark.parametrize("seed", range(4))
 def test_close_by_distance_is_the_closing(seed):
-    from topomap.geometry import disk
-    from topomap.segmentation import _close_by_distance
+    from topomap.core.geometry import disk
+    from topomap.core.segmentation import _close_by_distance
 
     rng = np.random.default_rng(seed)
     free = rng.random((130, 170)) < rng.uniform(0.6, 0.97)
@@ -87,10 +87,10 @@ def test_close_by_distance_is_the_closing(seed):
 @pytest.mark.parametrize("resolution", [0.05, 0.02, 0.01])
 def test_free_mask_median_is_medianblur(resolution):
     # a fine map: median windows wider than 5 cells take the box-count route
-    from topomap.geometry import disk, metres_to_px
+    from topomap.core.geometry import disk, metres_to_px
     from topomap.io import from_array
     from topomap.options import TopomapOptions
-    from topomap.segmentation import preprocess_masks
+    from topomap.core.segmentation import preprocess_masks
 
     rng = np.random.default_rng(int(resolution * 1000))
     free = ndi.binary_opening(rng.random((160, 190)) < 0.8)
@@ -108,7 +108,7 @@ def test_masks_without_clearance_are_the_same_masks():
     # segment_topomap computes the clearance itself (on a second thread): the masks must not change
     from topomap.io import from_array
     from topomap.options import TopomapOptions
-    from topomap.segmentation import preprocess_masks
+    from topomap.core.segmentation import preprocess_masks
 
     rng = np.random.default_rng(7)
     grid = from_array(ndi.binary_opening(rng.random((120, 150)) < 0.8), resolution=0.05)
@@ -122,7 +122,7 @@ def test_masks_without_clearance_are_the_same_masks():
 def test_segmentation_clearance_is_the_distance_transform_of_its_free_space():
     # the clearance made beside the masks is the exact distance transform of the searched free space
     from topomap import load_map, segment
-    from topomap._example import example_map_path
+    from topomap.io.example import example_map_path
     from topomap._fast import edt
 
     grid = load_map(example_map_path())
@@ -169,7 +169,7 @@ def test_batch_workers_run_maps_on_one_thread():
     # the pool initializer of segment_many(jobs > 1) switches the second thread off in the worker
     from concurrent.futures import ProcessPoolExecutor
 
-    from topomap import batch
+    from topomap.run import batch
 
     with ProcessPoolExecutor(1, initializer=batch._pool_init) as ex:
         assert ex.submit(_beside_flag).result() is False

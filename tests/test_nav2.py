@@ -15,7 +15,7 @@ from scipy import ndimage as ndi
 import topomap
 from topomap.cli import main
 from topomap.errors import ParameterError, PlanningError
-from topomap.nav2 import DEFAULT_CLEARANCE, route_graph, write_route_graph
+from topomap.planning.nav2 import DEFAULT_CLEARANCE, route_graph, write_route_graph
 
 from _testdata import corridor_with_rooms
 
@@ -305,7 +305,7 @@ def test_export_labels_of_another_map(tmp_path):
 
 
 def _real_nogt():
-    from topomap.datasets import _shared_dataset
+    from topomap.bench.datasets import _shared_dataset
 
     d = os.environ.get("TOPOMAP_REAL_NOGT_DIR")
     return Path(d) if d and Path(d).is_dir() else _shared_dataset("real_nogt")

@@ -142,7 +142,7 @@ def test_intermediates_are_the_masks_that_ran(two_rooms):
         p = d["path"]
         np.testing.assert_allclose(d["radius"], im.clearance[p[:, 0], p[:, 1]] * two_rooms.resolution)
     # and the threshold is measured on the occupied clearance
-    from topomap.skeleton import graph_pixels
+    from topomap.core.skeleton import graph_pixels
 
     px = graph_pixels(seg.occupied_graph)
     assert seg.threshold == pytest.approx(2 * im.occupied_clearance[px[:, 0], px[:, 1]].mean() * 0.05)

@@ -1,10 +1,10 @@
-"""The outside of the building (topomap.outside): free space a laser saw beyond the facade."""
+"""The outside of the building (topomap.core.outside): free space a laser saw beyond the facade."""
 
 import numpy as np
 import pytest
 
 import topomap
-from topomap import outside as O
+from topomap.core import outside as O
 from topomap.io import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
 
 
@@ -82,7 +82,7 @@ def test_open_unknown_is_large_or_at_the_edge():
 
 
 def test_drop_outside_renumbers_rooms_fragments_and_doors():
-    from topomap.doors import Door
+    from topomap.core.doors import Door
 
     labels = np.array([[1, 1, 2, 2, 3, 3, 4, 5]], np.int32)     # rooms 1-3, fragments 4, 5
     doors = [Door(0, (0, 1), (0, 2), rooms=(1, 2)), Door(1, (0, 3), (0, 4), rooms=(2, 3)),
@@ -115,7 +115,7 @@ def test_first_hit_matches_walking_each_ray(shape):
 
 
 def test_blocks_reduce_like_the_definition():
-    from topomap.skeleton import downsample
+    from topomap.core.skeleton import downsample
 
     rng = np.random.default_rng(5)
     m = rng.random((13, 10)) < 0.6

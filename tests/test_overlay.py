@@ -1,4 +1,4 @@
-"""The overlay picture drawn straight into the raster (topomap.plot.overlay_image / overlay_png)."""
+"""The overlay picture drawn straight into the raster (topomap.io.plot.overlay_image / overlay_png)."""
 
 import io
 import subprocess
@@ -8,14 +8,14 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from topomap import plot
+from topomap.io import plot
 from topomap.io import load_map
-from topomap.segmentation import segment
+from topomap.core.segmentation import segment
 
 
 @pytest.fixture(scope="module")
 def seg():
-    from topomap._example import example_map_path
+    from topomap.io.example import example_map_path
 
     s = segment(load_map(example_map_path()))
     s.room_graph
@@ -77,8 +77,8 @@ def test_matplotlib_figure_on_request(seg):
 
 
 def test_raster_overlay_does_not_import_matplotlib():
-    code = ("import sys\nfrom topomap._example import example_map_path\nfrom topomap.io import load_map\n"
-            "from topomap.segmentation import segment\nfrom topomap.plot import overlay_png\n"
+    code = ("import sys\nfrom topomap.io.example import example_map_path\nfrom topomap.io import load_map\n"
+            "from topomap.core.segmentation import segment\nfrom topomap.io.plot import overlay_png\n"
             "overlay_png(segment(load_map(example_map_path())))\nprint('matplotlib' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"

@@ -11,7 +11,7 @@ import pytest
 
 import _testdata as T
 from topomap.io import from_array
-from topomap.segmentation import segment
+from topomap.core.segmentation import segment
 
 POS_TOL = 0.15  # m: 3 px at 0.05 m/px
 WIDTH_TOL = 0.15  # m

@@ -4,10 +4,10 @@ import numpy as np
 import networkx as nx
 import pytest
 
-from topomap import planning as P
+from topomap.planning import paths as P
 from topomap.errors import TopomapError
 from topomap.io import FREE, OCCUPIED, OccupancyGrid, load_map
-from topomap.segmentation import METHODS, Segmentation, cut_rooms, segment
+from topomap.core.segmentation import METHODS, Segmentation, cut_rooms, segment
 
 RES = 0.05
 
@@ -57,7 +57,7 @@ def row():
 
 @pytest.fixture(scope="module")
 def example():
-    from topomap._example import example_map_path
+    from topomap.io.example import example_map_path
 
     return segment(load_map(example_map_path()))
 
@@ -108,7 +108,7 @@ def test_invariants_hand_map(row):
 
 @pytest.mark.parametrize("method", sorted(METHODS))
 def test_invariants_example(method):
-    from topomap._example import example_map_path
+    from topomap.io.example import example_map_path
 
     _check_invariants(segment(load_map(example_map_path()), method=method))
 
@@ -117,7 +117,7 @@ def test_invariants_example(method):
 @pytest.mark.parametrize("yaw", [0.0, 0.6])
 def test_room_cells_recovered_from_graph_polygons(method, yaw):
     """A graph alone gives back the label image exactly (planning from a saved graph relies on it)."""
-    from topomap._example import example_map_path
+    from topomap.io.example import example_map_path
 
     g = load_map(example_map_path())
     seg = segment(OccupancyGrid(g.cells, g.resolution, (2.0, -1.0, yaw)), method=method)
@@ -270,7 +270,7 @@ def test_plan_within_one_room(row):
 
 
 def test_plan_same_from_segmentation_graph_and_saved_file(row, tmp_path):
-    from topomap.export import load_graphml, save_graphml
+    from topomap.io.export import load_graphml, save_graphml
 
     s, g = room_centre(row, 1), room_centre(row, 4)
     a = P.plan_path(row, s, g)
@@ -557,7 +557,7 @@ def test_route_across_a_door_whose_segment_runs_on_through_a_wall():
     labels[25:45, 5:31] = 2  # room 2 below its left half; columns 31-34 a wall between 2 and 1
     cells[labels > 0] = FREE
     grid = OccupancyGrid(cells, RES)
-    from topomap.doors import Door
+    from topomap.core.doors import Door
 
     p1, p2 = (25.0, 10.0), (25.0, 60.0)  # midpoint column 35: room 1, beyond the wall
     (x1, x2), (y1, y2) = grid.pixel_to_world(np.array([p1[0], p2[0]]), np.array([p1[1], p2[1]]))

@@ -1,12 +1,12 @@
-"""Room outlines of the room–door graph (topomap.roomgraph.room_polygons): they follow the cells' edges."""
+"""Room outlines of the room–door graph (topomap.core.roomgraph.room_polygons): they follow the cells' edges."""
 
 import numpy as np
 import pytest
 import shapely
 
 from topomap.io import FREE, OCCUPIED, OccupancyGrid
-from topomap.roomgraph import room_graph, room_polygons
-from topomap.segmentation import Segmentation
+from topomap.core.roomgraph import room_graph, room_polygons
+from topomap.core.segmentation import Segmentation
 
 
 def _labels():
@@ -56,7 +56,7 @@ def test_room_graph_polygons_are_room_polygons():
 
 
 def _polygons_of(mask):
-    from topomap.geometry import mask_rings
+    from topomap.core.geometry import mask_rings
 
     xy, ring, piece, hole = mask_rings(mask)
     rings = shapely.linearrings(xy[:, ::-1], indices=ring)  # (row, col) -> (x = col, y = row)
@@ -111,7 +111,7 @@ def test_area_attribute_is_the_outline_area():
 
 
 def test_detail_limit_keeps_the_largest_pieces_and_never_covers_another_room(monkeypatch, caplog):
-    import topomap.roomgraph as rg
+    import topomap.core.roomgraph as rg
 
     i = np.arange(60) // 2
     L = ((i[:, None] + i[None, :]) % 2 == 0).astype(np.int32)  # room 1: a checkerboard of 2 x 2 pieces
@@ -145,7 +145,7 @@ def test_outline_texts_in_blocks_are_the_plain_texts(monkeypatch):
 
     import shapely.wkt
 
-    import topomap.export as ex
+    import topomap.io.export as ex
 
     i = np.arange(30) // 2
     L = ((i[:, None] + i[None, :]) % 2 == 0).astype(np.int32)
@@ -166,7 +166,7 @@ def test_outline_texts_in_blocks_are_the_plain_texts(monkeypatch):
 @pytest.mark.parametrize("seed", range(3))
 def test_label_rings_are_each_labels_mask_rings(seed):
     # one pass over a label image gives, for every label, the rings of its own mask (same corners, same order)
-    from topomap.geometry import label_rings, mask_rings
+    from topomap.core.geometry import label_rings, mask_rings
 
     rng = np.random.default_rng(seed)
     for _ in range(100):
@@ -195,8 +195,8 @@ def test_label_rings_are_each_labels_mask_rings(seed):
 def test_detail_limit_found_before_tracing_equals_the_rings_count(seed, monkeypatch):
     # the rooms beyond the detail limit, found from their boundary edges before any ring is traced,
     # are those whose traced rings have more edges than the limit allows
-    from topomap import roomgraph as RG
-    from topomap.geometry import label_rings
+    from topomap.core import roomgraph as RG
+    from topomap.core.geometry import label_rings
 
     monkeypatch.setattr(RG, "OUTLINE_MIN_RINGS", 3)
     rng = np.random.default_rng(seed)

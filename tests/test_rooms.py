@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 from scipy import ndimage as ndi
 
-from topomap import rooms
+from topomap.core import rooms
 from topomap._fast import lookup
-from topomap.rooms import _fill_pieces, _rooms_first, _runs, fill_unlabeled
+from topomap.core.rooms import _fill_pieces, _rooms_first, _runs, fill_unlabeled
 
 
 def _case(rng, shape, small_share):
@@ -96,7 +96,7 @@ def test_a_cut_reaches_the_walls_it_was_rounded_short_of(short):
     # rounded onto the cell beside a wall leaves): still two rooms, no
     # 4-connected way round its end
     from topomap.io import from_array
-    from topomap.rooms import cut_rooms
+    from topomap.core.rooms import cut_rooms
 
     free = np.zeros((44, 84), bool)
     free[2:42, 2:40] = True

@@ -1,4 +1,4 @@
-"""ROS bags in, ROS messages and map_server files out (topomap.ros), without ROS.
+"""ROS bags in, ROS messages and map_server files out (topomap.io.ros), without ROS.
 
 The input bags are written here with rosbags' own writers and message
 classes, in the three formats (ROS 1 .bag, ROS 2 sqlite3, ROS 2 MCAP), so
@@ -18,7 +18,8 @@ import numpy as np
 import pytest
 
 import topomap
-from topomap import export, ros
+from topomap.io import export
+from topomap.io import ros
 from topomap.errors import BagError, MapError, MapFileNotFoundError, MissingDependencyError, ParameterError
 from topomap.io import FREE, OCCUPIED, UNKNOWN, from_array, load_map
 

@@ -1,4 +1,4 @@
-"""The laser SLAM simulator (topomap.simulate) on small hand-drawn plans."""
+"""The laser SLAM simulator (topomap.bench.simulate) on small hand-drawn plans."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from scipy import ndimage as ndi
 
 from _floorplans import draw_plan, home
 from topomap.errors import ParameterError
-from topomap.simulate import ScanOptions, simulate_scan
+from topomap.bench.simulate import ScanOptions, simulate_scan
 
 #: Every fault off: the clean laser on the bare plan.
 CLEAN = dict(glass_share=0.0, drift_xy=0.0, drift_yaw=0.0, plan_furniture=False, furniture_density=0.0,
@@ -156,7 +156,7 @@ def test_only_doors_of_dead_end_rooms_are_closed():
 
 
 def test_the_robot_maps_the_largest_part_of_a_home_in_pieces():
-    from topomap.simulate import _largest_part
+    from topomap.bench.simulate import _largest_part
 
     adj = {1: {2}, 2: {1}, 3: {4}, 4: {3, 5}, 5: {4}}  # two parts no door joins: {1, 2} and {3, 4, 5}
     area = np.array([0, 50, 50, 10, 10, 10])
@@ -168,7 +168,7 @@ def test_the_robot_maps_the_largest_part_of_a_home_in_pieces():
 def test_drift_is_bounded_however_long_the_path():
     """The SLAM's residual error stays near drift_xy / drift_yaw on a long path (no random walk
     that grows with the distance: a 400 m path would otherwise shift walls by metres)."""
-    from topomap.simulate import scan_poses
+    from topomap.bench.simulate import scan_poses
     path = np.stack([np.zeros(8001), np.arange(8001.0)], axis=1)  # 400 m at 0.05 m a cell
     opts = ScanOptions(**{**CLEAN, "drift_xy": 0.03, "drift_yaw": 0.5})
     true, believed = scan_poses(path, 0.05, opts, np.random.default_rng(3))
@@ -181,7 +181,7 @@ def test_drift_is_bounded_however_long_the_path():
 
 
 def test_the_scan_truth_is_the_rooms_the_map_shows_whole():
-    from topomap.simulate import SHOWN_AREA, shown_doors, shown_rooms
+    from topomap.bench.simulate import SHOWN_AREA, shown_doors, shown_rooms
 
     rooms = np.zeros((60, 90), np.uint16)
     rooms[5:55, 5:40] = 1
@@ -204,7 +204,7 @@ def test_the_scan_truth_is_the_rooms_the_map_shows_whole():
 
 
 def test_a_room_behind_a_closed_door_is_not_in_the_scan_truth(plan):
-    from topomap.simulate import shown_doors, shown_rooms
+    from topomap.bench.simulate import shown_doors, shown_rooms
 
     r = simulate_scan(plan, options=ScanOptions(**{**CLEAN, "closed_doors": 1.0}), seed=1)
     shown = shown_rooms(plan.rooms, r.grid.free, resolution=plan.resolution)
@@ -254,7 +254,7 @@ def test_the_robot_starts_where_it_can_reach_most_of_the_home():
 def test_every_beam_stops_at_the_first_wall_that_is_not_glass(plan):
     """Trace each beam of scans taken in every room up to its range: it crosses no wall cell but glass,
     and beams through glass go on past the facade."""
-    from topomap.simulate import _beams, build_world, cast_rays
+    from topomap.bench.simulate import _beams, build_world, cast_rays
 
     opts = ScanOptions(**{**CLEAN, "glass_share": 0.5, "range_sigma": 0.0, "no_return_share": 0.0,
                           "field_of_view": 360.0, "angle_step": 2.0})

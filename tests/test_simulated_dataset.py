@@ -1,4 +1,4 @@
-"""The simulated-corpus layout of topomap.datasets: one folder per case (map, plan, ground truth)."""
+"""The simulated-corpus layout of topomap.bench.datasets: one folder per case (map, plan, ground truth)."""
 
 import json
 import math
@@ -9,9 +9,9 @@ import pytest
 from click.testing import CliRunner
 from PIL import Image
 
-from topomap.benchmark import run_benchmark
+from topomap.bench.benchmark import run_benchmark
 from topomap.cli import main
-from topomap.datasets import (BenchmarkNotFoundError, detect_layout, door_cells, load_dataset,
+from topomap.bench.datasets import (BenchmarkNotFoundError, detect_layout, door_cells, load_dataset,
                               load_simulated, read_doors)
 from topomap.errors import MapError, MapFileError, ParameterError
 from topomap.io import FREE, OCCUPIED, UNKNOWN, load_map, save_map
@@ -249,7 +249,7 @@ def test_the_section_script(corpus, tmp_path):
 
 
 def test_plan_split_is_a_fixed_rule_on_the_name():
-    from topomap.datasets import SPLITS, plan_split
+    from topomap.bench.datasets import SPLITS, plan_split
 
     # pinned: the halves must never change between versions (tuning on dev, reporting on held-out)
     assert [plan_split(n) for n in ("a", "house_a", "house_d")] == ["dev", "held-out", "dev"]

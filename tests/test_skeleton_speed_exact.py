@@ -1,4 +1,4 @@
-"""The vectorised parts of topomap.skeleton give exactly what the plain ones they replaced gave.
+"""The vectorised parts of topomap.core.skeleton give exactly what the plain ones they replaced gave.
 
 Each fast path is compared with the straightforward computation it stands for, on random
 inputs: same values, same dtype, same shape, same order.
@@ -7,7 +7,7 @@ inputs: same values, same dtype, same shape, same order.
 import numpy as np
 import pytest
 
-from topomap.skeleton import _unique_pixels
+from topomap.core.skeleton import _unique_pixels
 
 
 @pytest.mark.parametrize("dtype", [np.int64, np.int32, np.int16, np.uint8, np.uint64, np.float64])
@@ -29,7 +29,7 @@ def test_unique_pixels_far_apart():
 
 
 def _branch_edges_one_by_one(rc, porder, bounds, en_p, en_n, rep, mr, mc, n_nodes):
-    """The branch-by-branch tracing :func:`topomap.skeleton._branch_edges` replaced."""
+    """The branch-by-branch tracing :func:`topomap.core.skeleton._branch_edges` replaced."""
     touch = {}
     for p, n in zip(en_p.tolist(), en_n.tolist()):
         touch.setdefault(p, []).append(n)
@@ -74,7 +74,7 @@ def _branch_edges_one_by_one(rc, porder, bounds, en_p, en_n, rep, mr, mc, n_node
 def test_branch_edges_are_those_traced_one_by_one():
     # random branches whose ends touch no node, one, two or three nodes (the first and the
     # last pixel, one-pixel branches), the same node at both ends
-    from topomap.skeleton import _branch_edges
+    from topomap.core.skeleton import _branch_edges
 
     rng = np.random.default_rng(5)
     for _ in range(300):
@@ -105,7 +105,7 @@ def test_prune_spurs_kinds_follow_the_degrees(copy):
     # prune_spurs keeps the degrees up to date itself: the kinds must be those of the pruned graph
     from scipy import ndimage as ndi
 
-    from topomap.skeleton import prune_spurs, skeleton_graph, skeletonize
+    from topomap.core.skeleton import prune_spurs, skeleton_graph, skeletonize
 
     names = {0: "isolated", 1: "endpoint", 2: "loop"}
     rng = np.random.default_rng(7)
@@ -135,7 +135,7 @@ def _rings_and_soups(rng, k):
 
 
 def test_clusters_are_components():
-    from topomap.skeleton import _PixelGraph
+    from topomap.core.skeleton import _PixelGraph
 
     rng = np.random.default_rng(11)
     for img in _rings_and_soups(rng, 200):
@@ -148,7 +148,7 @@ def test_clusters_are_components():
 def test_branch_labels_are_components():
     # the branches' labels from pointer jumping are those of the branch pixels' image, loops
     # without a node (lists that never end) included; an end pixel's list ends at the other end
-    from topomap.skeleton import _Branches, _PixelGraph
+    from topomap.core.skeleton import _Branches, _PixelGraph
 
     rng = np.random.default_rng(12)
     for img in _rings_and_soups(rng, 300):
@@ -167,7 +167,7 @@ def test_copy_is_networkx_copy():
     # the same graph, orders included (prune_spurs' merged paths follow each node's order of branches)
     import networkx as nx
 
-    from topomap.skeleton import _copy, skeleton_graph, skeletonize
+    from topomap.core.skeleton import _copy, skeleton_graph, skeletonize
 
     def everything(G):
         return (dict(G.graph), list(G.nodes(data=True)),

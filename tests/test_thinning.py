@@ -12,7 +12,7 @@ import pytest
 from scipy import ndimage as ndi
 from skimage.morphology import skeletonize as sk
 
-from topomap.skeleton import _THIN_SPARSE_CELLS, _thin, skeletonize
+from topomap.core.skeleton import _THIN_SPARSE_CELLS, _thin, skeletonize
 
 
 @pytest.mark.parametrize("seed", range(8))

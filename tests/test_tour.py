@@ -1,4 +1,4 @@
-"""Room tours (topomap.tour, re-exported as topomap.planning.plan_tour) on maps whose best tour is known."""
+"""Room tours (topomap.planning.tour, re-exported as topomap.planning.plan_tour) on maps whose best tour is known."""
 
 import itertools
 import json
@@ -8,11 +8,11 @@ import pytest
 from click.testing import CliRunner
 
 from topomap.errors import NoPathError, NotInRoomError
-from topomap.export import load_graph, save_graph
+from topomap.io.export import load_graph, save_graph
 from topomap.io import FREE, OCCUPIED, OccupancyGrid
 from topomap.planning import plan_tour, travel_graph
-from topomap.segmentation import Segmentation, cut_rooms
-from topomap.tour import solve_order, stop_distances, tour_length, tour_lower_bound
+from topomap.core.segmentation import Segmentation, cut_rooms
+from topomap.planning.tour import solve_order, stop_distances, tour_length, tour_lower_bound
 
 RES = 0.05
 

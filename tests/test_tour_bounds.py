@@ -6,10 +6,10 @@ import networkx as nx
 import pytest
 
 from topomap import planning as P
-from topomap import tour as TR
-from topomap.doors import Door
+from topomap.planning import tour as TR
+from topomap.core.doors import Door
 from topomap.io import FREE, OCCUPIED, OccupancyGrid
-from topomap.segmentation import Segmentation
+from topomap.core.segmentation import Segmentation
 
 
 def grid_of_rooms(k, cell=12, res=0.05):

@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 from scipy import ndimage as ndi
 
-from topomap import planning as P
-from topomap.planning import _block_any, _block_components
+from topomap.planning import paths as P
+from topomap.planning.paths import _block_any, _block_components
 
 
 def _reference(mask, f):

@@ -1,11 +1,11 @@
-"""Openings in straight walls (topomap.walls), on small hand-drawn maps."""
+"""Openings in straight walls (topomap.core.walls), on small hand-drawn maps."""
 
 import numpy as np
 import pytest
 
-from topomap import walls as W
+from topomap.core import walls as W
 from topomap.io import from_array
-from topomap.segmentation import segment
+from topomap.core.segmentation import segment
 
 RES = 0.05
 
@@ -84,7 +84,7 @@ def _first_maps(directory, load, names):
 def test_scanned_maps_measure_as_scanned_and_plans_as_drawn():
     """On the real laser SLAM maps of the benchmark the walls are not
     straight (scan_rise is used); on its drawn floor plans they are."""
-    from topomap.datasets import benchmark_dir, load_benchmark, load_labelled, real_maps_dir
+    from topomap.bench.datasets import benchmark_dir, load_benchmark, load_labelled, real_maps_dir
 
     real, ipa = real_maps_dir(), benchmark_dir()
     if real is None or ipa is None:
@@ -102,7 +102,7 @@ def test_plans_and_scans_measure_the_same_on_a_finer_grid():
     """office_e and a SLAM map upsampled 4x (0.0125 m/px; every length in
     metres the same) measure as at 0.05 m/px: the walls are measured on a
     0.05 m grid (on its own grid the plan measured 0.63, as if scanned)."""
-    from topomap.datasets import benchmark_dir, load_benchmark, load_labelled, real_maps_dir
+    from topomap.bench.datasets import benchmark_dir, load_benchmark, load_labelled, real_maps_dir
     from topomap.io import OccupancyGrid
 
     real, ipa = real_maps_dir(), benchmark_dir()
@@ -439,7 +439,7 @@ def test_long_walls_chain_the_pieces_of_each_line_in_order():
 
 
 def _spans_passage_by_definition(obstacle, p, q, depth_px, slack=1.25):
-    """:func:`topomap.walls._spans_passage` segment by segment, every run sampled to its cap."""
+    """:func:`topomap.core.walls._spans_passage` segment by segment, every run sampled to its cap."""
     H, W = obstacle.shape
     out = []
     for a, b in zip(p, q):

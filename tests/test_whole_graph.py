@@ -18,10 +18,10 @@ from hypothesis import strategies as st
 from scipy import ndimage as ndi
 
 import _testdata as T
-from topomap.datasets import _shared_dataset, benchmark_dir, real_maps_dir
+from topomap.bench.datasets import _shared_dataset, benchmark_dir, real_maps_dir
 from topomap.io import from_array, load_map
-from topomap.rooms import cut_rooms, join_touching_rooms
-from topomap.segmentation import segment
+from topomap.core.rooms import cut_rooms, join_touching_rooms
+from topomap.core.segmentation import segment
 
 _FORWARD = ((0, 1), (1, -1), (1, 0), (1, 1))
 
@@ -107,7 +107,7 @@ def test_boundary_wider_than_any_door_merges():
     labels[10:, :] = 2  # 80 cells = 4 m: wider than a 3 m door
     labels[:, 70:] = 3  # room 3 joined to room 1 by a door, touching room 2 along 0.5 m
     labels[0, 0] = 4  # a fragment after the rooms (n_rooms = 3)
-    from topomap.doors import Door
+    from topomap.core.doors import Door
 
     door = Door(id=0, p1=(5, 69.5), p2=(5, 70.5), width=0.05, rooms=(1, 3))
     out, doors, n = join_touching_rooms(grid, labels, [door], 3, max_door_width=3.0)

@@ -19,16 +19,20 @@ from __future__ import annotations
 
 import importlib
 
+from . import _moved
+
 __version__ = "0.1.0"
 
+_moved.install()  # the modules that moved keep their old import paths (topomap.export, ...)
+
 _LAZY = {
-    "load_map": "io", "save_map": "io", "from_array": "io", "OccupancyGrid": "io",
-    "segment": "segmentation", "Segmentation": "segmentation", "METHODS": "segmentation",
-    "DEFAULT_METHOD": "segmentation",
-    "room_graph": "roomgraph",
+    "load_map": "io.maps", "save_map": "io.maps", "from_array": "io.maps", "OccupancyGrid": "grid",
+    "segment": "core.segmentation", "Segmentation": "core.segmentation", "METHODS": "core.segmentation",
+    "DEFAULT_METHOD": "core.segmentation",
+    "room_graph": "core.roomgraph",
     "TopomapError": "errors", "MapError": "errors", "MapFileError": "errors", "ParameterError": "errors",
-    "example_map_path": "_example",
-    "segment_many": "batch", "OutputExistsError": "errors",
+    "example_map_path": "io.example",
+    "segment_many": "run.batch", "OutputExistsError": "errors",
 }
 
 __all__ = sorted(_LAZY) + ["__version__"]

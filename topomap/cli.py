@@ -21,7 +21,7 @@ log = logging.getLogger("topomap")
 
 
 def _method_names():
-    # kept in sync with topomap.segmentation.METHODS (a test checks) without importing numpy at start-up
+    # kept in sync with topomap.core.segmentation.METHODS (a test checks) without importing numpy at start-up
     return ["topomap", "paper", "watershed", "morphological", "distance", "voronoi"]
 
 
@@ -68,8 +68,8 @@ def write_segmentation(seg, outdir, *, overlay: bool = True, skeletons: bool = F
     (:func:`topomap.planning.travel_graph`: the room–door graph with
     in-room door-to-door distances, so ``topomap plan`` works from
     ``rooms.graphml`` or ``rooms.json`` alone) and, unless ``overlay`` is
-    False, the overlay picture (:func:`topomap.plot.overlay_png`) — then
-    writes everything with :func:`topomap.export.write_outputs` (all files
+    False, the overlay picture (:func:`topomap.io.plot.overlay_png`) — then
+    writes everything with :func:`topomap.io.export.write_outputs` (all files
     or none; ``rooms.geojson`` only when ``geojson``).
 
     ``timings``, when given, receives the seconds of each step: ``travel``,
@@ -86,8 +86,8 @@ def write_segmentation(seg, outdir, *, overlay: bool = True, skeletons: bool = F
     import time
 
     from ._fast import Beside
-    from .export import write_outputs
-    from .planning import travel_graph
+    from .io.export import write_outputs
+    from .planning.paths import travel_graph
 
     t = {} if timings is None else timings
     seg.room_graph  # made here, before the thread below reads it
@@ -108,11 +108,11 @@ def _pictures(seg, overlay, skeletons):
     """``(overlay.png bytes or None, labels.png bytes)`` of ``seg``."""
     import io as _io
 
-    from .export import save_labels
+    from .io.export import save_labels
 
     png = None
     if overlay:
-        from .plot import overlay_png
+        from .io.plot import overlay_png
 
         png = overlay_png(seg, skeletons=skeletons)
     buf = _io.BytesIO()
@@ -124,8 +124,8 @@ def _pictures(seg, overlay, skeletons):
 #: ``import`` stage of ``--profile``, not hidden in the first map's stages).
 _PRELOAD = ("numpy", "scipy.ndimage", "scipy.sparse.csgraph", "scipy.spatial", "cv2", "PIL.Image",
             "PIL.PngImagePlugin", "networkx", "shapely", "shapely.geometry", "skimage.draw",
-            "skimage.graph", "skimage.morphology", "skimage.segmentation", "topomap.io", "topomap.segmentation",
-            "topomap.roomgraph", "topomap.planning", "topomap.export", "topomap.plot")
+            "skimage.graph", "skimage.morphology", "skimage.segmentation", "topomap.io", "topomap.core.segmentation",
+            "topomap.core.roomgraph", "topomap.planning", "topomap.io.export", "topomap.io.plot")
 
 
 def _preload(maps=()) -> float:
@@ -152,10 +152,10 @@ def _warm_up(method) -> float:
 
     import numpy as np
 
-    from .io import from_array
-    from .planning import travel_graph
-    from .plot import overlay_png
-    from .segmentation import segment
+    from .io.maps import from_array
+    from .planning.paths import travel_graph
+    from .io.plot import overlay_png
+    from .core.segmentation import segment
 
     t0 = time.perf_counter()
     free = np.zeros((60, 100), bool)
@@ -188,7 +188,7 @@ def _segment_one(path, outdir, resolution, method, skeletons, topic=None, at=Non
     import time
 
     from . import io
-    from .segmentation import segment
+    from .core.segmentation import segment
 
     # a --previous path goes to segment() as it is: its messages then name the file
     t0 = time.perf_counter()
@@ -213,7 +213,7 @@ def _segment_one(path, outdir, resolution, method, skeletons, topic=None, at=Non
 
     with ExitStack() as stack:
         if bag is not None:
-            from .ros import staged_bag
+            from .io.ros import staged_bag
 
             stack.enter_context(staged_bag(seg, bag))
         if previous is not None:  # the change record beside the graph (room IDs follow the previous graph)
@@ -233,7 +233,7 @@ def _id_changes(path) -> str:
     """One line on the room-ID changes recorded in ``path`` (changes.json)."""
     import json
 
-    from .identity import RoomChanges
+    from .core.identity import RoomChanges
 
     return RoomChanges.from_dict(json.loads(Path(path).read_text(encoding="utf-8"))).summary()
 
@@ -259,7 +259,7 @@ def _summary(row) -> str:
 
 def _print_profile(path, row):
     """One line per stage on stderr (``row``: a summary row, ``t_<stage>`` seconds): where the time of a map went."""
-    from .batch import _STAGES
+    from .run.batch import _STAGES
 
     t = {k[2:]: v for k, v in row.items() if k.startswith("t_") and v is not None and v == v}
     stages = [k for k in _STAGES if k in t] + sorted(k for k in t if k not in _STAGES)
@@ -273,7 +273,7 @@ def _report_failure(row) -> int:
     msg = row["error"]
     if Path(row["map"]).name not in msg:
         msg = f"{row['map']}: {msg}"
-    from .batch import ERROR
+    from .run.batch import ERROR
 
     if row["status"] == ERROR:
         click.echo(f"internal error: {msg} (rerun with --debug for the traceback)", err=True)
@@ -343,7 +343,7 @@ def segment_cmd(maps, outdir, resolution, method, skeletons, no_overlay, no_geoj
 
     keep_freed_memory()  # a batch reuses the pages of the maps before (see there)
     imported = _preload(maps)
-    from .batch import ERROR, FAILED, OK, SKIPPED, segment_many
+    from .run.batch import ERROR, FAILED, OK, SKIPPED, segment_many
     from .errors import ParameterError
 
     warm = None
@@ -361,13 +361,13 @@ def segment_cmd(maps, outdir, resolution, method, skeletons, no_overlay, no_geoj
     try:
         outdir = _check_outdir(outdir)
         if resolution is not None:
-            from .io import check_resolution
+            from .io.maps import check_resolution
 
             check_resolution(resolution, name="--resolution")
     except Exception as exc:  # noqa: BLE001
         sys.exit(_fail(exc))
     if bag is not None:
-        from .ros import check_bag_path
+        from .io.ros import check_bag_path
 
         try:
             if len(maps) > 1:
@@ -376,14 +376,14 @@ def segment_cmd(maps, outdir, resolution, method, skeletons, no_overlay, no_geoj
         except Exception as exc:  # noqa: BLE001
             sys.exit(_fail(exc))
     if previous is not None:
-        from .export import load_graph
+        from .io.export import load_graph
 
         try:
             load_graph(previous)  # a bad file stops the run before anything is written
         except Exception as exc:  # noqa: BLE001
             sys.exit(_fail(exc, "--previous"))
     many = len(maps) > 1
-    batch_log = logging.getLogger("topomap.batch")
+    batch_log = logging.getLogger("topomap.run.batch")
     if many and not sys.stderr.isatty() and batch_log.getEffectiveLevel() > logging.INFO:
         batch_log.setLevel(logging.INFO)  # no progress bar: a line per map
     try:
@@ -425,7 +425,7 @@ def segment_cmd(maps, outdir, resolution, method, skeletons, no_overlay, no_geoj
 @click.option("--method", type=click.Choice(_method_names()), default=None)
 def demo_cmd(outdir, method):
     """Segment the embedded example office map and write the outputs."""
-    from ._example import example_map_path
+    from .io.example import example_map_path
 
     try:
         seg = _segment_one(example_map_path(), outdir, None, method, True)
@@ -441,7 +441,7 @@ def demo_cmd(outdir, method):
 @main.command("benchmark")
 @click.argument("dataset_dir", type=click.Path(path_type=Path))
 @click.option("--methods", default=None,
-              help="Comma-separated methods (default: every method of topomap.segmentation.METHODS).")
+              help="Comma-separated methods (default: every method of topomap.core.segmentation.METHODS).")
 @click.option("--variant", type=click.Choice(["unfurnished", "furnished", "plan", "scan", "both"]), default="both",
               show_default=True, help="Which maps: without furniture, with furniture, or both; of a simulated "
                                       "corpus: the floor plan, the simulated scan, or both.")
@@ -462,7 +462,7 @@ def benchmark_cmd(dataset_dir, methods, variant, jobs, out, maps):
     (map.yaml, plan.yaml, gt_rooms.png, gt_doors.json). Each map is loaded
     as `topomap segment` loads it; runtimes are of loading plus segmentation.
     """
-    from .benchmark import _check_methods, format_table, run_benchmark, write_rows
+    from .bench.benchmark import _check_methods, format_table, run_benchmark, write_rows
 
     try:
         names = _check_methods(methods)
@@ -540,8 +540,8 @@ def plan_cmd(graph, start, start_room, goal, goal_room, robot_width, as_json):
     """
     import json
 
-    from .export import load_graph
-    from .planning import plan_path
+    from .io.export import load_graph
+    from .planning.paths import plan_path
 
     start, goal = _place(start, start_room, "from"), _place(goal, goal_room, "to")
     try:
@@ -589,8 +589,8 @@ def tour_cmd(graph, start, start_room, rooms, return_to_start, robot_width, as_j
     import json
 
     from .errors import ParameterError
-    from .export import load_graph
-    from .planning import plan_tour
+    from .io.export import load_graph
+    from .planning.paths import plan_tour
 
     start = _place(start, start_room, "from")
     try:
@@ -631,7 +631,7 @@ def tour_cmd(graph, start, start_room, rooms, return_to_start, robot_width, as_j
 @click.option("--no-furniture", "no_furniture", is_flag=True, help="No furniture (neither the plan's nor random).")
 @click.option("--no-people", "no_people", is_flag=True, help="No people (dynamic clutter) along the path.")
 @click.option("--option", "extra", multiple=True, metavar="NAME=VALUE",
-              help="Any other scan option of topomap.simulate.ScanOptions (e.g. range_max=5.6); repeatable.")
+              help="Any other scan option of topomap.bench.simulate.ScanOptions (e.g. range_max=5.6); repeatable.")
 @click.option("--resolution", type=float, default=0.05, show_default=True, help="Metres per cell of the map.")
 @click.option("-j", "--jobs", type=click.IntRange(min=1), default=1, show_default=True,
               help="Simulate plans in this many local processes.")
@@ -647,9 +647,9 @@ def simulate_cmd(plans, outdir, seed, explore, glass, closed_doors, no_drift, no
     gt_rooms.json and simulation.json per plan. The output folder of several plans reads as a data set:
     `topomap benchmark OUT --variant scan`.
     """
-    from .batch import FAILED, SKIPPED
-    from .corpus import scan_options, simulate_many
-    from .io import check_resolution
+    from .run.batch import FAILED, SKIPPED
+    from .bench.corpus import scan_options, simulate_many
+    from .io.maps import check_resolution
 
     try:
         check_resolution(resolution, name="--resolution")
@@ -692,7 +692,7 @@ def export_cmd(source, target, nav2, clearance):
     data) and .geojson (map-frame metres). With --nav2, writes the route
     graph Nav2's Route Server loads (OUTPUT may then be left out).
     """
-    from .export import _format, load_graph, save_graph
+    from .io.export import _format, load_graph, save_graph
 
     if clearance is not None and nav2 is None:
         click.echo("error: --clearance needs --nav2", err=True)
@@ -710,7 +710,7 @@ def export_cmd(source, target, nav2, clearance):
             _format(target)
         G = load_graph(source)
         if nav2 is not None:
-            from .nav2 import DEFAULT_CLEARANCE, labels_beside, route_graph
+            from .planning.nav2 import DEFAULT_CLEARANCE, labels_beside, route_graph
 
             route = route_graph(G, labels_beside(source), clearance=DEFAULT_CLEARANCE if clearance is None
                                 else clearance)
@@ -721,7 +721,7 @@ def export_cmd(source, target, nav2, clearance):
         if target is not None:
             save_graph(G, target)
         if route is not None:
-            from .nav2 import write_route_graph
+            from .planning.nav2 import write_route_graph
 
             write_route_graph(route, nav2)
     except Exception as exc:  # noqa: BLE001
@@ -736,7 +736,7 @@ def export_cmd(source, target, nav2, clearance):
 
 
 class _EditCommand(click.Command):
-    """A command that keeps the order its options were given in (``ctx.meta["topomap.edit.order"]``:
+    """A command that keeps the order its options were given in (``ctx.meta["topomap.core.edit.order"]``:
     one parameter name per occurrence), for edits applied in the order typed."""
 
     def make_parser(self, ctx):
@@ -745,7 +745,7 @@ class _EditCommand(click.Command):
 
         def parse_args(args):
             opts, rest, order = parse(args=args)
-            ctx.meta["topomap.edit.order"] = [p.name for p in order]
+            ctx.meta["topomap.core.edit.order"] = [p.name for p in order]
             return opts, rest, order
 
         parser.parse_args = parse_args
@@ -773,13 +773,13 @@ def edit_cmd(outdir, merges, splits, names, no_gos):
     graph keeps names, no-go marks and merges for `topomap segment NEW_MAP
     --previous OUT_DIR/rooms.graphml`.
     """
-    from .edit import edit_outputs
+    from .core.edit import edit_outputs
 
     given = {"merges": [("merge", *v) for v in merges], "splits": [("split", *v) for v in splits],
              "names": [("name", *v) for v in names], "no_gos": [("no_go", v) for v in no_gos]}
     if not any(given.values()):
         raise click.UsageError("nothing to edit: give --merge, --split, --name or --no-go")
-    order = click.get_current_context().meta.get("topomap.edit.order") or list(given)
+    order = click.get_current_context().meta.get("topomap.core.edit.order") or list(given)
     edits, taken = [], {k: 0 for k in given}
     for name in order:  # each option's values in the order typed, interleaved as typed
         if name in given and taken[name] < len(given[name]):

@@ -31,6 +31,17 @@ __all__ = [
 ]
 
 
+def one_line(text) -> str:
+    """Collapse whitespace (newlines included) and cap the length."""
+    text = " ".join(str(text).split())
+    return text if len(text) <= 300 else text[:297] + "..."
+
+
+def named(name, text) -> str:
+    """``"name: text"`` on one line (:func:`one_line`): how every error names its file or value."""
+    return one_line(f"{name}: {text}")
+
+
 def first_line(exc) -> str:
     """The first line of ``exc``'s message, or its type's name when that is empty:
     what a one-line error report says of an exception."""
@@ -100,4 +111,4 @@ class MissingDependencyError(TopomapError, ImportError):
 
 class EditError(TopomapError, ValueError):
     """An edit of the rooms cannot be made: an unknown room ID, a bad name, a split line
-    outside the map or one that does not cut the room in two (see :mod:`topomap.edit`)."""
+    outside the map or one that does not cut the room in two (see :mod:`topomap.core.edit`)."""

@@ -2,8 +2,8 @@
 
 Each Voronoi method has a frozen dataclass of its options:
 :class:`TopomapOptions` (the default method,
-:func:`topomap.segmentation.segment_topomap`) and :class:`PaperOptions`
-(:func:`topomap.segmentation.segment_paper`). Lengths are in metres. Every
+:func:`topomap.core.segmentation.segment_topomap`) and :class:`PaperOptions`
+(:func:`topomap.core.segmentation.segment_paper`). Lengths are in metres. Every
 field is checked when the object is made: a wrong type, a negative or
 non-finite length, a fraction outside ``[0, 1]``, an unknown ``rule`` or a
 non-bool flag raises :class:`~topomap.errors.ParameterError` naming the
@@ -114,7 +114,7 @@ class _Options:
 
 @dataclass(frozen=True)
 class TopomapOptions(_Options):
-    """Options of topomap's default method (:func:`~topomap.segmentation.segment_topomap`).
+    """Options of topomap's default method (:func:`~topomap.core.segmentation.segment_topomap`).
 
     Attributes
     ----------
@@ -166,7 +166,7 @@ class TopomapOptions(_Options):
         in it; a door frame narrows the passage by more. 0.25 m.
     straight_walls : float
         Share (0..1) of the wall-face cells on straight lines of at least
-        ``min_wall_length`` (:func:`topomap.walls.straight_share`) from which
+        ``min_wall_length`` (:func:`topomap.core.walls.straight_share`) from which
         a map counts as drawn with straight walls: 0.7, between the drawn
         floor plans of the benchmark (0.77-0.98, furnished or not) and its
         laser SLAM maps (0.14-0.67).
@@ -258,7 +258,7 @@ class TopomapOptions(_Options):
         edge, a single scan ray, however long.
         0 makes every region a room.
     openings : bool
-        Also cut at openings in straight walls (:func:`topomap.walls.wall_openings`):
+        Also cut at openings in straight walls (:func:`topomap.core.walls.wall_openings`):
         a gap between ``min_door_width`` and ``max_door_width`` between two
         collinear pieces of a wall face, the piece it is seen from at least
         ``min_wall_length`` long and the wall going on for at least
@@ -296,7 +296,7 @@ class TopomapOptions(_Options):
         pieces cover at least half of it is a structural wall — a
         corridor's side, a façade: 4.0 m, longer than any piece of furniture
         and than the wall of a small room. Pieces are found along the
-        building's two main directions (:func:`topomap.walls.long_walls`).
+        building's two main directions (:func:`topomap.core.walls.long_walls`).
         Every gap of ``min_door_width`` to ``max_door_width`` in such a wall,
         with space ``alcove_depth`` deep on both sides, is an opening, even
         with specks in it (an open door leaf, a person the laser saw); and an
@@ -324,7 +324,7 @@ class TopomapOptions(_Options):
         one of the building's main directions that ends in free space
         pointing at a wall across its line, ``min_door_width`` to
         ``max_door_width`` away, is a partition mapped only in part
-        (:func:`topomap.walls.partition_gaps`): the gap is cut when the laser
+        (:func:`topomap.core.walls.partition_gaps`): the gap is cut when the laser
         saw the partition go on (``partition_hits``). 1.5 m: longer than a
         cupboard or a desk stands out from a wall (0.6-1.2 m), as long as the
         shortest stretch of a room's dividing wall seen from a corridor
@@ -348,7 +348,7 @@ class TopomapOptions(_Options):
         walls are at least a wall's thickness plus a room apart.
     face_gap : float
         Gaps (m) along a straight wall face that still leave it one wall
-        line (:func:`topomap.walls.straight_lines`): 0.25 m. A laser scan
+        line (:func:`topomap.core.walls.straight_lines`): 0.25 m. A laser scan
         leaves such gaps where a beam missed or something stood in front of
         the wall; the narrowest door (``min_door_width``) is twice as wide,
         so a doorway is never bridged.
@@ -392,7 +392,7 @@ class TopomapOptions(_Options):
         of a door found in two consecutive maps moved by at most 0.05 m in
         75 % of the cases, 0.15 m in 94 %); farther, the wall has moved
         away from the post. 0 turns this off (see
-        :class:`topomap.identity.DoorPrior`).
+        :class:`topomap.core.identity.DoorPrior`).
     prior_changed_area : float
         With a previous result, a new cut inside a room the previous map had
         whole (the same previous room on both sides of it) is dropped when at
@@ -407,7 +407,7 @@ class TopomapOptions(_Options):
     outside_enclosure : float
         A room whose cells are, on average, bounded by an obstacle in fewer
         than this share of the eight directions around them is *outside*
-        (:mod:`topomap.outside`): 0.3. A room is bounded by walls or
+        (:mod:`topomap.core.outside`): 0.3. A room is bounded by walls or
         furniture nearly all round (a cell near its open door still sees
         walls in 5 to 8 directions); the free space a laser saw through a
         window or an open outer door fans out beyond the facade and ends in
@@ -495,7 +495,7 @@ class TopomapOptions(_Options):
 
 @dataclass(frozen=True)
 class PaperOptions(_Options):
-    """Options of the paper's method (:func:`~topomap.segmentation.segment_paper`).
+    """Options of the paper's method (:func:`~topomap.core.segmentation.segment_paper`).
 
     Attributes
     ----------

@@ -15,7 +15,7 @@ single plan: ``OUT`` itself; several: ``OUT/NAME``, named as
                        width, the two rooms (0 = outside)
 ``gt_rooms_scan.png``  the ground truth of the scan: the rooms of
                        ``gt_rooms.png`` the scan shows (at least
-                       :data:`~topomap.simulate.SHOWN_AREA` of a room free in
+                       :data:`~topomap.bench.simulate.SHOWN_AREA` of a room free in
                        ``map.pgm``), each whole; the others 0
 ``gt_doors_scan.json`` the doors of the scan's ground truth: those of
                        ``gt_doors.json`` whose rooms are shown (or outside)
@@ -28,7 +28,7 @@ Each case is written into a temporary folder beside its destination and
 renamed into place when every file is written, so a case is whole or absent;
 a case folder that holds a complete ``simulation.json`` for the same plan,
 seed and options is kept (skipped) unless ``overwrite=True``.
-:mod:`topomap.datasets` reads such a folder of cases as the ``simulated``
+:mod:`topomap.bench.datasets` reads such a folder of cases as the ``simulated``
 benchmark layout.
 """
 
@@ -46,12 +46,12 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-from .batch import FAILED, OK, SKIPPED, output_dirs
-from .errors import MapFileError, OutputExistsError, ParameterError
+from ..run.batch import FAILED, OK, SKIPPED, output_dirs
+from ..errors import MapFileError, OutputExistsError, ParameterError
 
 __all__ = ["CASE_FILES", "case_seed", "scan_options", "write_case", "simulate_case", "simulate_many"]
 
-log = logging.getLogger("topomap.corpus")
+log = logging.getLogger("topomap.bench.corpus")
 
 #: The files of a complete case folder.
 CASE_FILES = ("map.pgm", "map.yaml", "plan.pgm", "plan.yaml", "gt_rooms.png", "gt_doors.json",
@@ -66,7 +66,7 @@ def case_seed(seed: int, name: str) -> int:
 
 def scan_options(*, explore=None, glass_share=None, closed_doors=None, no_drift: bool = False,
                  no_furniture: bool = False, no_people: bool = False, extra: Sequence[str] = ()):
-    """:class:`~topomap.simulate.ScanOptions` from the ``topomap simulate`` options.
+    """:class:`~topomap.bench.simulate.ScanOptions` from the ``topomap simulate`` options.
 
     ``extra`` holds ``NAME=VALUE`` texts for any other field; an unknown
     name or a value of the wrong kind is a :class:`~topomap.errors.ParameterError`
@@ -106,7 +106,7 @@ def scan_options(*, explore=None, glass_share=None, closed_doors=None, no_drift:
 
 def _doors_json(plan, shown=None) -> dict:
     """The plan's doors (numbered from 1 in the plan's order); with ``shown`` (the scan's rooms) only
-    the doors of :func:`topomap.simulate.shown_doors`, with their plan numbers."""
+    the doors of :func:`topomap.bench.simulate.shown_doors`, with their plan numbers."""
     from .simulate import shown_doors
 
     doors = list(enumerate(plan.doors, start=1))
@@ -155,7 +155,7 @@ def write_case(out_dir, plan, scan_grid, *, meta: Optional[dict] = None) -> Path
     ----------
     out_dir : str or os.PathLike
         The case folder; replaced as a whole if it exists.
-    plan : topomap.floorplan.FloorPlan
+    plan : topomap.bench.floorplan.FloorPlan
         The plan with its ground truth.
     scan_grid : topomap.io.OccupancyGrid
         The robot's map of the plan, on the plan's grid (same shape).
@@ -167,9 +167,9 @@ def write_case(out_dir, plan, scan_grid, *, meta: Optional[dict] = None) -> Path
     pathlib.Path
         ``out_dir``.
     """
-    from .export import save_labels
+    from ..io.export import save_labels
     from .floorplan import plan_grid
-    from .io import save_map
+    from ..io.maps import save_map
     from .simulate import shown_rooms
 
     out = Path(out_dir)
@@ -231,7 +231,7 @@ def simulate_case(plan_path, out_dir, *, seed: int = 0, options=None, resolution
         The case folder.
     seed : int
         The scan's seed (the same seed, plan and options give the same files).
-    options : topomap.simulate.ScanOptions, optional
+    options : topomap.bench.simulate.ScanOptions, optional
         The simulated laser, path and faults; default ``ScanOptions()``.
     resolution : float
         Metres per cell of the plan's grid.
@@ -273,7 +273,7 @@ def _case_task(args):
     try:
         return simulate_case(path, out, seed=seed, options=options, resolution=resolution, overwrite=overwrite)
     except Exception as exc:  # noqa: BLE001 - one bad plan never stops the corpus; its row says why
-        from .errors import first_line
+        from ..errors import first_line
 
         return {"plan": str(path), "output": str(out), "status": FAILED, "error": first_line(exc)}
 

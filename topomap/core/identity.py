@@ -4,7 +4,7 @@ A robot names its rooms, then keeps exploring or re-maps; a fresh
 segmentation numbers rooms by a row-major scan of the new image, so "room 4"
 may now be another room. :func:`match_rooms` gives the rooms of a new
 segmentation the IDs of the rooms of a previous one (a
-:class:`~topomap.segmentation.Segmentation`, a room graph, or a saved room
+:class:`~topomap.core.segmentation.Segmentation`, a room graph, or a saved room
 graph file) and says what changed; ``topomap.segment(grid, previous=...)``
 calls it after the method has run.
 
@@ -63,7 +63,7 @@ from typing import Optional
 import numpy as np
 import networkx as nx
 
-from .errors import ParameterError
+from ..errors import ParameterError
 from .segmentation import Segmentation
 
 log = logging.getLogger("topomap")
@@ -137,7 +137,7 @@ class RoomChanges:
 
 @dataclass
 class TrackedSegmentation(Segmentation):
-    """A :class:`~topomap.segmentation.Segmentation` whose room IDs follow a
+    """A :class:`~topomap.core.segmentation.Segmentation` whose room IDs follow a
     previous one (returned by :func:`match_rooms`).
 
     Room IDs are the labels of ``labels`` and need not be contiguous;
@@ -190,7 +190,7 @@ class TrackedSegmentation(Segmentation):
 # --------------------------------------------------------------------------
 
 def _computed_node_attributes():
-    from .export import NODE_TYPES
+    from ..io.export import NODE_TYPES
 
     return set(NODE_TYPES)
 
@@ -206,7 +206,7 @@ class _Previous:
         self.offset = (0, 0)  # (row, col) of the previous frame's cell self.labels[0, 0] is
         path = None
         if isinstance(previous, (str, Path)):
-            from .export import load_graph
+            from ..io.export import load_graph
 
             path = str(previous)
             previous = load_graph(previous)
@@ -233,7 +233,7 @@ class _Previous:
             self.doors = [(tuple(d.xy1), tuple(d.xy2)) for d in previous.doors]
             self.free = previous.grid.free
         elif isinstance(previous, nx.Graph):
-            from .export import check_room_ids
+            from ..io.export import check_room_ids
 
             self.seg, self.G = None, previous
             self.name = str(previous.graph.get("map", "previous room graph"))
@@ -267,7 +267,7 @@ class _Previous:
             self.next_id = max(int(nxt), top) if nxt not in (None, "") else top
         except (TypeError, ValueError):
             raise ParameterError(f"{self.where}: next_room_id {nxt!r} is not an integer") from None
-        from .export import MAX_ROOM_ID
+        from ..io.export import MAX_ROOM_ID
 
         if self.ids and (self.ids[0] < 1 or self.ids[-1] > MAX_ROOM_ID) or not 1 <= self.next_id <= MAX_ROOM_ID + 1:
             raise ParameterError(f"{self.where}: room IDs {self.ids[0] if self.ids else '-'}.."
@@ -326,7 +326,7 @@ def _rasterised(G, ids, within=None, name="previous room graph"):
     frame when None) and the ``(row, col)`` of the image's first cell in the frame, from the room
     polygons (which follow cell edges, so this is the label image it was built from; see
     :mod:`topomap.planning`). Time and memory are bounded by ``within``'s size, not the frame's."""
-    from .planning import _Ctx
+    from ..planning.paths import _Ctx
 
     ctx = _Ctx(G)
     w0, w1, v0, v1 = _window(ctx, within, name)
@@ -390,14 +390,14 @@ def match_rooms(previous, seg: Segmentation, *, min_overlap: float = DEFAULT_MIN
     """
     from scipy.optimize import linear_sum_assignment
 
-    from .options import _check_fraction
+    from ..options import _check_fraction
 
     t0 = time.perf_counter()
     if _check_fraction("min_overlap", min_overlap) == 0:
         raise ParameterError(f"min_overlap must be a share in (0, 1], got {min_overlap!r}")
     min_overlap = float(min_overlap)
     if min_room_area is None:
-        from .options import TopomapOptions
+        from ..options import TopomapOptions
 
         opts = seg.options if isinstance(seg.options, TopomapOptions) else TopomapOptions()
         min_room_area = opts.min_room_area
@@ -406,7 +406,7 @@ def match_rooms(previous, seg: Segmentation, *, min_overlap: float = DEFAULT_MIN
     if not isinstance(seg, Segmentation):
         raise ParameterError(f"match_rooms() needs a Segmentation, got {type(seg).__name__}")
     prev = _Previous(previous, within=seg.grid)
-    if any("merged" in a for a in prev.attrs.values()):  # rooms a user merged stay merged (topomap.edit)
+    if any("merged" in a for a in prev.attrs.values()):  # rooms a user merged stay merged (topomap.core.edit)
         from .edit import keep_merges
 
         seg = keep_merges(prev, seg, min_overlap=min_overlap)
@@ -515,7 +515,7 @@ class DoorPrior:
     """The doors and free space of a previous result, as a prior of the door
     stage of a new run of the default method (``topomap.segment(grid,
     previous=...)`` makes one and hands it to
-    :func:`~topomap.segmentation.segment_topomap`).
+    :func:`~topomap.core.segmentation.segment_topomap`).
 
     A robot's map grows by a little between two versions, but the door
     decisions of a fresh run also depend on quantities measured over the

@@ -51,9 +51,9 @@ from typing import Iterable, Optional
 
 import numpy as np
 
-from .errors import (BenchmarkNotFoundError, MapError, MapFileError, MapTooLargeError, ParameterError,
+from ..errors import (BenchmarkNotFoundError, MapError, MapFileError, MapTooLargeError, ParameterError,
                      first_line)
-from .io import FREE_GRAY  # noqa: F401  (re-exported: the benchmark's white level)
+from ..io.maps import FREE_GRAY  # noqa: F401  (re-exported: the benchmark's white level)
 
 __all__ = [
     "BENCHMARK_RESOLUTION",
@@ -136,7 +136,7 @@ class BenchmarkMap:
         YAML.
     gt_rooms : (M, N) ndarray of int32, optional
         Ground-truth room labels (0 = no room); default derived from
-        ``gt_gray`` (:func:`topomap.evaluation.gt_rooms_from_image`).
+        ``gt_gray`` (:func:`topomap.bench.evaluation.gt_rooms_from_image`).
     gt_doors : tuple of dict, optional
         True doors in map-frame metres (simulated layout, :func:`read_doors`):
         ``{"p1": (x, y), "p2": (x, y), "rooms": (a, b)}``; None when the true
@@ -178,7 +178,7 @@ class BenchmarkMap:
         -------
         topomap.io.OccupancyGrid
         """
-        from .io import load_map
+        from ..io.maps import load_map
 
         return load_map(self.load_path, **self.load_kwargs)
 
@@ -227,9 +227,9 @@ def _open(path: Path):
         with warnings.catch_warnings():  # the size is checked against MAX_CELLS below
             warnings.simplefilter("ignore", Image.DecompressionBombWarning)
             img = Image.open(path)
-        from .io import _check_size
+        from ..grid import check_image_size
 
-        _check_size(str(path), img.size[1], img.size[0])
+        check_image_size(str(path), img.size[1], img.size[0])
         img.load()
     except Image.DecompressionBombError as exc:
         raise MapTooLargeError(f"{path}: image too large to decode ({first_line(exc)})") from None
@@ -541,7 +541,7 @@ def read_doors(path) -> tuple:
 
 
 def door_cells(doors, grid) -> list:
-    """True doors in metres as pixel cell groups of ``grid`` (for :func:`topomap.evaluation.score_doors`).
+    """True doors in metres as pixel cell groups of ``grid`` (for :func:`topomap.bench.evaluation.score_doors`).
 
     Parameters
     ----------
@@ -554,9 +554,9 @@ def door_cells(doors, grid) -> list:
     -------
     list of (K, 2) ndarray of int
         The cells ``(row, col)`` of the digital line from ``p1`` to ``p2``
-        (:func:`topomap.geometry.line_pixels`), one array per door.
+        (:func:`topomap.core.geometry.line_pixels`), one array per door.
     """
-    from .geometry import line_pixels
+    from ..core.geometry import line_pixels
 
     out = []
     for d in doors:
@@ -623,7 +623,7 @@ def load_simulated(directory, *, variant: str = "scan", names=None) -> list:
         with ``gt_rooms.png`` + ``gt_doors.json``. A case without the
         scan's files (written before they were) gets them derived as
         ``topomap simulate`` derives them
-        (:func:`topomap.simulate.shown_rooms`, :func:`~topomap.simulate.shown_doors`).
+        (:func:`topomap.bench.simulate.shown_rooms`, :func:`~topomap.bench.simulate.shown_doors`).
     names : iterable of str or str, optional
         Only these cases (names or shell patterns, see :func:`select_names`).
 
@@ -672,7 +672,7 @@ def load_simulated(directory, *, variant: str = "scan", names=None) -> list:
                            f"{pgm.name} shape {map_gray.shape}")
         doors = read_doors(case / _CASE_DOORS if derive else doors_file)
         if derive:  # a case written before the scan had its own ground truth
-            from .io import load_map
+            from ..io.maps import load_map
             from .simulate import shown_doors, shown_rooms
 
             grid = load_map(yml)
@@ -739,7 +739,7 @@ def load_pairs(pairs) -> list:
 
 
 def _shared_dataset(name: str) -> Optional[Path]:
-    repo = Path(__file__).resolve().parent.parent
+    repo = Path(__file__).resolve().parents[2]
     cand = repo.parent / "shared" / "datasets" / name
     return cand if cand.is_dir() else None
 

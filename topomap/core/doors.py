@@ -19,7 +19,7 @@ from operator import itemgetter
 
 import numpy as np
 
-from ._fast import ranges as _ranges
+from .._fast import ranges as _ranges
 from .geometry import disk, point_segment_distances
 from .walls import wall_faces
 
@@ -159,7 +159,7 @@ def passage_candidates(G, *, min_branch_px: float = 10, margin_px: int = 2):
     Parameters
     ----------
     G : networkx.MultiGraph
-        Free-space skeleton graph (:func:`topomap.skeleton.skeleton_graph`)
+        Free-space skeleton graph (:func:`topomap.core.skeleton.skeleton_graph`)
         with ``radius`` along edges.
 
     Returns
@@ -751,7 +751,7 @@ def _window_cells(mask: np.ndarray, top: int, width: int, ra, rb, ca, cb):
 
 
 def _window_faces(obstacle: np.ndarray, ra, rb, ca, cb, faces=None):
-    """:func:`~topomap.walls.wall_faces` of the windows ``[ra:rb, ca:cb]`` of
+    """:func:`~topomap.core.walls.wall_faces` of the windows ``[ra:rb, ca:cb]`` of
     ``obstacle`` (a cell outside its window is not free), all windows at once.
 
     From the map's faces over the rows the windows span, the cells on a
@@ -898,7 +898,7 @@ def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, dept
     parallel faces, such as a gap between two wall ends, the door line thus
     runs through the middle of the wall's thickness, wherever along the
     passage the skeleton's minimum lies. Cells farther than ``max_px`` are
-    not searched. ``faces``: :func:`~topomap.walls.wall_faces` of
+    not searched. ``faces``: :func:`~topomap.core.walls.wall_faces` of
     ``obstacle``, when the caller has them (else found here).
 
     Candidates centred on a free cell (all of :func:`passage_minima`'s)
@@ -1071,7 +1071,7 @@ def find_bottlenecks(Gf, obstacle: np.ndarray, opts, resolution: float, threshol
         The map's wall-thickness threshold, pixels: posts are averaged over
         cells up to this deep into the wall (at least 2 px).
     faces : (M, N) ndarray of bool, optional
-        :func:`~topomap.walls.wall_faces` of ``obstacle``, when the caller
+        :func:`~topomap.core.walls.wall_faces` of ``obstacle``, when the caller
         has them (the walls stage does).
 
     Returns
@@ -1203,8 +1203,8 @@ def _wall_ends_at_posts(tree, posts, threshold_px: float) -> np.ndarray:
 def across_corridor(accepted, walls, depth_px: float) -> list:
     """Stage "door judging": the accepted ``(width, Candidate)`` whose posts
     do not both lie within ``depth_px`` of two long walls the door crosses
-    (:func:`topomap.walls.across_walls`; ``walls`` a
-    :class:`~topomap.walls.WallIndex` or a list of long walls); those get
+    (:func:`topomap.core.walls.across_walls`; ``walls`` a
+    :class:`~topomap.core.walls.WallIndex` or a list of long walls); those get
     :data:`ACROSS_CORRIDOR`.
 
     A narrowing between two things that stand out of a corridor's side
@@ -1252,7 +1252,7 @@ def seen_posts(accepted, seen: np.ndarray) -> list:
 
 
 def opening_candidates(openings, resolution: float) -> list:
-    """``(width m, Candidate)`` of wall openings (:func:`topomap.walls.wall_openings`),
+    """``(width m, Candidate)`` of wall openings (:func:`topomap.core.walls.wall_openings`),
     status :data:`WALL_OPENING`, for :func:`suppress_duplicates`."""
     openings = list(openings)
     if not openings:

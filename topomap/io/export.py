@@ -1,6 +1,6 @@
 """Saving and loading results: label image, room graph, overlay picture.
 
-Formats of the room–door graph (:func:`topomap.roomgraph.room_graph`,
+Formats of the room–door graph (:func:`topomap.core.roomgraph.room_graph`,
 usually annotated by :func:`topomap.planning.travel_graph`):
 
 GraphML (:func:`save_graphml`, :func:`load_graphml`)
@@ -46,8 +46,9 @@ from pathlib import Path
 import numpy as np
 import networkx as nx
 
-from .errors import GraphFormatError, first_line
-from .io import _one_line, _renamed, atomic_write  # noqa: F401  (atomic_write re-exported: topomap.export.atomic_write)
+from ..errors import GraphFormatError, first_line
+from ..errors import one_line as _one_line
+from .files import atomic_write, renamed_error as _renamed
 
 __all__ = ["atomic_write", "save_labels", "label_png_bytes", "file_labels", "MAX_FILE_LABEL", "save_graphml", "save_json", "to_graphml_graph",
            "node_link", "write_outputs", "save_bytes", "geometry_wkt", "restore_types", "load_graphml", "load_json",
@@ -65,7 +66,7 @@ GEOJSON_COORDINATES = ("x, y in metres in the map frame (the frame of the map's 
 def save_labels(labels, path) -> Path:
     """Write the label image as a 16-bit PNG (0 = not a room), same size as the map.
 
-    ``labels``: a :class:`~topomap.segmentation.Segmentation` or an (M, N)
+    ``labels``: a :class:`~topomap.core.segmentation.Segmentation` or an (M, N)
     array of labels. ``path``: a file name (written atomically) or a binary
     file object (written as it is; the caller owns the file, as
     :func:`write_outputs`). Labels above the largest room ID are fragments;
@@ -130,7 +131,7 @@ def file_labels(seg, name: str = "<labels>", kind: str = "PNG") -> np.ndarray:
         Not a non-empty 2-D array, a negative label, or room IDs beyond
         65534 (65535 for a label array).
     """
-    from .errors import ParameterError
+    from ..errors import ParameterError
 
     is_seg = hasattr(seg, "labels") and hasattr(seg, "top_room_id")
     labels = np.asarray(seg.labels if is_seg else seg)
@@ -796,7 +797,7 @@ def _bad(path, what, exc=None) -> GraphFormatError:
 
 
 def _check_file(path) -> Path:
-    from .errors import MapFileNotFoundError
+    from ..errors import MapFileNotFoundError
 
     path = Path(path)
     if not path.is_file():
@@ -820,8 +821,8 @@ def _check_frame(G: nx.MultiGraph, path) -> nx.MultiGraph:
     """``G`` if the map size its ``shape`` claims is within :func:`topomap.io.cell_limit`, else MapTooLargeError."""
     import numbers
 
-    from . import io
-    from .errors import MapTooLargeError
+    from . import maps as io
+    from ..errors import MapTooLargeError
 
     check_room_ids(G, path)
     # the map frame, checked here so that its errors name the file (not the '<array>' of a grid built from it)
@@ -871,7 +872,7 @@ def load_graphml(path) -> nx.MultiGraph:
     -------
     networkx.MultiGraph
         Nodes are int room IDs, edges keyed by int door ID; attributes as in
-        :func:`topomap.roomgraph.room_graph` (see :func:`restore_types`).
+        :func:`topomap.core.roomgraph.room_graph` (see :func:`restore_types`).
 
     Raises
     ------
@@ -1162,7 +1163,7 @@ def load_graph(path) -> nx.MultiGraph:
     MapTooLargeError
         The graph's ``shape`` claims a map of more than :func:`topomap.io.cell_limit` cells.
     """
-    from .errors import TopomapError
+    from ..errors import TopomapError
 
     try:
         return _load_graph(path)
@@ -1213,7 +1214,7 @@ def save_label_map(seg, stem, *, resolution=None, origin=None) -> Path:
     :func:`topomap.io.load_map` does. ROS 1 ``map_server`` stores the pixel
     value as it is (int8: labels up to 127). For more labels, or exact IDs
     in every case, read the pair with :func:`load_label_map` or use the
-    ``mono16`` image of :func:`topomap.ros.label_image`.
+    ``mono16`` image of :func:`topomap.io.ros.label_image`.
 
     Parameters
     ----------
@@ -1263,7 +1264,7 @@ def _label_map_parts(seg, image_name: str, *, resolution=None, origin=None, name
     """:func:`label_map_bytes` as ``(PGM header, PGM pixels as a C-contiguous array, yaml_bytes)``: the
     pixels written as they are by :func:`write_outputs`, not copied into one bytes object with the
     header (fresh pages for a megabyte: making and writing labels.pgm 2.2 -> 1.3 ms on the ipa maps)."""
-    from .io import FREE_THRESH, OCCUPIED_THRESH, pgm_header, yaml_text
+    from .maps import FREE_THRESH, OCCUPIED_THRESH, pgm_header, yaml_text
 
     name = image_name if name is None else name
     if hasattr(seg, "labels") and hasattr(seg, "grid"):
@@ -1377,7 +1378,7 @@ def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None, geojs
         The graph saved as GraphML, JSON and GeoJSON (``topomap segment``
         saves :func:`topomap.planning.travel_graph`).
     overlay_png : bytes, optional
-        PNG content of ``overlay.png`` (:func:`topomap.plot.overlay_png`);
+        PNG content of ``overlay.png`` (:func:`topomap.io.plot.overlay_png`);
         None writes no overlay.
     geojson : bool
         Also write ``rooms.geojson``.

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._fast import lookup
+from .._fast import lookup
 
 __all__ = ["plot_map", "plot_rooms", "plot_doors", "plot_skeletons", "plot_room_graph",
            "plot_route", "plot_segmentation", "save_overlay", "room_colors", "overlay_image", "overlay_png"]
@@ -229,7 +229,7 @@ def _overlay_indexed(seg, skeletons=False, graph=False, alpha=0.75):
         idx = lookup(lut, labels)
     else:
         idx = np.take(lut, np.clip(labels, 0, n + nf))
-    from .io import FREE, OCCUPIED
+    from .maps import FREE, OCCUPIED
 
     # cells without a label: walls black, unknown grey, free white (one lookup on the cell values)
     by_cell = np.full(256, _UNKNOWN, np.uint8)

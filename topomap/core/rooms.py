@@ -13,11 +13,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy import ndimage as ndi
 
-from ._fast import label, lookup, ranges
+from .._fast import label, lookup, ranges
 from .geometry import line_pixels
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .io import OccupancyGrid
+    from ..io.maps import OccupancyGrid
 
 __all__ = ["fill_unlabeled", "relabel_sequential", "cut_rooms", "doors_between_rooms", "join_touching_rooms",
            "EIGHT", "FOUR"]
@@ -184,7 +184,7 @@ def cut_rooms(grid: OccupancyGrid, segments, *, space=None, min_room_cells: int 
     space : (M, N) ndarray of bool, optional
         The free cells rooms are cut from (default ``grid.free``); the
         default method passes the free space with narrow wall gaps closed
-        (:func:`topomap.segmentation.close_wall_gaps`).
+        (:func:`topomap.core.segmentation.close_wall_gaps`).
     min_room_cells : int
         Smallest room, in cells. A piece smaller than this is no room of its
         own: its cells join the room they are connected to through free

@@ -52,10 +52,10 @@ import numpy as np
 from scipy import ndimage as ndi
 from scipy import sparse
 
-from ._fast import label as _label
-from .errors import ParameterError
-from .geometry import point_segment_distances
-from .io import FREE_GRAY  # noqa: F401  (re-exported: the benchmark's white level)
+from .._fast import label as _label
+from ..errors import ParameterError
+from ..core.geometry import point_segment_distances
+from ..io.maps import FREE_GRAY  # noqa: F401  (re-exported: the benchmark's white level)
 
 __all__ = [
     "FREE_GRAY",
@@ -689,7 +689,7 @@ def evaluate(labels, map_gray, gt_gray, *, pred_doors=None, resolution: float = 
     door_map_gray : (M, N) array_like of uint8, optional
         Map the true doors are extracted from (default ``map_gray``). For the
         furnished variant pass the unfurnished map
-        (:attr:`topomap.datasets.BenchmarkMap.unfurnished_gray`).
+        (:attr:`topomap.bench.datasets.BenchmarkMap.unfurnished_gray`).
     scored : (M, N) array_like of bool, optional
         The cells the method was given: the free cells of the grid as loaded
         (:attr:`topomap.io.OccupancyGrid.free`). Default ``map_gray >= 250``.
@@ -698,7 +698,7 @@ def evaluate(labels, map_gray, gt_gray, *, pred_doors=None, resolution: float = 
         ``gt_gray``.
     true_doors : list of (K, 2) array_like of int, optional
         The true doors as pixel cell groups, when the ground truth lists them
-        (e.g. :func:`topomap.datasets.door_cells` of a simulated case);
+        (e.g. :func:`topomap.bench.datasets.door_cells` of a simulated case);
         default the door lines of ``gt_gray`` (:func:`gt_doors_from_images`).
     true_edges : iterable of (int, int), optional
         The true room-adjacency edges (ground-truth labels) with

@@ -2,7 +2,7 @@
 
 :func:`room_shape` measures a room from its cells alone; :func:`room_kind` turns
 the measures and the room's number of doors into a kind; :func:`annotate_kinds`
-puts both on every node of a room graph (:func:`topomap.roomgraph.room_graph`
+puts both on every node of a room graph (:func:`topomap.core.roomgraph.room_graph`
 calls it). Every threshold is a physical quantity (m, m²) or a ratio of
 lengths; the "Graph attributes" page of the documentation gives the reason of
 each.
@@ -31,7 +31,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage as ndi
 
-from ._fast import edt
+from .._fast import edt
 
 __all__ = ["KINDS", "CORRIDOR_MAX_WIDTH", "CORRIDOR_MIN_ELONGATION", "CORRIDOR_MIN_LENGTH", "CORRIDOR_MIN_DOORS",
            "WIDE_CORRIDOR_MAX_WIDTH", "WIDE_CORRIDOR_MIN_ELONGATION",

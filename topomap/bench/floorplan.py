@@ -5,7 +5,7 @@ walls with a thickness, doors open, the outside of the building apart, and
 the ground truth a room-segmentation benchmark needs (room labels with the
 doors closed, the door segments, each room's kinds). It is what
 :func:`read_plan` makes of one vector plan of the R2V / LIFULL data set and
-what :mod:`topomap.simulate` scans with a simulated robot.
+what :mod:`topomap.bench.simulate` scans with a simulated robot.
 
 Grid convention: the ROS one of :class:`topomap.io.OccupancyGrid`: row 0 is
 the top of the image (largest y), ``origin`` is the world pose of the
@@ -22,11 +22,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ._fast import label as _label
-from .errors import MapError, MapFileError, MapTooLargeError, ParameterError, PlanFormatError
-from .geometry import point_segment_distances
-from .io import FREE, OCCUPIED, cell_limit, UNKNOWN, OccupancyGrid, _check_file, _msg, check_resolution, save_map
-from .options import _check_area, check_length
+from .._fast import label as _label
+from ..errors import MapError, MapFileError, MapTooLargeError, ParameterError, PlanFormatError
+from ..core.geometry import point_segment_distances
+from ..errors import named as _msg
+from ..grid import FREE, OCCUPIED, UNKNOWN, OccupancyGrid, cell_limit
+from ..io.maps import _check_file, check_resolution, save_map
+from ..options import _check_area, check_length
 
 __all__ = ["PlanDoor", "FloorPlan", "read_plan", "plan_grid", "ground_truth_problems", "ROOM_KINDS", "STORAGE_KINDS", "FIXTURE_KINDS"]
 

@@ -40,7 +40,7 @@ import math
 import numpy as np
 import networkx as nx
 
-from .errors import NoPathError, NotInRoomError, PlanningError
+from ..errors import NoPathError, NotInRoomError, PlanningError
 
 log = logging.getLogger("topomap")
 
@@ -278,9 +278,9 @@ def _stop_graph(seg_or_G, start, rooms, robot_width):
     """The door graph with the start and the rooms to visit joined to their rooms' doors:
     ``(H, names, stops, points, start_room)``; ``names[0]`` is the start's node, ``names[k]`` stop
     ``k`` (room ``stops[k - 1]``); ``points`` their map-frame points."""
-    from .planning import _attach_to_doors, _Ctx, _annotated, _endpoint, door_graph
+    from .paths import _attach_to_doors, _Ctx, _annotated, _endpoint, door_graph
 
-    from .options import check_length
+    from ..options import check_length
 
     robot_width = check_length("robot_width", robot_width)
     ctx = _Ctx(seg_or_G)

@@ -1,10 +1,10 @@
 """Running segmentation methods on a room-segmentation benchmark.
 
 :func:`run_benchmark` segments every map of a benchmark directory -- either
-layout of :mod:`topomap.datasets`: the ipa_room_segmentation maps of Bormann
+layout of :mod:`topomap.bench.datasets`: the ipa_room_segmentation maps of Bormann
 et al. 2016, or real maps with a YAML and a label image -- with every method
-of :data:`topomap.segmentation.METHODS`, and scores the result with
-:func:`topomap.evaluation.evaluate`; :func:`format_table` turns the per-map
+of :data:`topomap.core.segmentation.METHODS`, and scores the result with
+:func:`topomap.bench.evaluation.evaluate`; :func:`format_table` turns the per-map
 rows into a summary table and :func:`write_rows` saves them as CSV or JSON.
 
 Conventions:
@@ -19,7 +19,7 @@ Conventions:
   as loaded); beside it the *free-cells* protocol (true rooms restricted to
   those cells too) and the *ceiling* (the ground truth itself scored under
   each protocol); segments and rooms of <= 100 cells are ignored. See
-  :mod:`topomap.evaluation`;
+  :mod:`topomap.bench.evaluation`;
 * **rooms**: ``n_rooms`` is every room the method reports (the room
   graph's nodes, as the user sees them, however small), ``n_fragments``
   the free regions it set apart as too small to be a room (scored as no
@@ -53,7 +53,7 @@ from typing import Callable, Iterable, Optional, Sequence
 import numpy as np
 
 from .datasets import LABELLED_VARIANT, SIMULATED_VARIANTS, VARIANTS
-from .errors import ParameterError
+from ..errors import ParameterError
 
 __all__ = [
     "VARIANTS",
@@ -94,7 +94,7 @@ def benchmark_grid(bm):
 
     Parameters
     ----------
-    bm : topomap.datasets.BenchmarkMap
+    bm : topomap.bench.datasets.BenchmarkMap
 
     Returns
     -------
@@ -114,7 +114,7 @@ def segment_map(bm, method: str):
     seconds cover loading and segmentation (``seg.timings["load"]`` is set
     to the loading part).
     """
-    from .segmentation import segment
+    from ..core.segmentation import segment
 
     gc.collect()
     t0 = time.perf_counter()
@@ -127,7 +127,7 @@ def segment_map(bm, method: str):
 
 
 def _check_methods(methods) -> list:
-    from .segmentation import METHODS
+    from ..core.segmentation import METHODS
 
     if methods is None:
         return list(METHODS)
@@ -185,8 +185,8 @@ def _warm_up(method: str) -> None:
     if method in _WARM:
         return
     _WARM.add(method)
-    from .io import from_array
-    from .segmentation import segment
+    from ..io.maps import from_array
+    from ..core.segmentation import segment
 
     free = np.zeros((80, 120), bool)
     free[5:75, 5:58] = True
@@ -207,9 +207,9 @@ def _error_row(row, exc, runtime, jobs):
 
 
 def _score(bm, grid, seg) -> dict:
-    """:func:`topomap.evaluation.evaluate` of one segmentation of ``bm`` (the grid as loaded)."""
+    """:func:`topomap.bench.evaluation.evaluate` of one segmentation of ``bm`` (the grid as loaded)."""
     from .datasets import door_cells
-    from .errors import MapError
+    from ..errors import MapError
     from .evaluation import evaluate
 
     if grid.shape != bm.gt_rooms.shape:
@@ -233,9 +233,9 @@ def run_map(bm, method: str, *, jobs: int = 1, warm_up: bool = True) -> dict:
 
     Parameters
     ----------
-    bm : topomap.datasets.BenchmarkMap
+    bm : topomap.bench.datasets.BenchmarkMap
     method : str
-        A key of :data:`topomap.segmentation.METHODS`.
+        A key of :data:`topomap.core.segmentation.METHODS`.
     jobs : int, optional
         Recorded in the row (the number of parallel workers of the run).
     warm_up : bool, optional
@@ -244,7 +244,7 @@ def run_map(bm, method: str, *, jobs: int = 1, warm_up: bool = True) -> dict:
     Returns
     -------
     dict
-        One row: see :data:`ROW_COLUMNS` and :func:`topomap.evaluation.evaluate`
+        One row: see :data:`ROW_COLUMNS` and :func:`topomap.bench.evaluation.evaluate`
         (scores are scored on ``grid.free`` of the grid as loaded), plus
         ``t_<stage>`` per-stage seconds from ``Segmentation.timings``. If
         loading or the method raises, the row has ``error`` set to a
@@ -286,10 +286,10 @@ def _pool_init(jobs: int = 1):
     # workers ignore Ctrl-C; the parent cancels them
     import signal
 
-    from . import io
+    from ..grid import share_memory
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    io._MEMORY_SHARERS = jobs  # the maps running at once share the memory the size limit is taken from
+    share_memory(jobs)  # the maps running at once share the memory the size limit is taken from
 
 
 def _pool_task(bm, method, jobs):
@@ -311,7 +311,7 @@ def _execute(tasks, jobs, progress) -> dict:
     """Run ``(variant, map, method)`` tasks; ``{(method, variant, name): row}``."""
     results = {}
     total = len(tasks)
-    from .batch import worker_count
+    from ..run.batch import worker_count
 
     jobs = worker_count(jobs, len(tasks))
     if jobs == 1:
@@ -350,15 +350,15 @@ def run_benchmark(directory, *, methods: Optional[Sequence[str]] = None,
     Parameters
     ----------
     directory : str or Path
-        A folder in any layout of :mod:`topomap.datasets`, picked by what
-        it holds (:func:`topomap.datasets.detect_layout`): ``NAME.png``,
+        A folder in any layout of :mod:`topomap.bench.datasets`, picked by what
+        it holds (:func:`topomap.bench.datasets.detect_layout`): ``NAME.png``,
         ``NAME_furnitures.png``, ``NAME_gt_segmentation.png`` (ipa),
         ``NAME.png`` + ``NAME.yaml`` + ``NAME_gt.png`` (labelled), or case
         folders ``CASE/`` with ``map.yaml``, ``plan.yaml``, ``gt_rooms.png``
         and ``gt_doors.json`` (simulated).
     methods : sequence of str or str, optional
         Method names (or one comma-separated string); default every method
-        of :data:`topomap.segmentation.METHODS`.
+        of :data:`topomap.core.segmentation.METHODS`.
     variants : iterable of str or str, optional
         ipa layout: ``"unfurnished"``, ``"furnished"`` or ``"both"``
         (default); simulated layout: ``"plan"`` (the drawn floor plan),
@@ -387,7 +387,7 @@ def run_benchmark(directory, *, methods: Optional[Sequence[str]] = None,
     ------
     ParameterError
         An unknown method or variant (or one of another layout), or ``jobs < 1``.
-    topomap.datasets.BenchmarkNotFoundError
+    topomap.bench.datasets.BenchmarkNotFoundError
         No benchmark maps in ``directory``, or a ``maps`` pattern matches none.
     """
     methods = _check_methods(methods)
@@ -551,7 +551,7 @@ def _jsonable(v):
 def write_rows(rows: Sequence[dict], path) -> Path:
     """Write per-map rows to ``path``: CSV (``.csv``) or JSON (``.json``).
 
-    The file is written atomically (:func:`topomap.export.atomic_write`).
+    The file is written atomically (:func:`topomap.io.export.atomic_write`).
     CSV columns are :data:`ROW_COLUMNS` then every other key in first-seen
     order (missing values empty); JSON is a list of objects with NaN as
     ``null``.
@@ -561,7 +561,7 @@ def write_rows(rows: Sequence[dict], path) -> Path:
     ParameterError
         Another file extension.
     """
-    from .export import atomic_write
+    from ..io.export import atomic_write
 
     path = Path(path)
     ext = path.suffix.lower()

@@ -1,6 +1,6 @@
 """The room–door graph: rooms as nodes, doors as edges.
 
-:func:`room_graph` turns a :class:`~topomap.segmentation.Segmentation` into a
+:func:`room_graph` turns a :class:`~topomap.core.segmentation.Segmentation` into a
 :class:`networkx.MultiGraph` (two rooms can share several doors, each its own
 edge, keyed by the door id). Every attribute, with its unit, is listed on the
 "Graph attributes" page of the documentation.
@@ -15,7 +15,7 @@ import numpy as np
 import networkx as nx
 from scipy import ndimage as ndi
 
-from ._fast import lookup
+from .._fast import lookup
 from .geometry import label_rings, mask_rings
 from .kinds import annotate_kinds
 
@@ -114,7 +114,7 @@ def _without(labels: np.ndarray, drop: np.ndarray) -> np.ndarray:
 
 
 def _room_polygons(labels, to_world, rings=None, objs=None, detailed=None):
-    """:func:`room_polygons`, from the labels' rings (:func:`topomap.geometry.label_rings`) and their rooms'
+    """:func:`room_polygons`, from the labels' rings (:func:`topomap.core.geometry.label_rings`) and their rooms'
     bounding boxes (as ``ndi.find_objects(labels)``) when given.
 
     All rooms' outlines come from one pass over the labels; a room beyond the detail limit
@@ -158,7 +158,7 @@ def _room_polygons(labels, to_world, rings=None, objs=None, detailed=None):
 
 
 def _polygons(xy, ring, piece, offset, to_world, mirror):
-    """shapely Polygons of the rings ``xy, ring, piece`` of :func:`topomap.geometry.mask_rings` (``(row, col)``
+    """shapely Polygons of the rings ``xy, ring, piece`` of :func:`topomap.core.geometry.mask_rings` (``(row, col)``
     + ``offset``), through ``to_world`` (turned around when ``mirror``), one per piece."""
     import shapely
 
@@ -178,7 +178,7 @@ def _polygons(xy, ring, piece, offset, to_world, mirror):
 
 def _room_stats(runs, n):
     """Cell counts, row sums and column sums (exact integers, as floats) and bounding boxes (as
-    ``ndi.find_objects``) of labels ``1..n``, from the labels' runs (:attr:`topomap.geometry.LabelRings.runs`)."""
+    ``ndi.find_objects``) of labels ``1..n``, from the labels' runs (:attr:`topomap.core.geometry.LabelRings.runs`)."""
     row, col, length, lab = runs
     cnt = np.bincount(lab, weights=length, minlength=n + 1)
     sr = np.bincount(lab, weights=row * length, minlength=n + 1)
@@ -290,7 +290,7 @@ def interior_points(labels: np.ndarray, n: int, centroids=None):
         4-neighbour of another label, of no room or off the map). Time and memory linear in the
         cells of the labels' bounding box.
     """
-    from ._fast import edt
+    from .._fast import edt
     from .geometry import true_bbox
 
     rows = np.full(n + 1, -1, np.int64)

@@ -7,7 +7,7 @@ thick, doors are gaps of 0.7-1.2 m, one room opens onto the corridor through
 a 1.6 m wide opening, and there is some furniture (a table, a chair,
 cabinets along walls, a round plant, a desk).
 
-Run ``python -m topomap._example`` to rewrite the shipped files
+Run ``python -m topomap.io.example`` to rewrite the shipped files
 ``topomap/data/example_office.pgm`` and ``example_office.yaml``.
 """
 
@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .io import GRAY_FREE, GRAY_OCCUPIED, GRAY_UNKNOWN, pgm_bytes, yaml_text
+from .maps import GRAY_FREE, GRAY_OCCUPIED, GRAY_UNKNOWN, pgm_bytes, yaml_text
 
 __all__ = ["ExampleMap", "make_example_office", "example_map_path", "write_example_files",
            "ROOM_NAMES", "EXAMPLE_STEM"]
@@ -173,7 +173,7 @@ def make_example_office() -> ExampleMap:
 
 
 def _data_dir() -> Path:
-    return Path(__file__).parent / "data"
+    return Path(__file__).parent.parent / "data"
 
 
 def example_map_path() -> Path:
@@ -204,7 +204,7 @@ def write_example_files(directory=None) -> Path:
     pathlib.Path
         The YAML file written.
     """
-    from .io import _atomic_write
+    from .files import write_bytes as _atomic_write
 
     d = Path(directory) if directory is not None else _data_dir()
     d.mkdir(parents=True, exist_ok=True)

@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._fast import label_stats
+from .._fast import label_stats
 from .skeleton import downsample
 
 __all__ = ["DIRECTIONS", "unknown_cells", "open_unknown", "enclosure", "outside_regions", "drop_outside"]

@@ -1,7 +1,7 @@
 """A robot's laser SLAM map of a floor plan, simulated.
 
 :func:`simulate_scan` drives a simulated robot with a 2-D laser scanner
-through a :class:`~topomap.floorplan.FloorPlan` and builds the occupancy grid
+through a :class:`~topomap.bench.floorplan.FloorPlan` and builds the occupancy grid
 a SLAM package (gmapping, slam_toolbox) would publish and ``map_saver``
 would write: free where the beams passed, occupied where they ended,
 unknown where no beam reached. The map lies on the plan's own grid (same
@@ -63,10 +63,10 @@ from typing import Optional
 
 import numpy as np
 
-from .errors import ParameterError
+from ..errors import ParameterError
 from .floorplan import FloorPlan
-from .io import FREE, FREE_THRESH, OCCUPIED, OCCUPIED_THRESH, UNKNOWN, OccupancyGrid
-from .options import _check_area, _Options, _opt
+from ..io.maps import FREE, FREE_THRESH, OCCUPIED, OCCUPIED_THRESH, UNKNOWN, OccupancyGrid
+from ..options import _check_area, _Options, _opt
 
 __all__ = ["ScanOptions", "ScanResult", "World", "build_world", "robot_path", "scan_poses",
            "cast_rays", "integrate", "to_grid", "simulate_scan", "SHOWN_AREA", "shown_rooms", "shown_doors"]
@@ -430,7 +430,7 @@ def _glass(plan: FloorPlan, options: ScanOptions, rng) -> np.ndarray:
 
 def _segment_cells(plan: FloorPlan, p1, p2, half_width: float) -> tuple:
     """Cells (rows, cols) within ``half_width`` metres of the world segment p1-p2."""
-    from .geometry import point_segment_distances
+    from ..core.geometry import point_segment_distances
     a, b = _to_pixel(plan, [p1, p2])
     hw = half_width / plan.resolution
     H, W = plan.shape
@@ -1207,7 +1207,7 @@ def shown_rooms(rooms, free, *, resolution: float, min_area: float = SHOWN_AREA)
     (M, N) ndarray
         ``rooms`` (its dtype) with the rooms the map does not show set to 0.
     """
-    from .io import check_resolution
+    from ..io.maps import check_resolution
 
     rooms = np.asarray(rooms)
     free = np.asarray(free, bool)

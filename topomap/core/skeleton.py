@@ -548,7 +548,7 @@ def skeleton_graph(skel: np.ndarray, *, radius: np.ndarray | None = None,
     --------
     skeleton_topology, graph_from_topology : the two steps, for callers that
         move the pixels in between (the default method's coarse skeleton,
-        :func:`topomap.segmentation.coarse_skeleton_graph`).
+        :func:`topomap.core.segmentation.coarse_skeleton_graph`).
     """
     return graph_from_topology(skeleton_topology(skel), radius=radius, resolution=resolution,
                                to_world=to_world)

@@ -47,7 +47,7 @@ import numpy as np
 import networkx as nx
 from scipy import ndimage as ndi
 
-from .errors import ParameterError, PlanningError
+from ..errors import ParameterError, PlanningError
 
 __all__ = ["route_graph", "write_route_graph", "labels_beside", "free_clearance", "segment_clear", "DEFAULT_CLEARANCE",
            "FRAME", "SAMPLES_PER_CELL", "REACH", "MAX_IDS"]
@@ -177,7 +177,7 @@ def route_graph(seg_or_G, labels=None, *, clearance: float = DEFAULT_CLEARANCE, 
     Parameters
     ----------
     seg_or_G : Segmentation or networkx.MultiGraph
-        A segmentation, or its room graph (as :func:`topomap.export.load_graph` reads it), then with
+        A segmentation, or its room graph (as :func:`topomap.io.export.load_graph` reads it), then with
         ``labels``.
     labels : (M, N) ndarray of int, optional
         The label image of the room graph (``labels.pgm`` / ``labels.png``): rooms and fragments are
@@ -207,7 +207,7 @@ def route_graph(seg_or_G, labels=None, *, clearance: float = DEFAULT_CLEARANCE, 
     """
     from skimage.graph import MCP_Geometric
 
-    from .options import check_length
+    from ..options import check_length
 
     clearance = check_length("clearance", clearance)
     if isinstance(seg_or_G, nx.Graph):
@@ -219,7 +219,7 @@ def route_graph(seg_or_G, labels=None, *, clearance: float = DEFAULT_CLEARANCE, 
     labels = np.asarray(labels)
     if labels.ndim != 2:
         raise ParameterError(f"labels must be a 2-D array, got shape {labels.shape}")
-    from .planning import _Ctx
+    from .paths import _Ctx
 
     ctx = _Ctx(G)  # the map frame and the doors' ends, checked (PlanningError naming what is missing)
     if ctx.shape != tuple(labels.shape):
@@ -337,7 +337,7 @@ def _far_points(mcp, cum, start, targets, own, res):
 
     Distances are taken on blocks of about 0.25 m (one block of the tree's cells or the room's
     reachable cells: any of its cells), a tenth of the reach."""
-    from .planning import _block_any
+    from .paths import _block_any
 
     reach = np.isfinite(cum) & own
     if not reach.any():
@@ -437,7 +437,7 @@ def write_route_graph(graph: dict, path) -> Path:
     -------
     pathlib.Path
     """
-    from .io import atomic_write
+    from ..io.files import atomic_write
 
     path = Path(path)
     text = json.dumps(graph, indent=1, allow_nan=False)
@@ -457,7 +457,7 @@ def labels_beside(graph_path) -> np.ndarray:
     Returns
     -------
     (M, N) ndarray of int
-        From ``labels.yaml`` + ``labels.pgm`` (:func:`topomap.export.load_label_map`), else from
+        From ``labels.yaml`` + ``labels.pgm`` (:func:`topomap.io.export.load_label_map`), else from
         ``labels.png``.
 
     Raises
@@ -467,8 +467,8 @@ def labels_beside(graph_path) -> np.ndarray:
     MapError
         ``labels.png`` cannot be read.
     """
-    from .errors import MapFileNotFoundError
-    from .export import load_label_map
+    from ..errors import MapFileNotFoundError
+    from ..io.export import load_label_map
 
     folder = Path(graph_path).parent
     if (folder / "labels.yaml").is_file():
@@ -477,6 +477,6 @@ def labels_beside(graph_path) -> np.ndarray:
     if not png.is_file():
         raise MapFileNotFoundError(f"{folder}: no labels.yaml + labels.pgm or labels.png beside the room graph "
                                    "(the folder topomap segment wrote)")
-    from .datasets import read_label_image
+    from ..bench.datasets import read_label_image
 
     return read_label_image(png).astype(np.int64)

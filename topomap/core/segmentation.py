@@ -11,13 +11,13 @@ intermediate images and the per-stage timings. Methods:
     The method of Mora, Prados & Barber (ICAART 2023), step by step:
     :func:`segment_paper`, options :class:`~topomap.options.PaperOptions`.
 ``"watershed"``, ``"morphological"``, ``"distance"``, ``"voronoi"``
-    The comparison methods of :mod:`topomap.baselines`.
+    The comparison methods of :mod:`topomap.core.baselines`.
 
 Each Voronoi method is a short sequence of stages, each a function of the
 module that owns its concern: crop and masks here, skeletons in
-:mod:`topomap.skeleton` (the default method's coarse grid here), door
-finding, judging and duplicate suppression in :mod:`topomap.doors`, cutting
-rooms in :mod:`topomap.rooms`.
+:mod:`topomap.core.skeleton` (the default method's coarse grid here), door
+finding, judging and duplicate suppression in :mod:`topomap.core.doors`, cutting
+rooms in :mod:`topomap.core.rooms`.
 """
 
 from __future__ import annotations
@@ -30,10 +30,10 @@ from typing import Optional
 
 import numpy as np
 
-from .errors import ParameterError
+from ..errors import ParameterError
 from .geometry import disk, metres_to_px, true_bbox
-from .io import FREE, OCCUPIED, OccupancyGrid
-from .options import PaperOptions, TopomapOptions, check_keywords, options_from_kwargs
+from ..io.maps import FREE, OCCUPIED, OccupancyGrid
+from ..options import PaperOptions, TopomapOptions, check_keywords, options_from_kwargs
 from .rooms import cut_rooms, doors_between_rooms
 
 log = logging.getLogger("topomap")
@@ -77,10 +77,10 @@ class Intermediates:
         that were closed before doors were searched and rooms cut.
     wall_lines : (K, 4) ndarray of float or None
         ``"topomap"``: the straight wall faces ``(r1, c1, r2, c2)`` (pixels)
-        found on the map (:func:`topomap.walls.straight_lines`).
+        found on the map (:func:`topomap.core.walls.straight_lines`).
     straight_share : float or None
         ``"topomap"``: the share of wall-face cells on the map's Hough lines
-        (:func:`topomap.walls.wall_lines`, :func:`topomap.walls.straight_share`),
+        (:func:`topomap.core.walls.wall_lines`, :func:`topomap.core.walls.straight_share`),
         which decides the ``rise`` the method ran with.
 
     Notes
@@ -135,7 +135,7 @@ class Segmentation:
         through walls) and, last, the regions outside the building
         (:attr:`outside`), which are not in the room graph.
     doors : list of Door
-        Doors between two different rooms (see :class:`topomap.doors.Door`).
+        Doors between two different rooms (see :class:`topomap.core.doors.Door`).
     method : str
         Name of the method that produced the result.
     params : dict
@@ -148,7 +148,7 @@ class Segmentation:
         Skeleton graphs of free and occupied space (pixel paths, metres).
     candidates : list of Candidate
         Every narrow-passage candidate with the reason it was kept or not
-        (``status``, one of :data:`topomap.doors.STATUSES`).
+        (``status``, one of :data:`topomap.core.doors.STATUSES`).
     timings : dict
         Seconds per pipeline stage.
     options : TopomapOptions or PaperOptions or None
@@ -225,7 +225,7 @@ class Segmentation:
 
     @property
     def room_graph(self):
-        """The room–door graph (:func:`topomap.roomgraph.room_graph`), built once."""
+        """The room–door graph (:func:`topomap.core.roomgraph.room_graph`), built once."""
         if self._room_graph is None:
             from .roomgraph import room_graph
 
@@ -289,7 +289,7 @@ def preprocess_masks(grid: OccupancyGrid, opts, *, occupied=None, clearance: boo
     """
     import cv2
 
-    from ._fast import edt
+    from .._fast import edt
 
     res = grid.resolution
     er = metres_to_px(opts.erosion_radius, res)
@@ -326,10 +326,10 @@ def furniture_keep(grid: OccupancyGrid, looked: OccupancyGrid, clutter, opts, *,
     map) the long walls are chained from Hough lines only, and those at
     least half of whose cells are bulky furniture in two or more separate
     pieces — a row of desks or round tables
-    (:func:`topomap.walls.furniture_rows`) — keep none of it. On a drawn
+    (:func:`topomap.core.walls.furniture_rows`) — keep none of it. On a drawn
     plan (``rows=False``) such a row stays a wall, as a plan draws a
     partition of solid blocks, and the long walls are chained from the runs
-    of wall faces (:func:`topomap.walls.straight_lines`), which find the
+    of wall faces (:func:`topomap.core.walls.straight_lines`), which find the
     row in every orientation of the map. ``parts``: :func:`clutter_parts`
     of ``grid.free`` with the furniture size, when already made.
 
@@ -392,7 +392,7 @@ def _close_by_distance(free: np.ndarray, r: int) -> np.ndarray:
     not dilated or outside the image (exact Euclidean distances: ``d <= r`` iff ``d**2 <= r**2``)."""
     import cv2
 
-    from ._fast import edt
+    from .._fast import edt
 
     if free.all():
         return np.zeros(free.shape, bool)
@@ -404,7 +404,7 @@ def _close_by_distance(free: np.ndarray, r: int) -> np.ndarray:
 def solid_components(free: np.ndarray):
     """The 8-connected components of the non-free cells: ``(solid, comp, stats)``, the non-free
     cells (uint8 0/1), their labels (0: the free cells) and OpenCV's statistics per label."""
-    from ._fast import label_stats
+    from .._fast import label_stats
 
     solid = np.logical_not(free).view(np.uint8)
     _, comp, stats, _ = label_stats(solid, connectivity=8)
@@ -456,7 +456,7 @@ def clutter_mask(free: np.ndarray, max_extent_px: float, *, furniture_px: float 
 
     ``parts``: :func:`clutter_parts` of the same arguments, when already
     made (the furniture stage asks twice, with and without ``keep``)."""
-    from ._fast import lookup
+    from .._fast import lookup
 
     comp, clutter = parts if parts is not None else clutter_parts(
         free, max_extent_px, furniture_px=furniture_px, wall_thickness_px=wall_thickness_px)
@@ -515,7 +515,7 @@ def coarse_skeletons(free_mask: np.ndarray, occupied_mask: np.ndarray, factor: i
     wall survives), a coarse occupied cell is occupied if any is.
     """
     from . import skeleton as S
-    from ._fast import Beside
+    from .._fast import Beside
 
     # the two thinnings run in compiled code without Python's lock: free space's on a second core
     fs = Beside(lambda: S.skeletonize(S.downsample(free_mask, factor, keep="all")))
@@ -556,7 +556,7 @@ def topomap_graphs(fs, os_, factor, d_free, occupied_mask, grid, min_occupied_br
     (px, distance of each occupied-mask cell to the mask's edge) the
     threshold is measured on."""
     from . import skeleton as S
-    from ._fast import edt
+    from .._fast import edt
 
     d_occ = edt(occupied_mask, exact=False)  # only averaged into the wall threshold
     Gf = coarse_skeleton_graph(fs, factor, d_free, grid)
@@ -654,12 +654,12 @@ def segment_paper(grid: OccupancyGrid, options: PaperOptions | None = None, **kw
     """Segment ``grid`` with the paper's method (Mora, Prados & Barber).
 
     Stages: masks (:func:`preprocess_masks`, occupied space = the occupied
-    cells), skeletons (:func:`topomap.skeleton.skeletonize`), graphs
-    (:func:`topomap.skeleton.skeleton_graph`, spurs pruned), the threshold
-    (:func:`topomap.doors.wall_threshold`), passage candidates and their
+    cells), skeletons (:func:`topomap.core.skeleton.skeletonize`), graphs
+    (:func:`topomap.core.skeleton.skeleton_graph`, spurs pruned), the threshold
+    (:func:`topomap.core.doors.wall_threshold`), passage candidates and their
     intersection points, the paper's door conditions
-    (:func:`topomap.doors.select_doors`), cutting rooms
-    (:func:`topomap.rooms.cut_rooms`).
+    (:func:`topomap.core.doors.select_doors`), cutting rooms
+    (:func:`topomap.core.rooms.cut_rooms`).
 
     Parameters
     ----------
@@ -683,7 +683,7 @@ def segment_paper(grid: OccupancyGrid, options: PaperOptions | None = None, **kw
     """
     from . import doors as D
     from . import skeleton as S
-    from ._fast import edt
+    from .._fast import edt
 
     opts = options_from_kwargs(PaperOptions, "paper", options, kwargs).resolved(grid.resolution)
     res = grid.resolution
@@ -722,7 +722,7 @@ def _near_hits(search: OccupancyGrid, occupied: np.ndarray, radius_px: float, *,
     most of the cells that bound free space are such cells (a laser map,
     whose walls are hits and whose other bounds are unexplored space);
     None on a map whose walls are not occupied cells (a plan that draws
-    them in mid-gray). ``faces``: :func:`topomap.walls.wall_faces` of
+    them in mid-gray). ``faces``: :func:`topomap.core.walls.wall_faces` of
     ``search``, when the caller has them."""
     import cv2
 
@@ -742,12 +742,12 @@ class _Walls:
     smaller (``k`` map cells per side), so that a wall's straightness, its
     gaps and its lines are judged in metres whatever the resolution.
 
-    ``faces``, ``hough`` (:func:`topomap.walls.wall_lines`), ``lines`` and
-    ``lw`` (:func:`topomap.walls.long_walls`) are in the cells of that grid;
+    ``faces``, ``hough`` (:func:`topomap.core.walls.wall_lines`), ``lines`` and
+    ``lw`` (:func:`topomap.core.walls.long_walls`) are in the cells of that grid;
     :meth:`fine` turns its points into map cells and :attr:`index` holds the
     long walls in map cells. With ``runs``, ``lines`` are the straight runs of
     faces on the main directions and the Hough lines off them
-    (:func:`topomap.walls.straight_lines`), and the long walls are chained
+    (:func:`topomap.core.walls.straight_lines`), and the long walls are chained
     from them; without, both are from the Hough lines only."""
 
     def __init__(self, search: OccupancyGrid, opts, *, runs: bool = True):
@@ -768,7 +768,7 @@ class _Walls:
         self.index = W.WallIndex(W.scale_walls(self.lw, k))
 
     def straight_share(self) -> float:
-        """The share of wall faces on straight lines (:func:`topomap.walls.straight_share`)."""
+        """The share of wall faces on straight lines (:func:`topomap.core.walls.straight_share`)."""
         from . import walls as W
 
         return W.straight_share(self.faces, self.hough)
@@ -782,7 +782,7 @@ class _Walls:
         return self.fine(np.asarray(self.lines, float).reshape(-1, 2, 2)).reshape(-1, 4)
 
     def mask(self, shape, keep=None):
-        """The long walls' cells (:func:`topomap.walls.wall_mask`) on a map grid of ``shape``; with
+        """The long walls' cells (:func:`topomap.core.walls.wall_mask`) on a map grid of ``shape``; with
         ``keep`` (a bool per long wall), those of the walls it marks only."""
         from . import walls as W
 
@@ -793,9 +793,9 @@ class _Walls:
         return m
 
     def openings(self, opts, hits=None) -> list:
-        """Openings in walls (:func:`topomap.walls.wall_openings`), at the
-        ends of partitions (:func:`topomap.walls.partition_gaps`) and, with
-        long walls, their gaps (:func:`topomap.walls.long_wall_gaps`), without
+        """Openings in walls (:func:`topomap.core.walls.wall_openings`), at the
+        ends of partitions (:func:`topomap.core.walls.partition_gaps`) and, with
+        long walls, their gaps (:func:`topomap.core.walls.long_wall_gaps`), without
         those across a corridor, as segments in the map's cells. ``hits``:
         the map's occupied cells (laser hits, clutter included), the
         evidence of a partition going on."""
@@ -833,7 +833,7 @@ class _Walls:
 
 def _drop_outside(grid: OccupancyGrid, labels, doors, n_rooms: int, opts: TopomapOptions):
     """Stage "outside": the rooms a laser saw beyond the facade taken out of the rooms
-    (:mod:`topomap.outside`)."""
+    (:mod:`topomap.core.outside`)."""
     from . import outside as O
 
     encl = O.enclosure(grid.free, grid.occupied, grid.resolution, open_area=opts.open_unknown_area,
@@ -858,10 +858,10 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
     Stages: crop (:func:`crop_box`), masks (:func:`without_clutter`,
     :func:`preprocess_masks`), skeletons (:func:`coarse_skeletons`), graphs
     (:func:`topomap_graphs`), bottlenecks
-    (:func:`topomap.doors.find_bottlenecks`), door judging
-    (:func:`topomap.doors.judge_doors`), duplicate suppression
-    (:func:`topomap.doors.suppress_duplicates`), cutting rooms
-    (:func:`topomap.rooms.cut_rooms`).
+    (:func:`topomap.core.doors.find_bottlenecks`), door judging
+    (:func:`topomap.core.doors.judge_doors`), duplicate suppression
+    (:func:`topomap.core.doors.suppress_duplicates`), cutting rooms
+    (:func:`topomap.core.rooms.cut_rooms`).
 
     Parameters
     ----------
@@ -873,9 +873,9 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
     **kwargs
         Fields of :class:`~topomap.options.TopomapOptions` to override, for
         example ``window=0.4``.
-    prior : topomap.identity.DoorPrior, optional
+    prior : topomap.core.identity.DoorPrior, optional
         A previous result's doors: its doors are kept and new cuts in its
-        unchanged rooms dropped (:meth:`~topomap.identity.DoorPrior.adjust`).
+        unchanged rooms dropped (:meth:`~topomap.core.identity.DoorPrior.adjust`).
 
     Returns
     -------
@@ -891,7 +891,7 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
     from . import doors as D
     from . import skeleton as S
     from . import walls as W
-    from ._fast import Beside, edt
+    from .._fast import Beside, edt
 
     opts = options_from_kwargs(TopomapOptions, "topomap", options, kwargs)
     res = grid.resolution
@@ -1009,7 +1009,7 @@ def _baseline(name):
     def run(grid: OccupancyGrid, **params) -> Segmentation:
         import inspect
 
-        from . import baselines
+        from . import baselines as baselines
 
         fn = getattr(baselines, name)
         allowed = {k for k, p in inspect.signature(fn).parameters.items()
@@ -1024,7 +1024,7 @@ def _baseline(name):
         return Segmentation(grid=grid, labels=labels, doors=doors, method=name, params=params, timings=T.t)
 
     run.__name__ = f"segment_{name}"
-    run.__doc__ = f"Segment with :func:`topomap.baselines.{name}` and wrap the result."
+    run.__doc__ = f"Segment with :func:`topomap.core.baselines.{name}` and wrap the result."
     return run
 
 
@@ -1050,9 +1050,9 @@ def segment(grid: OccupancyGrid, *, method: str = None, previous=None, **params)
         One of :data:`METHODS` (default :data:`DEFAULT_METHOD`).
     previous : Segmentation or networkx.MultiGraph or str or os.PathLike, optional
         An earlier result (or saved room graph file) of the same place: rooms
-        keep its IDs (:func:`topomap.identity.match_rooms`; ``seg.changes``);
+        keep its IDs (:func:`topomap.core.identity.match_rooms`; ``seg.changes``);
         with ``"topomap"`` its doors are a prior of the door stage
-        (:class:`topomap.identity.DoorPrior`).
+        (:class:`topomap.core.identity.DoorPrior`).
     **params
         Keyword options of the method, lengths in metres (for ``"topomap"``
         and ``"paper"`` the fields of :class:`~topomap.options.TopomapOptions`

@@ -37,7 +37,7 @@ Resume
     ``overwrite=True`` runs every map again.
 Crash safety
     Every output file is written to a temporary name and renamed into place
-    once all of them are written (:func:`topomap.export.write_outputs`); a
+    once all of them are written (:func:`topomap.io.export.write_outputs`); a
     run killed in the middle leaves whole files only, with a record that
     says ``incomplete`` (so the map runs again); temporary files left by a
     killed run are removed when the map runs again.
@@ -78,14 +78,14 @@ try:
 except ImportError:  # not a POSIX system: an O_EXCL lock file instead
     fcntl = None
 
-from . import export as _export
-from .errors import MapFileError, MissingDependencyError, OutputExistsError, ParameterError, TopomapError, first_line
+from ..io import export as _export
+from ..errors import MapFileError, MissingDependencyError, OutputExistsError, ParameterError, TopomapError, first_line
 
 __all__ = ["segment_many", "output_dirs", "read_summary", "RECORD", "SUMMARY", "SUMMARY_COLUMNS",
            "OUTPUT_NAMES", "STATUSES", "OK", "SKIPPED", "FAILED", "ERROR", "PENDING", "INCOMPLETE", "COMPLETE",
            "SUMMARY_EVERY"]
 
-log = logging.getLogger("topomap.batch")
+log = logging.getLogger("topomap.run.batch")
 
 #: Name of the run record in every output folder.
 RECORD = "topomap_run.json"
@@ -182,7 +182,7 @@ def _output_lock(out: Path):
     dies); the file is removed at the end, and ``out`` too when this created
     it and it is left empty.
     """
-    from .io import _msg
+    from ..errors import named as _msg
 
     created = not out.exists()
     try:
@@ -276,14 +276,14 @@ def _read_record(folder: Path) -> Optional[dict]:
 
 
 def _write_record(folder: Path, record: dict):
-    from .io import atomic_write
+    from ..io.files import atomic_write
 
     with atomic_write(folder / RECORD, "w") as fh:
         fh.write(json.dumps(record, indent=1, sort_keys=True, allow_nan=False) + "\n")
 
 
 def _version() -> str:
-    from . import __version__
+    from .. import __version__
 
     return __version__
 
@@ -357,7 +357,7 @@ def _plan(paths, dirs, settings, overwrite):
 # --------------------------------------------------------------------------
 
 def _restore_record(folder: Path, previous: Optional[str], existed: bool):
-    from .io import atomic_write
+    from ..io.files import atomic_write
 
     try:
         if previous is None:
@@ -396,7 +396,7 @@ def _run_one(task: dict) -> dict:
             previous = (folder / RECORD).read_text()
         _write_record(folder, dict(record, status=INCOMPLETE))  # a kill from here on: the map runs again
         claimed = True
-        from .cli import _segment_one
+        from ..cli import _segment_one
 
         seg = _segment_one(task["path"], folder, s["resolution"], s["method"], s["skeletons"],
                            **task["write_options"])
@@ -436,11 +436,11 @@ def _pool_init(jobs: int = 1):
     # local workers ignore Ctrl-C; the parent stops them
     import signal
 
-    from . import io
-    from ._fast import keep_freed_memory, one_thread
+    from ..grid import share_memory
+    from .._fast import keep_freed_memory, one_thread
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    io._MEMORY_SHARERS = jobs  # the maps running at once share the memory the size limit is taken from
+    share_memory(jobs)  # the maps running at once share the memory the size limit is taken from
     keep_freed_memory()  # each worker runs many maps
     one_thread()  # one worker per core: a map's work on a second thread would compete with the others
 
@@ -537,7 +537,7 @@ def _cell(v):
 
 
 def _write_summary(rows, path: Path):
-    from .io import atomic_write
+    from ..io.files import atomic_write
 
     buf = _io.StringIO()
     w = csv.DictWriter(buf, fieldnames=_columns(rows), restval="", extrasaction="ignore", lineterminator="\n")
@@ -600,7 +600,7 @@ def segment_many(paths: Sequence, out, *, jobs: int = 1, scheduler=None, overwri
     resolution : float, optional
         Metres per pixel for images without YAML (default 0.05).
     method : str, optional
-        Segmentation method (default :data:`topomap.segmentation.DEFAULT_METHOD`).
+        Segmentation method (default :data:`topomap.core.segmentation.DEFAULT_METHOD`).
     skeletons : bool, optional
         Draw both skeleton graphs in ``overlay.png``.
     write_options : dict, optional
@@ -609,7 +609,7 @@ def segment_many(paths: Sequence, out, *, jobs: int = 1, scheduler=None, overwri
     progress : bool, optional
         A progress bar on stderr (tqdm); default: when stderr is a terminal.
         Without the bar every finished map is logged at INFO level on the
-        ``topomap.batch`` logger (with it, at DEBUG).
+        ``topomap.run.batch`` logger (with it, at DEBUG).
 
     Returns
     -------
@@ -642,7 +642,7 @@ def segment_many(paths: Sequence, out, *, jobs: int = 1, scheduler=None, overwri
     if resolution is not None and not (isinstance(resolution, (int, float)) and resolution > 0):
         raise ParameterError(f"resolution must be > 0 m/px, got {resolution!r}")
     if method is not None:
-        from .segmentation import METHODS
+        from ..core.segmentation import METHODS
 
         if method not in METHODS:
             raise ParameterError(f"unknown method {method!r}; methods: {', '.join(METHODS)}")

@@ -14,17 +14,18 @@ import logging
 import math
 import os
 import re
-import tempfile
 import threading
 import warnings
-from contextlib import contextmanager
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Optional
 
 import numpy as np
 
-from .errors import (
+from ..grid import (FREE, OCCUPIED, UNKNOWN, USUAL_RESOLUTION, OccupancyGrid, cell_limit, check_image_size, check_origin_range, check_resolution_range)
+from .files import write_bytes
+from ..errors import (
+    named,
+    one_line,
     MapError,
     MapFileError,
     MapFileNotFoundError,
@@ -33,20 +34,7 @@ from .errors import (
 )
 
 __all__ = [
-    "FREE",
-    "OCCUPIED",
-    "UNKNOWN",
-    "MAX_CELLS",
-    "JOB_BYTES_PER_CELL",
-    "JOB_BASE_BYTES",
-    "cell_limit",
-    "cells_for_memory",
-    "available_memory",
-    "MIN_RESOLUTION",
-    "MAX_RESOLUTION",
-    "USUAL_RESOLUTION",
     "USUAL_FREE_AREA",
-    "MAX_ORIGIN",
     "check_resolution",
     "MAX_YAML_BYTES",
     "YAML_KEYS",
@@ -57,54 +45,14 @@ __all__ = [
     "GRAY_FREE",
     "GRAY_OCCUPIED",
     "GRAY_UNKNOWN",
-    "OccupancyGrid",
     "classify_gray",
     "classify_plan",
     "from_array",
     "load_map",
-    "remove_stale_temporaries",
     "yaml_beside",
     "save_map",
 ]
 
-FREE = 0
-OCCUPIED = 100
-UNKNOWN = -1
-
-#: Largest map accepted, in cells (rows * cols), when set; None (the default)
-#: bounds a map by the memory its job will take against the memory the
-#: machine has available (:func:`max_cells`). Checked from the image header
-#: before any pixel is decoded; larger maps raise
-#: :class:`~topomap.errors.MapTooLargeError`. Read at call time, so it can be
-#: changed (``topomap.io.MAX_CELLS = ...``); the environment variable
-#: ``TOPOMAP_MAX_CELLS`` sets it too (for the command line).
-MAX_CELLS = None
-#: Memory the whole job of a map (``topomap segment``: loading, segmentation,
-#: room graph, travel distances, overlay, every file) takes at most: this
-#: many bytes per cell, plus :data:`JOB_BASE_BYTES` (measured on maps built
-#: to break it, ``benchmarks/adversarial.py``; the worst shape, a corridor
-#: three cells wide, takes 140 bytes per cell, most maps 33 to 62).
-JOB_BYTES_PER_CELL = 150
-#: The interpreter, the libraries and their caches (a 1-cell map's job peaks at about 125 MB).
-JOB_BASE_BYTES = 250_000_000
-#: The limit when the available memory cannot be read: (8 GiB - 250 MB) / 150 B.
-FALLBACK_MAX_CELLS = 55_000_000
-#: The limit is never below this many cells (a 1000 x 1000 map), however little memory is free.
-MIN_MAX_CELLS = 1_000_000
-#: How many maps share the machine's memory at once (the local workers of a batch set it).
-_MEMORY_SHARERS = 1
-
-#: Smallest and largest cell size accepted, metres per cell (1 mm and 10 m).
-#: The methods' options are lengths in metres, so their kernels grow as
-#: ``1 / resolution**2``: below 1 mm a single kernel would outgrow any map.
-#: A resolution outside :data:`USUAL_RESOLUTION` (what indoor maps use) is
-#: accepted with a warning.
-MIN_RESOLUTION = 0.001
-MAX_RESOLUTION = 10.0
-#: Resolutions indoor maps use (metres per cell); outside, :func:`load_map` warns.
-USUAL_RESOLUTION = (0.005, 0.5)
-#: Largest ``|x|`` or ``|y|`` of an origin, metres (10,000 km: UTM northings fit).
-MAX_ORIGIN = 1e7
 #: Largest map YAML read, bytes (a map_server YAML is a few hundred bytes).
 MAX_YAML_BYTES = 1 << 20
 #: The keys of a map_server YAML (anything else is a warning, a near-miss of one of these an error).
@@ -133,235 +81,30 @@ _MODES = ("trinary", "scale", "raw")
 _YAML_SUFFIXES = (".yaml", ".yml")
 
 
-def _one_line(text) -> str:
-    """Collapse whitespace (newlines included) and cap the length."""
-    text = " ".join(str(text).split())
-    return text if len(text) <= 300 else text[:297] + "..."
-
-
-def _msg(name, text) -> str:
-    return _one_line(f"{name}: {text}")
-
-
-def available_memory() -> Optional[int]:
-    """Bytes of memory this process can still take: ``MemAvailable`` of ``/proc/meminfo``, capped by
-    the cgroup's (container's) ``memory.max`` less its use; else free physical pages
-    (``os.sysconf``); None when neither can be read."""
-    avail = None
-    try:
-        with open("/proc/meminfo") as fh:
-            for line in fh:
-                if line.startswith("MemAvailable:"):
-                    avail = int(line.split()[1]) * 1024
-                    break
-    except (OSError, ValueError, IndexError):
-        pass
-    if avail is None:
-        try:
-            avail = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-        except (AttributeError, ValueError, OSError):
-            return None
-    try:  # cgroup v2: a container's own limit
-        with open("/sys/fs/cgroup/memory.max") as fh:
-            top = fh.read().strip()
-        if top != "max":
-            with open("/sys/fs/cgroup/memory.current") as fh:
-                used = int(fh.read().strip())
-            avail = min(avail, max(int(top) - used, 0))
-    except (OSError, ValueError):
-        pass
-    return avail
-
-
-def cells_for_memory(nbytes: float) -> int:
-    """The largest map (cells) whose job fits ``nbytes`` of memory: ``(nbytes - JOB_BASE_BYTES) /
-    JOB_BYTES_PER_CELL``, at least :data:`MIN_MAX_CELLS`."""
-    return max(int((nbytes - JOB_BASE_BYTES) // JOB_BYTES_PER_CELL), MIN_MAX_CELLS)
-
-
-def cell_limit() -> tuple:
-    """``(cells, why)``: the largest map accepted now, and the words an error gives for it.
-
-    :data:`MAX_CELLS` when set, else the environment variable
-    ``TOPOMAP_MAX_CELLS``, else the memory available (:func:`available_memory`,
-    shared by the maps a batch runs at once) through :func:`cells_for_memory`
-    (:data:`FALLBACK_MAX_CELLS` when it cannot be read).
-
-    Raises
-    ------
-    ParameterError
-        ``TOPOMAP_MAX_CELLS`` is not a whole number > 0.
-    """
-    if MAX_CELLS is not None:
-        return int(MAX_CELLS), f"topomap.io.MAX_CELLS = {int(MAX_CELLS):,}"
-    env = os.environ.get("TOPOMAP_MAX_CELLS", "").strip()
-    if env:
-        try:
-            v = float(env.replace("_", "").replace(",", ""))
-        except ValueError:
-            v = float("nan")
-        if not (v.is_integer() and v >= 1):
-            raise ParameterError(f"TOPOMAP_MAX_CELLS must be a whole number of cells > 0, got {env!r}")
-        return int(v), f"TOPOMAP_MAX_CELLS = {int(v):,}"
-    avail = available_memory()
-    if avail is None:
-        return FALLBACK_MAX_CELLS, (f"the {FALLBACK_MAX_CELLS:,} cells topomap assumes when it cannot read the "
-                                    f"free memory (set TOPOMAP_MAX_CELLS to change)")
-    share = avail / max(int(_MEMORY_SHARERS), 1)
-    n = cells_for_memory(share)
-    jobs = f" for each of {_MEMORY_SHARERS} maps at once" if _MEMORY_SHARERS > 1 else ""
-    return n, (f"the {n:,} cells the free memory allows ({share / 1e9:.1f} GB{jobs}, at "
-               f"{JOB_BYTES_PER_CELL} bytes per cell + {JOB_BASE_BYTES / 1e6:.0f} MB; set TOPOMAP_MAX_CELLS "
-               f"to change)")
-
-
-@dataclass(frozen=True, eq=False)
-class OccupancyGrid:
-    """A three-state occupancy grid with its metric frame.
-
-    Parameters
-    ----------
-    cells : (M, N) ndarray of int8
-        ``FREE`` (0), ``OCCUPIED`` (100) or ``UNKNOWN`` (-1) per cell.
-    resolution : float
-        Cell size in metres per pixel.
-    origin : tuple of float
-        ``(x, y, yaw)`` of the lower-left corner of the grid, metres and
-        radians (ROS map_server convention).
-    source : str, optional
-        File the grid was read from, used in messages.
-    gray : (M, N) ndarray of uint8, optional
-        The gray image the grid was classified from, if any.
-    """
-
-    cells: np.ndarray
-    resolution: float = 0.05
-    origin: tuple = (0.0, 0.0, 0.0)
-    source: Optional[str] = None
-    gray: Optional[np.ndarray] = field(default=None, repr=False)
-
-    def __post_init__(self):
-        name = self.source or "<array>"
-        try:
-            cells = np.asarray(self.cells)
-        except (TypeError, ValueError) as exc:
-            raise MapError(_msg(name, f"cells are not an array: {exc}")) from None
-        if cells.ndim != 2:
-            raise MapError(f"{name}: grid must be 2-D, got ndim={cells.ndim}")
-        if cells.shape[0] == 0 or cells.shape[1] == 0:
-            raise MapError(f"{name}: grid is empty (shape {cells.shape})")
-        limit, why = cell_limit()
-        if cells.size > limit:
-            raise MapTooLargeError(_msg(name, f"map is {cells.shape[1]} x {cells.shape[0]} cells = {cells.size:,}, "
-                                              f"more than {why}"))
-        try:
-            res = float(self.resolution)
-        except (TypeError, ValueError):
-            raise ParameterError(_msg(name, f"resolution must be a number, got {self.resolution!r}")) from None
-        if not np.isfinite(res) or res <= 0:
-            raise ParameterError(f"{name}: resolution must be > 0 m/px, got {self.resolution!r}")
-        _check_resolution_range(name, res)
-        object.__setattr__(self, "resolution", res)
-        try:
-            origin = tuple(float(v) for v in self.origin)
-        except (TypeError, ValueError):
-            raise ParameterError(_msg(name, f"origin must be (x, y[, yaw]) numbers, got {self.origin!r}")) from None
-        if not all(math.isfinite(v) for v in origin):
-            raise ParameterError(_msg(name, f"origin must be finite, got {self.origin!r}"))
-        _check_origin_range(name, origin)
-        if len(origin) == 2:
-            origin = origin + (0.0,)
-        if len(origin) != 3:
-            raise ParameterError(_msg(name, f"origin must be (x, y[, yaw]), got {self.origin!r}"))
-        object.__setattr__(self, "origin", origin)
-        if not (np.issubdtype(cells.dtype, np.integer) or cells.dtype == bool):
-            raise MapError(_msg(name, f"cells must be integers (0, 100, -1), got dtype {cells.dtype}"))
-        object.__setattr__(self, "cells", cells.astype(np.int8, copy=False))
-
-    @property
-    def name(self) -> str:
-        """File name for messages, ``<array>`` when built from an array."""
-        return self.source or "<array>"
-
-    @property
-    def shape(self) -> tuple:
-        return self.cells.shape
-
-    @property
-    def free(self) -> np.ndarray:
-        """(M, N) ndarray of bool: cells that are free."""
-        return self.cells == FREE
-
-    @property
-    def occupied(self) -> np.ndarray:
-        """(M, N) ndarray of bool: cells that are occupied."""
-        return self.cells == OCCUPIED
-
-    @property
-    def unknown(self) -> np.ndarray:
-        """(M, N) ndarray of bool: cells of unknown state."""
-        return self.cells == UNKNOWN
-
-    def pixel_to_world(self, row, col):
-        """Centre of pixel ``(row, col)`` in map-frame metres ``(x, y)``.
-
-        Accepts scalars or arrays (fractional pixels allowed). Yaw of the
-        origin is applied as ROS does (rotation about the origin).
-        """
-        row = np.asarray(row, dtype=float)
-        col = np.asarray(col, dtype=float)
-        h = self.cells.shape[0]
-        u = (col + 0.5) * self.resolution
-        v = (h - row - 0.5) * self.resolution
-        ox, oy, yaw = self.origin
-        if yaw:
-            c, s = np.cos(yaw), np.sin(yaw)
-            u, v = c * u - s * v, s * u + c * v
-        return ox + u, oy + v
-
-    def world_to_pixel(self, x, y):
-        """Fractional pixel ``(row, col)`` of map-frame point ``(x, y)`` in metres.
-
-        Round the result to get the cell index; the inverse of
-        :meth:`pixel_to_world`.
-        """
-        x = np.asarray(x, dtype=float)
-        y = np.asarray(y, dtype=float)
-        ox, oy, yaw = self.origin
-        u, v = x - ox, y - oy
-        if yaw:
-            c, s = np.cos(yaw), np.sin(yaw)
-            u, v = c * u + s * v, -s * u + c * v
-        h = self.cells.shape[0]
-        col = u / self.resolution - 0.5
-        row = h - v / self.resolution - 0.5
-        return row, col
-
-
 def _check_thresholds(name, occupied_thresh, free_thresh):
     """Validate map_server thresholds; return them as floats."""
     vals = []
     for key, val in (("occupied_thresh", occupied_thresh), ("free_thresh", free_thresh)):
         v = _as_float(name, key, val)
         if not 0.0 <= v <= 1.0:
-            raise ParameterError(_msg(name, f"{key} must be in [0, 1], got {val!r}"))
+            raise ParameterError(named(name, f"{key} must be in [0, 1], got {val!r}"))
         vals.append(v)
     occ, free = vals
     if free >= occ:
-        raise ParameterError(_msg(name, f"free_thresh ({free!r}) must be < occupied_thresh ({occ!r})"))
+        raise ParameterError(named(name, f"free_thresh ({free!r}) must be < occupied_thresh ({occ!r})"))
     return occ, free
 
 
 def _as_float(name, key, val) -> float:
     """A finite float from a number or numeric string, else ParameterError."""
     if isinstance(val, (bool, np.bool_)) or val is None:
-        raise ParameterError(_msg(name, f"{key} must be a number, got {val!r}"))
+        raise ParameterError(named(name, f"{key} must be a number, got {val!r}"))
     try:
         v = float(val)
     except (TypeError, ValueError, OverflowError):
-        raise ParameterError(_msg(name, f"{key} must be a number, got {val!r}")) from None
+        raise ParameterError(named(name, f"{key} must be a number, got {val!r}")) from None
     if not math.isfinite(v):
-        raise ParameterError(_msg(name, f"{key} must be finite, got {val!r}"))
+        raise ParameterError(named(name, f"{key} must be finite, got {val!r}"))
     return v
 
 
@@ -372,34 +115,21 @@ def _as_bool(name, key, val) -> bool:
         return bool(val)
     if isinstance(val, str) and val.strip().lower() in ("0", "1", "true", "false"):
         return val.strip().lower() in ("1", "true")
-    raise ParameterError(_msg(name, f"{key} must be 0 or 1, got {val!r}"))
+    raise ParameterError(named(name, f"{key} must be 0 or 1, got {val!r}"))
 
 
 def _as_mode(name, val) -> str:
     if not isinstance(val, str) or val.strip().lower() not in _MODES:
-        raise ParameterError(_msg(name, f"mode must be one of {', '.join(_MODES)}, got {val!r}"))
+        raise ParameterError(named(name, f"mode must be one of {', '.join(_MODES)}, got {val!r}"))
     return val.strip().lower()
-
-
-def _check_resolution_range(name, v: float, key: str = "resolution"):
-    if not MIN_RESOLUTION <= v <= MAX_RESOLUTION:
-        hint = " (metres per cell, not cells per metre)" if v > MAX_RESOLUTION else ""
-        text = f"{key} must be between {MIN_RESOLUTION:g} and {MAX_RESOLUTION:g} m per cell, got {v:g}{hint}"
-        raise ParameterError(_msg(name, text) if name else _one_line(text))
-
-
-def _check_origin_range(name, origin):
-    if any(abs(v) > MAX_ORIGIN for v in origin[:2]):
-        raise ParameterError(_msg(name, f"origin x and y must be within +-{MAX_ORIGIN:g} m, got "
-                                        f"[{', '.join(f'{v:g}' for v in origin)}]"))
 
 
 def _as_resolution(name, val, key: str = "resolution") -> float:
     """A resolution in [MIN_RESOLUTION, MAX_RESOLUTION] m per cell, else ParameterError naming ``key``."""
     v = _as_float(name, key, val)
     if v <= 0:
-        raise ParameterError(_msg(name, f"{key} must be > 0 m/px, got {val!r}"))
-    _check_resolution_range(name, v, key)
+        raise ParameterError(named(name, f"{key} must be > 0 m/px, got {val!r}"))
+    check_resolution_range(name, v, key)
     return v
 
 
@@ -414,16 +144,16 @@ def check_resolution(value, *, name: str = "--resolution") -> float:
     """
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)) \
             or not value > 0 or not math.isfinite(value):
-        raise ParameterError(_one_line(f"{name} must be > 0 m/px (a number), got {value!r}"))
-    _check_resolution_range(None, float(value), name)
+        raise ParameterError(one_line(f"{name} must be > 0 m/px (a number), got {value!r}"))
+    check_resolution_range(None, float(value), name)
     return float(value)
 
 
 def _as_origin(name, val) -> tuple:
     if isinstance(val, (str, bytes)) or not hasattr(val, "__len__") or len(val) not in (2, 3):
-        raise ParameterError(_msg(name, f"origin must be [x, y, yaw] in metres/radians, got {val!r}"))
+        raise ParameterError(named(name, f"origin must be [x, y, yaw] in metres/radians, got {val!r}"))
     org = tuple(_as_float(name, "origin", v) for v in val) + ((0.0,) if len(val) == 2 else ())
-    _check_origin_range(name, org)
+    check_origin_range(name, org)
     return org
 
 
@@ -501,7 +231,7 @@ def classify_plan(gray, *, negate: bool = False, transparent=None) -> np.ndarray
     (M, N) ndarray of int8
         ``FREE`` (0), ``OCCUPIED`` (100) or ``UNKNOWN`` (-1).
     """
-    from ._fast import lookup
+    from .._fast import lookup
 
     v = np.asarray(gray, dtype=np.uint8)
     lut = np.where(np.arange(256) >= FREE_GRAY, FREE, OCCUPIED).astype(np.int8)
@@ -552,11 +282,11 @@ def from_array(array, *, resolution: float = DEFAULT_RESOLUTION, origin=(0.0, 0.
     try:
         a = np.asarray(array)
     except (TypeError, ValueError) as exc:
-        raise MapError(_msg(name, f"cannot convert {type(array).__name__} to an array: {exc}")) from None
+        raise MapError(named(name, f"cannot convert {type(array).__name__} to an array: {exc}")) from None
     if a.ndim != 2:
-        raise MapError(_msg(name, f"array must be 2-D, got ndim={a.ndim} (shape {a.shape})"))
+        raise MapError(named(name, f"array must be 2-D, got ndim={a.ndim} (shape {a.shape})"))
     if a.size == 0:
-        raise MapError(_msg(name, f"array is empty (shape {a.shape})"))
+        raise MapError(named(name, f"array is empty (shape {a.shape})"))
     if a.dtype == bool:
         cells = np.where(a, FREE, OCCUPIED).astype(np.int8)
         return OccupancyGrid(cells, resolution, origin, source)
@@ -570,18 +300,12 @@ def from_array(array, *, resolution: float = DEFAULT_RESOLUTION, origin=(0.0, 0.
         cells[(a >= 0) & (a < 65)] = FREE
         cells[a >= 65] = OCCUPIED
         return OccupancyGrid(cells, resolution, origin, source)
-    raise MapError(_msg(name, f"unsupported array dtype {a.dtype} (use bool, uint8 gray or int8 ROS values)"))
+    raise MapError(named(name, f"unsupported array dtype {a.dtype} (use bool, uint8 gray or int8 ROS values)"))
 
 
 # --------------------------------------------------------------------------
 # Reading images
 # --------------------------------------------------------------------------
-
-def _check_size(name, rows, cols):
-    limit, why = cell_limit()
-    if int(rows) * int(cols) > limit:
-        raise MapTooLargeError(_msg(name, f"image is {cols} x {rows} px = {rows * cols:,} cells, more than {why}"))
-
 
 def _to_gray(name, img):
     """Decode a Pillow image into ``(gray uint8, transparent bool or None)``."""
@@ -623,7 +347,7 @@ def _to_gray(name, img):
         if mode == "RGBA":
             transparent = a[..., 3] == 0
     if gray.ndim != 2:
-        raise MapError(_msg(name, f"image mode {img.mode} decoded to shape {gray.shape}, not 2-D"))
+        raise MapError(named(name, f"image mode {img.mode} decoded to shape {gray.shape}, not 2-D"))
     gray = np.ascontiguousarray(gray)
     if transparent is not None and not transparent.any():
         transparent = None
@@ -639,17 +363,17 @@ def _exists(path: Path) -> bool:
 
 def _check_file(name, path: Path, what="map file"):
     if not _exists(path):
-        raise MapFileNotFoundError(_msg(name, f"{what} not found"))
+        raise MapFileNotFoundError(named(name, f"{what} not found"))
     if path.is_dir():
-        raise MapFileError(_msg(name, f"{what} is a directory, not a file"))
+        raise MapFileError(named(name, f"{what} is a directory, not a file"))
     try:
         size = path.stat().st_size
     except OSError as exc:
-        raise MapFileError(_msg(name, f"cannot stat {what}: {exc.strerror or exc}")) from None
+        raise MapFileError(named(name, f"cannot stat {what}: {exc.strerror or exc}")) from None
     if size == 0:
-        raise MapError(_msg(name, f"{what} is empty (0 bytes)"))
+        raise MapError(named(name, f"{what} is empty (0 bytes)"))
     if not os.access(path, os.R_OK):
-        raise MapFileError(_msg(name, f"{what} is not readable (permission denied)"))
+        raise MapFileError(named(name, f"{what} is not readable (permission denied)"))
 
 
 _PIL_LIMIT_LOCK = threading.Lock()
@@ -670,9 +394,9 @@ def _open_decode(path: Path, name: str, lift_pillow_limit: bool = False):
         img = Image.open(path)
     with img:
         cols, rows = img.size
-        _check_size(name, rows, cols)
+        check_image_size(name, rows, cols)
         if rows == 0 or cols == 0:
-            raise MapError(_msg(name, f"image has zero size ({cols} x {rows} px)"))
+            raise MapError(named(name, f"image has zero size ({cols} x {rows} px)"))
         img.load()
         return _to_gray(name, img)
 
@@ -699,21 +423,21 @@ def _read_image(path: Path, name: str):
                 limit, why = cell_limit()
                 if count is None or count > limit:
                     size = f"{count:,} cells" if count is not None else "too many cells"
-                    raise MapTooLargeError(_msg(name, f"image is {size}, more than {why}")) from None
+                    raise MapTooLargeError(named(name, f"image is {size}, more than {why}")) from None
                 return _open_decode(path, name, lift_pillow_limit=True)
         except (MapError, MapFileError):
             raise
         except UnidentifiedImageError:
-            raise MapError(_msg(name, "not an image file Pillow can read (unknown or corrupt format)")) from None
+            raise MapError(named(name, "not an image file Pillow can read (unknown or corrupt format)")) from None
         except MemoryError:
-            raise MapTooLargeError(_msg(name, "out of memory while decoding the image")) from None
+            raise MapTooLargeError(named(name, "out of memory while decoding the image")) from None
         except PermissionError as exc:
-            raise MapFileError(_msg(name, f"cannot read image: {exc.strerror or exc}")) from None
+            raise MapFileError(named(name, f"cannot read image: {exc.strerror or exc}")) from None
         except Exception as exc:  # Pillow raises OSError, ValueError, SyntaxError, struct.error, ...
-            detail = _one_line(exc) or type(exc).__name__
+            detail = one_line(exc) or type(exc).__name__
             if "truncated" in detail.lower():
-                raise MapError(_msg(name, f"image file is truncated or corrupt ({detail})")) from None
-            raise MapError(_msg(name, f"cannot decode image: {detail}")) from None
+                raise MapError(named(name, f"image file is truncated or corrupt ({detail})")) from None
+            raise MapError(named(name, f"cannot decode image: {detail}")) from None
 
 
 # --------------------------------------------------------------------------
@@ -740,12 +464,12 @@ def _check_yaml_keys(name, meta: dict):
     for key in meta:
         if key in YAML_KEYS:
             continue
-        shown = _one_line(repr(key))[:60]
+        shown = one_line(repr(key))[:60]
         close = difflib.get_close_matches(str(key), YAML_KEYS, n=1, cutoff=0.75) if isinstance(key, str) else []
         if close:
-            raise ParameterError(_msg(name, f"unknown key {shown} (did you mean '{close[0]}'?); a map YAML has "
+            raise ParameterError(named(name, f"unknown key {shown} (did you mean '{close[0]}'?); a map YAML has "
                                             f"{', '.join(YAML_KEYS)}"))
-        log.warning("%s", _msg(name, f"unknown key {shown} ignored (a map YAML has {', '.join(YAML_KEYS)})"))
+        log.warning("%s", named(name, f"unknown key {shown} ignored (a map YAML has {', '.join(YAML_KEYS)})"))
 
 
 def _read_yaml(path: Path, name: str) -> dict:
@@ -755,27 +479,27 @@ def _read_yaml(path: Path, name: str) -> dict:
     try:
         size = path.stat().st_size
     except OSError as exc:
-        raise MapFileError(_msg(name, f"cannot read map YAML: {exc.strerror or exc}")) from None
+        raise MapFileError(named(name, f"cannot read map YAML: {exc.strerror or exc}")) from None
     if size > MAX_YAML_BYTES:
-        raise MapError(_msg(name, f"map YAML is {size:,} bytes, more than {MAX_YAML_BYTES:,} (a map_server YAML "
+        raise MapError(named(name, f"map YAML is {size:,} bytes, more than {MAX_YAML_BYTES:,} (a map_server YAML "
                                   f"is a few lines; is this the image?)"))
     try:
         text = path.read_bytes()
     except OSError as exc:
-        raise MapFileError(_msg(name, f"cannot read map YAML: {exc.strerror or exc}")) from None
+        raise MapFileError(named(name, f"cannot read map YAML: {exc.strerror or exc}")) from None
     try:
         meta = yaml.load(text, Loader=_yaml_loader())  # noqa: S506 - a SafeLoader without aliases
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}" if mark is not None else ""
         problem = getattr(exc, "problem", None) or type(exc).__name__
-        raise MapError(_msg(name, f"not valid YAML{where}: {problem}")) from None
+        raise MapError(named(name, f"not valid YAML{where}: {problem}")) from None
     except (RecursionError, MemoryError):
-        raise MapError(_msg(name, "not valid YAML: nested too deeply")) from None
+        raise MapError(named(name, "not valid YAML: nested too deeply")) from None
     except Exception as exc:
-        raise MapError(_msg(name, f"not valid YAML: {_one_line(exc) or type(exc).__name__}")) from None
+        raise MapError(named(name, f"not valid YAML: {one_line(exc) or type(exc).__name__}")) from None
     if not isinstance(meta, dict):
-        raise MapError(_msg(name, f"map YAML must be a mapping (key: value), got {type(meta).__name__}"))
+        raise MapError(named(name, f"map YAML must be a mapping (key: value), got {type(meta).__name__}"))
     _check_yaml_keys(name, meta)
     return meta
 
@@ -792,7 +516,7 @@ def yaml_beside(path) -> tuple:
         image is read alone; ``why`` says so); ``(None, None)`` when there is none (or ``path`` is a
         YAML or a bag).
     """
-    from .errors import TopomapError
+    from ..errors import TopomapError
 
     p = Path(os.fspath(path))
     if p.suffix.lower() in _YAML_SUFFIXES or p.suffix.lower() in (".bag", ".mcap", ".db3") or not p.is_file():
@@ -804,7 +528,7 @@ def yaml_beside(path) -> tuple:
         try:
             image = _read_yaml(y, str(y)).get("image")
         except (TopomapError, OSError) as exc:
-            return None, f"{y.name} beside it cannot be read ({_one_line(exc)}); the image is read alone"
+            return None, f"{y.name} beside it cannot be read ({one_line(exc)}); the image is read alone"
         if isinstance(image, str) and image.strip() and "\x00" not in image:
             target = Path(image) if Path(image).is_absolute() else y.parent / image
             try:
@@ -812,7 +536,7 @@ def yaml_beside(path) -> tuple:
                     return y, None
             except OSError:
                 pass
-        return None, f"{y.name} beside it names another image ({_one_line(repr(image))[:60]}); the image is read alone"
+        return None, f"{y.name} beside it names another image ({one_line(repr(image))[:60]}); the image is read alone"
     return None, None
 
 
@@ -828,7 +552,7 @@ def load_map(path, *, resolution=None, origin=None, negate=None, occupied_thresh
         ``free_thresh``, ``mode`` optional; ``image`` relative to the YAML
         file), any image Pillow reads (PGM, PNG, ...), or a ROS bag (``.bag``,
         ``.mcap``, ``.db3`` or a ROS 2 bag directory), read by
-        :func:`topomap.ros.read_map` (needs ``pip install 'topomap-rooms[ros]'``).
+        :func:`topomap.io.ros.read_map` (needs ``pip install 'topomap-rooms[ros]'``).
     resolution : float, optional
         Metres per pixel; overrides the YAML. Images default to
         :data:`DEFAULT_RESOLUTION` (0.05 m/px).
@@ -891,32 +615,32 @@ def load_map(path, *, resolution=None, origin=None, negate=None, occupied_thresh
     image with map_server's rule, write a YAML for it or pass
     ``free_thresh`` / ``occupied_thresh`` / ``mode``.
 
-    **A bag** gives a :class:`topomap.ros.RosMap` (an ``OccupancyGrid``
+    **A bag** gives a :class:`topomap.io.ros.RosMap` (an ``OccupancyGrid``
     that also keeps the message's ``frame_id`` and stamp): cell values as
     map_saver + map_server turn them into three states (``0..25`` free,
     ``65..100`` occupied, the rest unknown; ``free_thresh`` /
     ``occupied_thresh`` change the 0.25 / 0.65 of map_saver), resolution
-    and origin (with yaw) from the message. See :func:`topomap.ros.read_map`
+    and origin (with yaw) from the message. See :func:`topomap.io.ros.read_map`
     for its errors (:class:`~topomap.errors.BagError`).
     """
     try:
         p = Path(os.fspath(path))
     except TypeError:
-        raise MapFileError(_msg(repr(path), "map path must be a str or os.PathLike")) from None
+        raise MapFileError(named(repr(path), "map path must be a str or os.PathLike")) from None
     name = str(p)
     if "\x00" in name:
-        raise MapFileError(_msg(repr(name), "map path contains a NUL byte"))
+        raise MapFileError(named(repr(name), "map path contains a NUL byte"))
     from .ros import is_bag
 
     if is_bag(p):
         from .ros import read_map
 
         if negate is not None or mode is not None:
-            raise ParameterError(_msg(name, "negate and mode apply to images; a bag holds ROS cell values"))
+            raise ParameterError(named(name, "negate and mode apply to images; a bag holds ROS cell values"))
         return read_map(p, topic=topic, time=time, free_thresh=free_thresh, occupied_thresh=occupied_thresh,
                         resolution=resolution, origin=origin)
     if topic is not None or time is not None:
-        raise ParameterError(_msg(name, "topic and time apply to ROS bags (.bag, .mcap, .db3, a bag directory)"))
+        raise ParameterError(named(name, "topic and time apply to ROS bags (.bag, .mcap, .db3, a bag directory)"))
 
     meta = {}
     image_path = p
@@ -927,16 +651,16 @@ def load_map(path, *, resolution=None, origin=None, negate=None, occupied_thresh
         for key in ("image",) + (("resolution",) if resolution is None else ()) + \
                    (("origin",) if origin is None else ()):
             if key not in meta or meta[key] is None:
-                raise MapError(_msg(name, f"map YAML lacks the required key '{key}'"))
+                raise MapError(named(name, f"map YAML lacks the required key '{key}'"))
         img = meta["image"]
         if not isinstance(img, str) or not img.strip() or "\x00" in img:
-            raise MapError(_msg(name, f"'image' must be a file name, got {img!r}"))
+            raise MapError(named(name, f"'image' must be a file name, got {img!r}"))
         image_path = Path(img)
         if not image_path.is_absolute():
             image_path = p.parent / image_path
         image_name = str(image_path)
         if not _exists(image_path):
-            raise MapFileNotFoundError(_msg(name, f"image '{img}' not found (looked for {image_name})"))
+            raise MapFileNotFoundError(named(name, f"image '{img}' not found (looked for {image_name})"))
 
     def pick(key, value, default):
         if value is not None:
@@ -948,7 +672,7 @@ def load_map(path, *, resolution=None, origin=None, negate=None, occupied_thresh
     val, where = pick("resolution", resolution, DEFAULT_RESOLUTION)
     res = _as_resolution(where, val)
     if not USUAL_RESOLUTION[0] <= res <= USUAL_RESOLUTION[1]:
-        log.warning("%s", _msg(name, f"resolution {res:g} m per cell is outside what indoor maps use "
+        log.warning("%s", named(name, f"resolution {res:g} m per cell is outside what indoor maps use "
                                      f"({USUAL_RESOLUTION[0]:g}-{USUAL_RESOLUTION[1]:g}); rooms and doors "
                                      f"may be meaningless"))
     val, where = pick("origin", origin, (0.0, 0.0, 0.0))
@@ -968,7 +692,7 @@ def load_map(path, *, resolution=None, origin=None, negate=None, occupied_thresh
         if image_path is p:
             raise
         # name both files: the YAML and its image
-        raise type(exc)(_msg(name, f"image {exc}")) from None
+        raise type(exc)(named(name, f"image {exc}")) from None
     if is_yaml or any(v is not None for v in (occupied_thresh, free_thresh, mode)):
         cells = classify_gray(gray, negate=neg, occupied_thresh=occ, free_thresh=free,
                               mode=mod, transparent=transparent)
@@ -999,7 +723,7 @@ def _warn_unknown_read_free(name, gray, cells, free_thresh, where, negate=False)
         return
     pv = (255 - (255 - g if negate else g)) / 255
     src = "" if where == name else f" (from {where})"
-    log.warning("%s", _msg(name, f"{n:,} cells ({100 * n / n_free:.0f} % of the free space) have gray {g}, "
+    log.warning("%s", named(name, f"{n:,} cells ({100 * n / n_free:.0f} % of the free space) have gray {g}, "
                                  f"map_saver's unknown, and free_thresh {free_thresh:g}{src} reads them as free "
                                  f"(p = {pv:.3f}); if they are unknown, set free_thresh to at most "
                                  f"{pv - 0.001:.3f} (map_server's default is {FREE_THRESH})"))
@@ -1012,10 +736,10 @@ USUAL_FREE_AREA = (1.0, 1e6)
 def _warn_free_area(name, area: float):
     lo, hi = USUAL_FREE_AREA
     if 0 < area < lo:
-        log.warning("%s", _msg(name, f"free space is only {area:.3g} m², less than a small room; "
+        log.warning("%s", named(name, f"free space is only {area:.3g} m², less than a small room; "
                                      f"is the resolution right?"))
     elif area > hi:
-        log.warning("%s", _msg(name, f"free space is {area:.3g} m², more than any building; "
+        log.warning("%s", named(name, f"free space is {area:.3g} m², more than any building; "
                                      f"is the resolution right (metres per cell)?"))
 
 
@@ -1050,132 +774,6 @@ def yaml_text(meta: dict) -> str:
     lines.append(f"occupied_thresh: {_fmt_float(meta.get('occupied_thresh', OCCUPIED_THRESH))}")
     lines.append(f"free_thresh: {_fmt_float(meta.get('free_thresh', FREE_THRESH))}")
     return "\n".join(lines) + "\n"
-
-
-#: Temporary files :func:`atomic_write` makes: ``.NAME.topomap-pPID.RANDOM.tmp`` (the ``topomap-`` marker:
-#: a user's own ``.draft.p4000000.autosave.tmp`` is not ours).
-_TMP_RE = re.compile(r"^\..+\.topomap-p(\d+)\.[A-Za-z0-9_]{8}\.tmp$")
-
-
-def _pid_alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except (PermissionError, OverflowError, OSError):
-        return True
-    return True
-
-
-def remove_stale_temporaries(folder) -> int:
-    """Remove the temporary files killed runs of :func:`atomic_write` left in ``folder``.
-
-    A temporary is ours when its name is ``.NAME.topomap-pPID.RANDOM.tmp``;
-    it is stale when process ``PID`` no longer runs. Other files (a user's
-    own ``.notes.txt.download.tmp``) are never touched.
-
-    Returns
-    -------
-    int
-        How many files were removed.
-    """
-    removed = 0
-    try:
-        entries = list(os.scandir(folder))
-    except OSError:
-        return 0
-    for e in entries:
-        name = e.name
-        if not (name.startswith(".") and name.endswith(".tmp")):
-            continue
-        m = _TMP_RE.match(name)
-        try:
-            if not e.is_file(follow_symlinks=False):
-                continue
-            stale = m is not None and int(m.group(1)) != os.getpid() and not _pid_alive(int(m.group(1)))
-            if stale:
-                os.unlink(e.path)
-                removed += 1
-        except OSError:
-            continue
-    if removed:
-        log.info("%s: removed %d stale temporary file(s) of killed runs", folder, removed)
-    return removed
-
-
-def _renamed(exc, tmp: str, path: Path):
-    """``exc`` with the final ``path`` in its message instead of the temporary ``tmp``, or None to keep it."""
-    from .errors import TopomapError
-
-    if isinstance(exc, OSError) and not isinstance(exc, TopomapError):
-        return MapFileError(_msg(path, f"cannot write: {exc.strerror or exc}"))
-    text = str(exc)
-    if tmp in text:
-        try:
-            return type(exc)(text.replace(tmp, str(path)))
-        except Exception:  # noqa: BLE001 - an exception type that takes other arguments: keep the original
-            return None
-    return None
-
-
-@contextmanager
-def atomic_write(path, mode: Optional[str] = "wb"):
-    """Open a temporary file beside ``path``; rename it to ``path`` on success.
-
-    On an exception the temporary file is removed and ``path`` is untouched
-    (never a half-written output, never a clobbered earlier one). Yields the
-    temporary file's path (``mode=None``, for writers that take a file name)
-    or a file object open in ``mode``. The file gets the permissions of the
-    file it replaces, or the umask's default for a new one.
-
-    The temporary is named ``.NAME.topomap-pPID.RANDOM.tmp``; temporaries that killed
-    runs left in the folder are removed first (:func:`remove_stale_temporaries`).
-    Errors name ``path``, never the temporary: a failed write (a full disk)
-    is a :class:`~topomap.errors.MapFileError`. Text modes write UTF-8, file
-    names that are not UTF-8 as their original bytes.
-    """
-    path = Path(path)
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise MapFileError(_msg(path.parent, f"cannot create the output folder: {exc.strerror or exc}")) from None
-    remove_stale_temporaries(path.parent)
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.topomap-p{os.getpid()}.", suffix=".tmp", dir=path.parent)
-    except OSError as exc:
-        raise MapFileError(_msg(path, f"cannot write: {exc.strerror or exc}")) from None
-    os.close(fd)
-    try:
-        try:
-            perm = os.stat(path).st_mode & 0o777
-        except OSError:
-            umask = os.umask(0)
-            os.umask(umask)
-            perm = 0o666 & ~umask
-        os.chmod(tmp, perm)
-        if mode is None:
-            yield tmp
-        else:
-            text = "b" not in mode
-            with open(tmp, mode, **({"encoding": "utf-8", "errors": "surrogateescape"} if text else {})) as fh:
-                yield fh
-                fh.flush()
-                os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException as exc:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        new = _renamed(exc, tmp, path) if isinstance(exc, Exception) else None
-        if new is not None:
-            raise new from None
-        raise
-
-
-def _atomic_write(path: Path, data: bytes):
-    with atomic_write(path) as fh:
-        fh.write(data)
 
 
 def save_map(grid_or_cells, path_stem, *, resolution=None, origin=None, mode: str = "trinary"):
@@ -1217,7 +815,7 @@ def save_map(grid_or_cells, path_stem, *, resolution=None, origin=None, mode: st
     name = str(stem)
     mode = _as_mode(name, mode)
     if mode == "scale":
-        raise ParameterError(_msg(name, "save_map supports mode 'trinary' or 'raw', got 'scale'"))
+        raise ParameterError(named(name, "save_map supports mode 'trinary' or 'raw', got 'scale'"))
     if isinstance(grid_or_cells, OccupancyGrid):
         grid = grid_or_cells
         gray = None
@@ -1228,7 +826,7 @@ def save_map(grid_or_cells, path_stem, *, resolution=None, origin=None, mode: st
         try:
             a = np.asarray(grid_or_cells)
         except (TypeError, ValueError) as exc:
-            raise MapError(_msg(name, f"cannot convert {type(grid_or_cells).__name__} to an array: {exc}")) from None
+            raise MapError(named(name, f"cannot convert {type(grid_or_cells).__name__} to an array: {exc}")) from None
         if a.dtype == np.uint8 and a.ndim == 2 and a.size:
             gray, cells = a, None
         else:
@@ -1249,10 +847,10 @@ def save_map(grid_or_cells, path_stem, *, resolution=None, origin=None, mode: st
     if mode != "trinary":
         meta["mode"] = mode
     if not stem.parent.is_dir():
-        raise MapFileNotFoundError(_msg(name, f"output directory {str(stem.parent)!r} does not exist"))
+        raise MapFileNotFoundError(named(name, f"output directory {str(stem.parent)!r} does not exist"))
     try:
-        _atomic_write(pgm, pgm_bytes(gray))
-        _atomic_write(yml, yaml_text(meta).encode())
+        write_bytes(pgm, pgm_bytes(gray))
+        write_bytes(yml, yaml_text(meta).encode())
     except OSError as exc:
-        raise MapFileError(_msg(name, f"cannot write map: {exc.strerror or exc}")) from None
+        raise MapFileError(named(name, f"cannot write map: {exc.strerror or exc}")) from None
     return yml

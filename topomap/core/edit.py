@@ -1,7 +1,7 @@
 """Editing rooms: merge two rooms, split one along a line, name a room, mark it no-go.
 
-Each edit takes a :class:`~topomap.segmentation.Segmentation` and returns a
-new one (a :class:`~topomap.identity.TrackedSegmentation`: room IDs need not
+Each edit takes a :class:`~topomap.core.segmentation.Segmentation` and returns a
+new one (a :class:`~topomap.core.identity.TrackedSegmentation`: room IDs need not
 be ``1..N`` after an edit); the input is never changed. The labels, the doors
 and the room graph of the result agree with each other, as those of a fresh
 segmentation do:
@@ -10,13 +10,13 @@ segmentation do:
   edited and still follow the largest room ID);
 * every door joins two different rooms whose cells touch along it;
 * the room graph is built again from the labels and the doors
-  (:func:`topomap.roomgraph.room_graph`).
+  (:func:`topomap.core.roomgraph.room_graph`).
 
 Room IDs
     A merge keeps the first room's ID (the second ID is no room any more). A
     split keeps the room's ID for the larger part and gives the other part a
     new ID, ``next_room_id``, so an ID is never given twice (as
-    :mod:`topomap.identity` does when a map grows).
+    :mod:`topomap.core.identity` does when a map grows).
 
 What the room graph says of an edit
     Node attributes that :func:`topomap.segment` with ``previous=`` carries to
@@ -43,7 +43,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import EditError, GraphFormatError, MapFileError, MapFileNotFoundError
+from ..errors import EditError, GraphFormatError, MapFileError, MapFileNotFoundError
 from .segmentation import Segmentation
 
 log = logging.getLogger("topomap")
@@ -103,7 +103,7 @@ def _next_id(seg, ids) -> int:
 
 def _user_attributes(seg) -> dict:
     """``ID -> {name: value}``: the attributes of ``seg``'s rooms that topomap does not compute (names,
-    no-go marks, merged IDs, a user's own), as :mod:`topomap.identity` carries them; copies."""
+    no-go marks, merged IDs, a user's own), as :mod:`topomap.core.identity` carries them; copies."""
     from .identity import _Previous
 
     return {int(r): dict(a) for r, a in _Previous(seg).attrs.items()}
@@ -257,7 +257,7 @@ def split(seg, room: int, p1, p2, *, min_area: float | None = None):
     line crosses the room — a passage between the two parts — it becomes a
     door between them, from wall to wall along the line. The cut cells, and
     pieces of the room smaller than ``min_area`` that the line cut off, go
-    to the nearest part (as :func:`topomap.rooms.cut_rooms` gives them). The
+    to the nearest part (as :func:`topomap.core.rooms.cut_rooms` gives them). The
     room's other doors lead into the part beside them. A merged room that
     is split is no longer recorded as merged.
 
@@ -290,7 +290,7 @@ def split(seg, room: int, p1, p2, *, min_area: float | None = None):
 
     from .doors import Door
     from .geometry import line_pixels
-    from .options import TopomapOptions
+    from ..options import TopomapOptions
     from .rooms import fill_unlabeled
 
     ids = _room_ids(seg)
@@ -539,7 +539,7 @@ def apply_edits(seg, edits, *, source: str | None = None):
 def keep_merges(previous, seg, *, min_overlap: float):
     """``seg`` with the rooms merged again that lie in one previous room a user had merged.
 
-    :func:`topomap.identity.match_rooms` calls it before it matches rooms.
+    :func:`topomap.core.identity.match_rooms` calls it before it matches rooms.
     A new room lies in previous room ``i`` when at least ``min_overlap`` of
     its part that the previous map knew is in ``i``; the new rooms that lie
     in a room with a ``merged`` attribute (two or more IDs) and are joined by
@@ -549,7 +549,7 @@ def keep_merges(previous, seg, *, min_overlap: float):
 
     Parameters
     ----------
-    previous : topomap.identity._Previous
+    previous : topomap.core.identity._Previous
         The previous rooms (their attributes and a lookup by map-frame point).
     seg : Segmentation
         The new segmentation (not changed).
@@ -603,9 +603,9 @@ def _grid_of(folder: Path, record: dict, labels: np.ndarray, res: float, origin,
     record names when it is unchanged since the run, else the file the room graph names (``graph_map``), when
     its free cells are the labelled cells; else a map of the labels' cells (free: the rooms and fragments),
     with a warning."""
-    from .batch import _fingerprint
-    from .errors import first_line
-    from .io import FREE, OCCUPIED, OccupancyGrid, load_map
+    from ..run.batch import _fingerprint
+    from ..errors import first_line
+    from ..io.maps import FREE, OCCUPIED, OccupancyGrid, load_map
 
     path, why = record.get("input"), "named neither in the run record nor in rooms.graphml"
     settings = record.get("settings") or {}
@@ -657,9 +657,9 @@ def load_segmentation(out_dir):
         A file cannot be read, or ``rooms.graphml`` and the labels
         disagree (different sizes, a room in one and not in the other).
     """
-    from .batch import RECORD, _read_record
+    from ..run.batch import RECORD, _read_record
     from .doors import Door
-    from .export import NODE_TYPES, load_graph, load_label_map
+    from ..io.export import NODE_TYPES, load_graph, load_label_map
     from .identity import TrackedSegmentation
 
     folder = Path(out_dir)
@@ -738,9 +738,9 @@ def save_edits(seg, out_dir, records) -> dict:
     dict
         ``{name: path}`` of the files written.
     """
-    from . import __version__
-    from .batch import COMPLETE, INCOMPLETE, OUTPUT_NAMES, RECORD, _read_record, _restore_record, _stat, _write_record
-    from .cli import write_segmentation
+    from .. import __version__
+    from ..run.batch import COMPLETE, INCOMPLETE, OUTPUT_NAMES, RECORD, _read_record, _restore_record, _stat, _write_record
+    from ..cli import write_segmentation
 
     folder = Path(out_dir)
     old = (folder / RECORD).read_text(encoding="utf-8") if (folder / RECORD).is_file() else None

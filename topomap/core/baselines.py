@@ -28,9 +28,9 @@ import numpy as np
 
 from topomap._fast import edt, label
 from topomap.errors import MapError, ParameterError
-from topomap.geometry import line_pixels, true_bbox
+from topomap.core.geometry import line_pixels, true_bbox
 from topomap.options import check_length
-from topomap.rooms import fill_unlabeled, relabel_sequential
+from topomap.core.rooms import fill_unlabeled, relabel_sequential
 
 __all__ = ["watershed", "morphological", "distance", "voronoi"]
 
@@ -140,7 +140,7 @@ def morphological(free, *, resolution=0.05, room_area_min=0.8, room_area_max=47.
     every connected component whose area lies strictly within
     ``(room_area_min, room_area_max)`` is taken as a room seed and removed
     from the further erosion. The seeds are finally grown back over all free
-    space geodesically (:func:`topomap.rooms.fill_unlabeled`, ipa's
+    space geodesically (:func:`topomap.core.rooms.fill_unlabeled`, ipa's
     region spreading).
 
     Parameters

@@ -38,9 +38,10 @@ from typing import Optional
 
 import numpy as np
 
-from .errors import BagError, MapError, MapFileError, MapFileNotFoundError, MapTooLargeError, \
+from ..errors import BagError, MapError, MapFileError, MapFileNotFoundError, MapTooLargeError, \
     MissingDependencyError, ParameterError, TopomapError
-from .io import FREE, OCCUPIED, UNKNOWN, OccupancyGrid, _one_line
+from ..errors import one_line as _one_line
+from ..grid import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
 
 __all__ = [
     "MAP_TYPE",
@@ -229,7 +230,7 @@ def occupancy_cells(data, width: int, height: int, *, free_thresh: float = SAVER
     MapTooLargeError
         More than :func:`topomap.io.cell_limit` cells.
     """
-    from . import io
+    from . import maps as io
 
     occ_t, free_t = io._check_thresholds(name, occupied_thresh, free_thresh)
     w, h = int(width), int(height)
@@ -390,7 +391,7 @@ def _check_expansion(p: Path, name: str):
     import io as _pyio
     import struct
 
-    from .io import _yaml_loader
+    from .maps import _yaml_loader
 
     files, mode, fmt = [p], "", ""
     if p.is_dir():
@@ -539,7 +540,7 @@ def read_map(path, *, topic: Optional[str] = None, time: Optional[float] = None,
     MissingDependencyError
         ``rosbags`` is not installed (``pip install 'topomap-rooms[ros]'``).
     """
-    from .io import _as_float, _check_thresholds
+    from .maps import _as_float, _check_thresholds
 
     p = Path(os.fspath(path))
     name = str(p)
@@ -595,7 +596,7 @@ def read_map(path, *, topic: Optional[str] = None, time: Optional[float] = None,
             conn, t, raw = chosen
             size = _map_size(raw, reader.is2)
             if size is not None:  # the cell bound from the message's header, before the message is decoded
-                from . import io
+                from . import maps as io
 
                 limit, why = io.cell_limit()
                 if size[0] * size[1] > limit:
@@ -736,7 +737,7 @@ def marker_array(seg, *, frame_id: Optional[str] = None, stamp: Optional[int] = 
     = door ID) a ``LINE_LIST`` from one door post to the other. Coordinates
     are map-frame metres (the room graph's ``polygon``, ``x``, ``y`` and
     ``x1, y1, x2, y2``), lines a little above the map plane. Rooms get the
-    colours of :func:`topomap.plot.room_colors`; doors are red.
+    colours of :func:`topomap.io.plot.room_colors`; doors are red.
 
     Parameters
     ----------
@@ -762,7 +763,7 @@ def marker_array(seg, *, frame_id: Optional[str] = None, stamp: Optional[int] = 
 
     ts = _ts(typestore)
     frame, ns = _frame_and_stamp(seg.grid, frame_id, stamp)
-    from .options import check_length
+    from ..options import check_length
 
     for key, v in (("line_width", line_width), ("text_height", text_height)):
         if check_length(key, v) == 0:
@@ -815,7 +816,7 @@ def label_image(seg, *, frame_id: Optional[str] = None, stamp: Optional[int] = N
     ``labels[row, col]`` (row 0 at the top, as in ``labels.png`` and a
     map_server PGM), little-endian 16-bit; 0 = not a room, ``1..n_rooms``
     the rooms, higher values fragments (see
-    :class:`~topomap.segmentation.Segmentation`). The cell of pixel ``(row,
+    :class:`~topomap.core.segmentation.Segmentation`). The cell of pixel ``(row,
     col)`` is the OccupancyGrid cell ``(height - 1 - row, col)`` of the map;
     its map-frame position is ``seg.grid.pixel_to_world(row, col)``.
 

@@ -2,10 +2,10 @@
 
 Stateless functions in the style of networkx: the graph (or segmentation)
 comes first. Every function that takes ``seg_or_G`` accepts either a
-:class:`~topomap.segmentation.Segmentation` or a room–door graph as built by
-:func:`topomap.roomgraph.room_graph` (also one loaded back with
-:func:`topomap.export.load_graphml` / :func:`~topomap.export.load_json` /
-:func:`~topomap.export.load_geojson`). A graph carries everything planning
+:class:`~topomap.core.segmentation.Segmentation` or a room–door graph as built by
+:func:`topomap.core.roomgraph.room_graph` (also one loaded back with
+:func:`topomap.io.export.load_graphml` / :func:`~topomap.io.export.load_json` /
+:func:`~topomap.io.export.load_geojson`). A graph carries everything planning
 needs: room polygons that follow cell edges exactly (so the room cells are
 recovered by rasterising them at the graph's ``resolution``, ``origin`` and
 ``shape``), doors with their end points, and, once :func:`travel_graph` has
@@ -14,7 +14,7 @@ annotated it, the in-room door-to-door travel distances.
 Room IDs
 --------
 Room IDs are the labels ``1..N`` of the label image and are deterministic:
-:func:`topomap.rooms.relabel_sequential` numbers rooms in order of their
+:func:`topomap.core.rooms.relabel_sequential` numbers rooms in order of their
 first cell in a row-major scan of the map image (top row first, left to
 right), so room 1 holds the top-most, then left-most free cell of the image
 (rows count down from the top of the image, which is the largest map-frame
@@ -87,9 +87,9 @@ import numbers
 import numpy as np
 import networkx as nx
 
-from .errors import NoPathError, NotInRoomError, PlanningError  # noqa: F401  (re-exported)
-from ._fast import lookup, ranges
-from .geometry import line_pixels
+from ..errors import NoPathError, NotInRoomError, PlanningError  # noqa: F401  (re-exported)
+from .._fast import lookup, ranges
+from ..core.geometry import line_pixels
 
 __all__ = ["PlanningError", "NotInRoomError", "NoPathError", "room_at", "neighbors", "doors_between",
            "room_distances", "travel_graph", "door_graph", "plan_path"]
@@ -100,7 +100,7 @@ __all__ = ["PlanningError", "NotInRoomError", "NoPathError", "room_at", "neighbo
 # --------------------------------------------------------------------------
 
 #: Offset (px) of the point at which a cell is tested against room polygons.
-#: Room outlines (:func:`topomap.roomgraph.room_polygons`) run along cell
+#: Room outlines (:func:`topomap.core.roomgraph.room_polygons`) run along cell
 #: edges on the top/left side of a room and may run through the cell centres
 #: on its bottom/right side; a point a quarter cell up and left of the centre
 #: is inside every cell of the room under either convention and outside the
@@ -113,7 +113,7 @@ class _Ctx:
     """Room cells, doors and the pixel <-> metre frame of ``seg_or_G``."""
 
     def __init__(self, seg_or_G):
-        from .io import OccupancyGrid
+        from ..io.maps import OccupancyGrid
 
         if isinstance(seg_or_G, nx.Graph):
             G = seg_or_G
@@ -125,7 +125,7 @@ class _Ctx:
             except (KeyError, TypeError, ValueError):
                 raise PlanningError("room graph lacks the map frame (graph attributes 'shape', 'resolution', "
                                     "'origin'); build it with topomap.room_graph or load it with "
-                                    "topomap.export.load_graph") from None
+                                    "topomap.io.export.load_graph") from None
             # frame only: a read-only all-zero view of the map's shape (no memory)
             self.grid = OccupancyGrid(np.broadcast_to(np.int8(0), shape), res, origin)
         elif hasattr(seg_or_G, "labels") and hasattr(seg_or_G, "grid"):
@@ -165,7 +165,7 @@ class _Ctx:
         """(r0, r1, c0, c1) half-open pixel box of room ``r``'s cells."""
         if self.seg is not None:
             if self._bbox is None:
-                from .roomgraph import _BOXES
+                from ..core.roomgraph import _BOXES
 
                 # the boxes room_graph found for these labels (rooms 1..N: the same as the labels' own)
                 ref, boxes = _BOXES.get(self.G, (lambda: None, None))
@@ -266,7 +266,7 @@ class _Ctx:
         return list(self._of.get(r, ()))
 
     def door_cells(self, did):
-        """The cells of door ``did``'s segment (:func:`topomap.geometry.line_pixels`; drawn once)."""
+        """The cells of door ``did``'s segment (:func:`topomap.core.geometry.line_pixels`; drawn once)."""
         cells = self._cells.get(did)
         if cells is None:
             _, _, p1, p2, _, _ = self.doors[did]
@@ -1068,4 +1068,4 @@ def plan_path(seg_or_G, start, goal, *, robot_width: float = 0.0) -> dict:
     pts = [ps] + [ctx.doors[d][5] for d in doors] + [pg]
     return {"rooms": rooms, "doors": doors, "waypoints": np.asarray(pts, float).reshape(-1, 2),
             "length": float(length), "legs": legs, "start_room": rs, "goal_room": rg}
-from .tour import plan_tour  # noqa: E402,F401  (re-exported: room tours, topomap.tour)
+from .tour import plan_tour  # noqa: E402,F401  (re-exported: room tours, topomap.planning.tour)

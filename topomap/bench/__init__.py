@@ -1,0 +1,1 @@
+"""Measuring the methods: benchmark data sets, scoring, simulated maps of floor plans."""
