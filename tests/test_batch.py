@@ -166,7 +166,9 @@ def test_internal_error_in_a_batch_exits_3(tmp_path, monkeypatch):
     def bug(*a, **k):
         raise ZeroDivisionError("oops")
 
-    monkeypatch.setattr("topomap.core.segmentation.segment", bug)
+    from topomap.core.segmentation import METHODS
+
+    monkeypatch.setitem(METHODS, "topomap", bug)
     maps = [png(tmp_path, f"{s}.png", T.gray(T.two_rooms().array)) for s in "ab"]
     r = invoke("segment", *maps, "-o", tmp_path / "out")
     assert r.exit_code == 3

@@ -104,7 +104,9 @@ def test_internal_error_exit_3(tmp_path, monkeypatch):
     def bug(*a, **k):
         raise KeyError("oops")
 
-    monkeypatch.setattr("topomap.core.segmentation.segment", bug)
+    from topomap.core.segmentation import METHODS
+
+    monkeypatch.setitem(METHODS, "topomap", bug)
     r = invoke("segment", path, "-o", tmp_path / "out")
     assert r.exit_code == 3
     lines = stderr_lines(r)

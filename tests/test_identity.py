@@ -13,7 +13,8 @@ from topomap.io.export import load_graph, save_graph
 from topomap.core.identity import TrackedSegmentation, match_rooms
 from topomap.io import FREE, OCCUPIED, OccupancyGrid
 from topomap.planning import room_at
-from topomap.core.segmentation import Segmentation, segment
+from topomap.api import segment
+from topomap.core.segmentation import Segmentation
 
 RES = 0.05
 
@@ -121,7 +122,7 @@ def test_user_attributes_carry_over_through_a_saved_graph(tmp_path):
     G.nodes[3]["no_go"] = True
     path = save_graph(G, tmp_path / "rooms.graphml")
     new = seg_of(boxes((42, 42), [B, A]))  # C gone
-    out, ch = match_rooms(path, new)
+    out, ch = match_rooms(load_graph(path), new)
     H = out.room_graph
     assert H.nodes[2]["name"] == "kitchen" and "no_go" not in H.nodes[1]
     assert ch.vanished == (3,)

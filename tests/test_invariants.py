@@ -194,6 +194,15 @@ def test_rotation_keeps_room_count_within_one_on_bare_plans(a, t):
     assert abs(s1.n_rooms - s2.n_rooms) <= 1, (s1.n_rooms, s2.n_rooms)
 
 
+@pytest.mark.xfail(strict=True, reason="a bare plan whose room count changes by 2 when it is flipped upside "
+                                       "down (6 rooms, 4 flipped): the door decisions on the coarse skeleton grid "
+                                       "depend on where the grid's cells fall; found by the property test above")
+def test_rotation_known_case_flip_ud():
+    a = floor_plan(np.random.default_rng(1359799), furniture=False)
+    s1, s2 = run(a), run(TRANSFORMS["flip_ud"](a))
+    assert abs(s1.n_rooms - s2.n_rooms) <= 1, (s1.n_rooms, s2.n_rooms)
+
+
 # --------------------------------------------------------------------------
 # Rotation, flip and resolution: exact on the hand-drawn maps
 # --------------------------------------------------------------------------

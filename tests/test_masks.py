@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy import ndimage as ndi
 
-from topomap.core.segmentation import clutter_mask
+from topomap.core.masks import clutter_mask
 
 
 def _reference(free, max_extent_px, furniture_px, wall_thickness_px):
@@ -46,7 +46,7 @@ def test_clutter_mask_is_its_definition(seed):
 def test_clutter_mask_keep_and_shared_parts(seed):
     # with keep: the clutter components touching a kept cell are none; the parts made once
     # (the furniture stage asks with and without keep) give the same masks
-    from topomap.core.segmentation import clutter_parts
+    from topomap.core.masks import clutter_parts
 
     rng = np.random.default_rng(seed)
     free = np.ones((150, 170), bool)
@@ -72,7 +72,7 @@ def test_clutter_mask_keep_and_shared_parts(seed):
 @pytest.mark.parametrize("seed", range(4))
 def test_close_by_distance_is_the_closing(seed):
     from topomap.core.geometry import disk
-    from topomap.core.segmentation import _close_by_distance
+    from topomap.core.masks import _close_by_distance
 
     rng = np.random.default_rng(seed)
     free = rng.random((130, 170)) < rng.uniform(0.6, 0.97)
@@ -90,7 +90,7 @@ def test_free_mask_median_is_medianblur(resolution):
     from topomap.core.geometry import disk, metres_to_px
     from topomap.io import from_array
     from topomap.options import TopomapOptions
-    from topomap.core.segmentation import preprocess_masks
+    from topomap.core.masks import preprocess_masks
 
     rng = np.random.default_rng(int(resolution * 1000))
     free = ndi.binary_opening(rng.random((160, 190)) < 0.8)
@@ -108,7 +108,7 @@ def test_masks_without_clearance_are_the_same_masks():
     # segment_topomap computes the clearance itself (on a second thread): the masks must not change
     from topomap.io import from_array
     from topomap.options import TopomapOptions
-    from topomap.core.segmentation import preprocess_masks
+    from topomap.core.masks import preprocess_masks
 
     rng = np.random.default_rng(7)
     grid = from_array(ndi.binary_opening(rng.random((120, 150)) < 0.8), resolution=0.05)

@@ -27,7 +27,7 @@ _moved.install()  # the modules that moved keep their old import paths (topomap.
 
 _LAZY = {
     "load_map": "io.maps", "save_map": "io.maps", "from_array": "io.maps", "OccupancyGrid": "grid",
-    "segment": "core.segmentation", "Segmentation": "core.segmentation", "METHODS": "core.segmentation",
+    "segment": "api", "Segmentation": "core.segmentation", "METHODS": "core.segmentation",
     "DEFAULT_METHOD": "core.segmentation",
     "room_graph": "core.roomgraph",
     "TopomapError": "errors", "MapError": "errors", "MapFileError": "errors", "ParameterError": "errors",

@@ -155,7 +155,7 @@ def _warm_up(method) -> float:
     from .io.maps import from_array
     from .planning.paths import travel_graph
     from .io.plot import overlay_png
-    from .core.segmentation import segment
+    from .api import segment
 
     t0 = time.perf_counter()
     free = np.zeros((60, 100), bool)
@@ -188,7 +188,7 @@ def _segment_one(path, outdir, resolution, method, skeletons, topic=None, at=Non
     import time
 
     from . import io
-    from .core.segmentation import segment
+    from .api import segment
 
     # a --previous path goes to segment() as it is: its messages then name the file
     t0 = time.perf_counter()

@@ -44,7 +44,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import EditError, GraphFormatError, MapFileError, MapFileNotFoundError
-from .segmentation import Segmentation
+from .result import Segmentation, TrackedSegmentation
 
 log = logging.getLogger("topomap")
 
@@ -104,9 +104,7 @@ def _next_id(seg, ids) -> int:
 def _user_attributes(seg) -> dict:
     """``ID -> {name: value}``: the attributes of ``seg``'s rooms that topomap does not compute (names,
     no-go marks, merged IDs, a user's own), as :mod:`topomap.core.identity` carries them; copies."""
-    from .identity import _Previous
-
-    return {int(r): dict(a) for r, a in _Previous(seg).attrs.items()}
+    return seg.user_attributes()
 
 
 def merged_ids(value) -> list:
@@ -127,7 +125,6 @@ def merged_ids(value) -> list:
 def _result(seg, rooms, doors, next_id, attrs):
     """The TrackedSegmentation of room labels ``rooms`` (0 off the rooms; None: those of ``seg``),
     ``doors`` and user attributes ``attrs``; the fragments of ``seg`` follow the largest room ID."""
-    from .identity import TrackedSegmentation
 
     if rooms is None:
         labels = seg.labels
@@ -549,8 +546,9 @@ def keep_merges(previous, seg, *, min_overlap: float):
 
     Parameters
     ----------
-    previous : topomap.core.identity._Previous
-        The previous rooms (their attributes and a lookup by map-frame point).
+    previous : object
+        The previous rooms as :mod:`topomap.core.identity` reads them: ``attrs`` (ID -> user attributes),
+        ``rooms_at(x, y)`` (their IDs at map-frame points) and ``name``.
     seg : Segmentation
         The new segmentation (not changed).
     min_overlap : float

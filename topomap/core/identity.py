@@ -56,15 +56,16 @@ from __future__ import annotations
 import dataclasses
 import logging
 import time
-from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Optional
 
 import numpy as np
 import networkx as nx
 
 from ..errors import ParameterError
-from .segmentation import Segmentation
+from ..options import TopomapOptions, _check_fraction
+from .edit import keep_merges
+from .geometry import line_pixels, point_segment_distances
+from .result import MAX_ROOM_ID, ROOM_ATTRIBUTES, RoomChanges, Segmentation, TrackedSegmentation, check_room_ids
 
 log = logging.getLogger("topomap")
 
@@ -76,142 +77,20 @@ DEFAULT_MIN_OVERLAP = 0.5
 _MIN_SHARE = 0.1
 
 
-@dataclass(frozen=True)
-class RoomChanges:
-    """What happened to the rooms between a previous and a new segmentation.
-
-    Attributes
-    ----------
-    kept : tuple of int
-        IDs present in both (the new room took the previous room's ID).
-    new : tuple of int
-        IDs of new rooms that overlap no previous room significantly.
-    vanished : tuple of int
-        Previous IDs whose room overlaps no new room significantly.
-    split : dict
-        ``previous ID -> tuple of new IDs``: a previous room now covered by
-        two or more new rooms (its own ID, when kept, is among them).
-    merged : dict
-        ``new ID -> tuple of previous IDs``: a new room covering two or more
-        previous rooms (it keeps one of their IDs).
-    next_room_id : int
-        The ID the next new room will get (one more than every ID given so far).
-    """
-
-    kept: tuple = ()
-    new: tuple = ()
-    vanished: tuple = ()
-    split: dict = field(default_factory=dict)
-    merged: dict = field(default_factory=dict)
-    next_room_id: int = 1
-
-    def explains(self, old: int, new: int) -> bool:
-        """True when the record links previous room ``old`` to new room ``new``:
-        the same ID kept, a split of ``old`` into ``new``, or a merge of
-        ``old`` into ``new``."""
-        old, new = int(old), int(new)
-        if old == new:
-            return old in self.kept
-        return new in self.split.get(old, ()) or old in self.merged.get(new, ())
-
-    def as_dict(self) -> dict:
-        """Plain JSON-ready form (dict keys as strings)."""
-        return {"kept": list(self.kept), "new": list(self.new), "vanished": list(self.vanished),
-                "split": {str(k): list(v) for k, v in self.split.items()},
-                "merged": {str(k): list(v) for k, v in self.merged.items()},
-                "next_room_id": int(self.next_room_id)}
-
-    @classmethod
-    def from_dict(cls, d: dict) -> "RoomChanges":
-        """The record of :meth:`as_dict` (``changes.json``) back as a :class:`RoomChanges`."""
-        return cls(kept=tuple(d["kept"]), new=tuple(d["new"]), vanished=tuple(d["vanished"]),
-                   split={int(k): tuple(v) for k, v in d["split"].items()},
-                   merged={int(k): tuple(v) for k, v in d["merged"].items()},
-                   next_room_id=int(d["next_room_id"]))
-
-    def summary(self) -> str:
-        """One line, e.g. ``"9 kept, 1 new, 0 vanished, 1 split, 0 merged"``."""
-        return (f"{len(self.kept)} kept, {len(self.new)} new, {len(self.vanished)} vanished, "
-                f"{len(self.split)} split, {len(self.merged)} merged")
-
-
-@dataclass
-class TrackedSegmentation(Segmentation):
-    """A :class:`~topomap.core.segmentation.Segmentation` whose room IDs follow a
-    previous one (returned by :func:`match_rooms`).
-
-    Room IDs are the labels of ``labels`` and need not be contiguous;
-    fragments are the labels above the largest room ID.
-
-    Attributes
-    ----------
-    room_ids : tuple of int
-        The room IDs, ascending (the room graph's nodes).
-    next_room_id : int
-        The ID the next new room will get; saved as the room graph's graph
-        attribute ``next_room_id``.
-    changes : RoomChanges
-        What changed against the previous segmentation.
-    room_attributes : dict
-        ``ID -> {name: value}``: attributes a user had added to the previous
-        rooms (``name``, ...), put on the matched nodes of :attr:`room_graph`.
-    """
-
-    room_ids: tuple = ()
-    next_room_id: int = 1
-    changes: Optional[RoomChanges] = None
-    room_attributes: dict = field(default_factory=dict, repr=False)
-
-    @property
-    def n_rooms(self) -> int:
-        """Number of rooms (``len(room_ids)``)."""
-        return len(self.room_ids)
-
-    @property
-    def top_room_id(self) -> int:
-        """The largest room ID (0 without rooms): labels above it are fragments."""
-        return max(self.room_ids, default=0)
-
-    @property
-    def room_graph(self):
-        """The room–door graph, with ``next_room_id`` and the carried user attributes."""
-        if self._room_graph is None:
-            G = Segmentation.room_graph.fget(self)
-            G.graph["next_room_id"] = int(self.next_room_id)
-            for r, attrs in self.room_attributes.items():
-                if r in G:
-                    for k, v in attrs.items():
-                        G.nodes[r].setdefault(k, v)
-        return self._room_graph
-
-
 # --------------------------------------------------------------------------
 # The previous rooms
 # --------------------------------------------------------------------------
-
-def _computed_node_attributes():
-    from ..io.export import NODE_TYPES
-
-    return set(NODE_TYPES)
-
 
 class _Previous:
     """Room IDs, areas (m²), user attributes and ``next_room_id`` of a previous result,
     and a lookup of its room at map-frame points."""
 
-    def __init__(self, previous, within=None):
+    def __init__(self, previous, within=None, source=None):
         if isinstance(previous, _Previous):
             self.__dict__.update(previous.__dict__)
             return
         self.offset = (0, 0)  # (row, col) of the previous frame's cell self.labels[0, 0] is
-        path = None
-        if isinstance(previous, (str, Path)):
-            from ..io.export import load_graph
-
-            path = str(previous)
-            previous = load_graph(previous)
         self.name = "previous"
-        computed = _computed_node_attributes()
         if isinstance(previous, Segmentation):
             self.seg, self.G = previous, None
             self.name = previous.grid.name
@@ -222,22 +101,14 @@ class _Previous:
             ids = [int(i) for i in np.nonzero(cnt)[0] if i > 0]
             res2 = previous.grid.resolution ** 2
             self.area = {i: float(cnt[i]) * res2 for i in ids}
-            attrs = dict(getattr(previous, "room_attributes", {}))
-            if previous._room_graph is not None:  # names a user put on the built graph
-                for r, d in previous._room_graph.nodes(data=True):
-                    extra = {k: v for k, v in d.items() if k not in computed}
-                    if extra:
-                        attrs[int(r)] = {**attrs.get(int(r), {}), **extra}
-            self.attrs = attrs
+            self.attrs = previous.user_attributes()  # with the names a user put on the built graph
             nxt = getattr(previous, "next_room_id", None)
             self.doors = [(tuple(d.xy1), tuple(d.xy2)) for d in previous.doors]
             self.free = previous.grid.free
         elif isinstance(previous, nx.Graph):
-            from ..io.export import check_room_ids
-
             self.seg, self.G = None, previous
             self.name = str(previous.graph.get("map", "previous room graph"))
-            self.where = path or f"previous room graph {self.name}"  # what messages name: the file, if any
+            self.where = source or f"previous room graph {self.name}"  # what messages name: the file, if any
             check_room_ids(previous, self.where)
             ids, self.area, self.attrs = [], {}, {}
             for r, d in previous.nodes(data=True):
@@ -251,7 +122,7 @@ class _Previous:
                                          "(build it with topomap.room_graph or load a file topomap segment wrote)")
                 ids.append(r)
                 self.area[r] = float(d.get("area", poly.area))
-                extra = {k: v for k, v in d.items() if k not in computed}
+                extra = {k: v for k, v in d.items() if k not in ROOM_ATTRIBUTES}
                 if extra:
                     self.attrs[r] = extra
             nxt = previous.graph.get("next_room_id")
@@ -259,16 +130,14 @@ class _Previous:
             self.doors = _graph_doors(previous)
             self.free = self.labels > 0  # a room graph knows its rooms' cells, not the map
         else:
-            raise ParameterError("previous must be a Segmentation, a room graph or the path of a saved room "
-                                 f"graph, got {type(previous).__name__}")
+            raise ParameterError("previous must be a Segmentation or a room graph (a saved one: "
+                                 f"topomap.io.export.load_graph), got {type(previous).__name__}")
         self.ids = sorted(ids)
         top = max(self.ids, default=0) + 1
         try:
             self.next_id = max(int(nxt), top) if nxt not in (None, "") else top
         except (TypeError, ValueError):
             raise ParameterError(f"{self.where}: next_room_id {nxt!r} is not an integer") from None
-        from ..io.export import MAX_ROOM_ID
-
         if self.ids and (self.ids[0] < 1 or self.ids[-1] > MAX_ROOM_ID) or not 1 <= self.next_id <= MAX_ROOM_ID + 1:
             raise ParameterError(f"{self.where}: room IDs {self.ids[0] if self.ids else '-'}.."
                                  f"{self.ids[-1] if self.ids else '-'} and next_room_id {self.next_id} must lie "
@@ -354,11 +223,10 @@ def match_rooms(previous, seg: Segmentation, *, min_overlap: float = DEFAULT_MIN
 
     Parameters
     ----------
-    previous : Segmentation or networkx.MultiGraph or str or os.PathLike
-        The earlier result: a segmentation, its room graph (rooms need
+    previous : Segmentation or networkx.MultiGraph
+        The earlier result: a segmentation or its room graph (rooms need
         their ``polygon``; a graph loaded from a file ``topomap segment``
-        wrote has them), or the path of such a file (GraphML, JSON or
-        GeoJSON).
+        wrote, :func:`topomap.io.export.load_graph`, has them).
     seg : Segmentation
         The new segmentation (not modified).
     min_overlap : float
@@ -385,20 +253,14 @@ def match_rooms(previous, seg: Segmentation, *, min_overlap: float = DEFAULT_MIN
         ``previous`` is not a segmentation or room graph, a previous room
         has no polygon, ``min_overlap`` is not in (0, 1] or ``min_room_area``
         is not an area > 0.
-    GraphFormatError, MapFileError
-        ``previous`` is a file that cannot be loaded.
     """
     from scipy.optimize import linear_sum_assignment
-
-    from ..options import _check_fraction
 
     t0 = time.perf_counter()
     if _check_fraction("min_overlap", min_overlap) == 0:
         raise ParameterError(f"min_overlap must be a share in (0, 1], got {min_overlap!r}")
     min_overlap = float(min_overlap)
     if min_room_area is None:
-        from ..options import TopomapOptions
-
         opts = seg.options if isinstance(seg.options, TopomapOptions) else TopomapOptions()
         min_room_area = opts.min_room_area
     if not (isinstance(min_room_area, (int, float)) and np.isfinite(min_room_area) and min_room_area > 0):
@@ -407,8 +269,6 @@ def match_rooms(previous, seg: Segmentation, *, min_overlap: float = DEFAULT_MIN
         raise ParameterError(f"match_rooms() needs a Segmentation, got {type(seg).__name__}")
     prev = _Previous(previous, within=seg.grid)
     if any("merged" in a for a in prev.attrs.values()):  # rooms a user merged stay merged (topomap.core.edit)
-        from .edit import keep_merges
-
         seg = keep_merges(prev, seg, min_overlap=min_overlap)
     grid = seg.grid
     res2 = grid.resolution ** 2
@@ -543,7 +403,7 @@ class DoorPrior:
 
     Parameters
     ----------
-    previous : Segmentation or networkx.MultiGraph or str or os.PathLike
+    previous : Segmentation or networkx.MultiGraph
         As for :func:`match_rooms`. From a room graph, doors are its edges'
         end points and the previous free space is its rooms' cells.
     within : OccupancyGrid, optional
@@ -551,10 +411,12 @@ class DoorPrior:
         where it overlaps it (a window of at most
         :data:`PREVIOUS_WINDOW_RATIO` times its cells), so the cost follows
         this map's size, not the frame the graph claims.
+    source : str, optional
+        The file ``previous`` was read from, named by the messages about it.
     """
 
-    def __init__(self, previous, *, within=None):
-        self.previous = _Previous(previous, within)
+    def __init__(self, previous, *, within=None, source=None):
+        self.previous = _Previous(previous, within, source)
         d = np.asarray(self.previous.doors, float).reshape(-1, 2, 2)
         self.xy1, self.xy2 = d[:, 0], d[:, 1]
 
@@ -582,8 +444,6 @@ class DoorPrior:
             ``segments`` without the dropped new cuts, then the previous
             doors cut again (those still a passage that no new cut closes).
         """
-        from .geometry import line_pixels
-
         res = grid.resolution
         K = self.xy1.shape[0]
         r1, c1 = grid.world_to_pixel(self.xy1[:, 0], self.xy1[:, 1])
@@ -650,8 +510,6 @@ def _same_doors(A, B, P, Q, tol_px: float) -> np.ndarray:
     doorway) closes another opening, and the previous door is then still
     to be cut.
     """
-    from .geometry import point_segment_distances
-
     if not (len(A) and len(P)):
         return np.zeros((len(A), len(P)), bool)
     mn, mp = (A + B) / 2, (P + Q) / 2

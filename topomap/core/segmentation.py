@@ -24,478 +24,67 @@ from __future__ import annotations
 
 import logging
 import time
-from contextlib import contextmanager
-from dataclasses import dataclass, field
-from typing import Optional
 
 import numpy as np
 
+from .._fast import Beside, edt
 from ..errors import ParameterError
-from .geometry import disk, metres_to_px, true_bbox
-from ..io.maps import FREE, OCCUPIED, OccupancyGrid
+from ..grid import OccupancyGrid
 from ..options import PaperOptions, TopomapOptions, check_keywords, options_from_kwargs
+from . import baselines
+from .masks import clutter_mask, clutter_parts, close_wall_gaps, preprocess_masks, solid_components, without_clutter
+from .doors import (
+    across_corridor,
+    find_bottlenecks,
+    intersection_points,
+    judge_doors,
+    occupied_skeleton_lines,
+    opening_candidates,
+    passage_candidates,
+    seen_posts,
+    select_doors,
+    suppress_duplicates,
+    wall_threshold,
+)
+from .outside import (
+    drop_outside,
+    enclosure,
+    outside_regions,
+)
+from .skeleton import (
+    downsample,
+    graph_endpoints,
+    graph_from_topology,
+    graph_pixels,
+    prune_spurs,
+    skeleton_graph,
+    skeleton_topology,
+    skeletonize,
+)
+from .walls import (
+    WallIndex,
+    across_walls_many,
+    furniture_rows,
+    long_wall_gaps,
+    long_walls,
+    partition_gaps,
+    scale_walls,
+    straight_lines,
+    straight_share,
+    wall_faces,
+    wall_lines,
+    wall_mask,
+    wall_openings,
+)
+from .geometry import disk, metres_to_px, true_bbox
+from .identity import DoorPrior, match_rooms
+from .result import Intermediates, Segmentation, StageTimer, paste
 from .rooms import cut_rooms, doors_between_rooms
 
 log = logging.getLogger("topomap")
 
 __all__ = ["Segmentation", "Intermediates", "segment", "segment_paper", "segment_topomap", "METHODS",
            "DEFAULT_METHOD", "cut_rooms", "doors_between_rooms"]
-
-
-@dataclass
-class Intermediates:
-    """Images a Voronoi method computed on the way, in the map's pixels.
-
-    Kept on :attr:`Segmentation.intermediates` so that a user (or the
-    pictures of the "How it works" page) can see what the skeletons were
-    taken from without re-running any stage.
-
-    Attributes
-    ----------
-    free_mask : (M, N) ndarray of bool
-        Free space after erosion and median filter: the free-space skeleton
-        was taken from it (on the coarse skeleton grid for ``"topomap"``).
-    occupied_mask : (M, N) ndarray of bool
-        Occupied space restricted to the wall band and dilated: the
-        occupied-space skeleton was taken from it.
-    clearance : (M, N) ndarray of float
-        Distance (pixels) of every free cell to the nearest non-free cell:
-        the ``radius`` along the free-space skeleton graph.
-    occupied_clearance : (M, N) ndarray of float
-        Distance (pixels) of every cell of ``occupied_mask`` to free space:
-        its mean over the occupied-skeleton pixels, doubled, is the
-        threshold.
-    clutter : (M, N) ndarray of bool or None
-        ``"topomap"``: the free-standing obstacle cells looked through while
-        doors are searched (``min_wall_length``); None when that is off or
-        for ``"paper"``.
-    skeleton_factor : int
-        Map cells per side of one cell of the grid the skeletons were taken
-        on (1 = the map's own grid).
-    closed_gaps : (M, N) ndarray of bool or None
-        ``"topomap"``: the free cells of the gaps narrower than ``wall_gap``
-        that were closed before doors were searched and rooms cut.
-    wall_lines : (K, 4) ndarray of float or None
-        ``"topomap"``: the straight wall faces ``(r1, c1, r2, c2)`` (pixels)
-        found on the map (:func:`topomap.core.walls.straight_lines`).
-    straight_share : float or None
-        ``"topomap"``: the share of wall-face cells on the map's Hough lines
-        (:func:`topomap.core.walls.wall_lines`, :func:`topomap.core.walls.straight_share`),
-        which decides the ``rise`` the method ran with.
-
-    Notes
-    -----
-    For ``"topomap"`` the masks and clearances are those of the map with the
-    clutter made free (the map doors are searched in). The default method
-    works on the bounding box of the free space; its images are placed on
-    the whole map when first read.
-    """
-
-    free_mask: np.ndarray
-    occupied_mask: np.ndarray
-    clearance: np.ndarray
-    occupied_clearance: np.ndarray
-    clutter: Optional[np.ndarray] = None
-    skeleton_factor: int = 1
-    closed_gaps: Optional[np.ndarray] = None
-    wall_lines: Optional[np.ndarray] = None
-    straight_share: Optional[float] = None
-
-    #: The images that :func:`uncrop` places back on the whole map.
-    IMAGES = ("free_mask", "occupied_mask", "clearance", "occupied_clearance", "clutter", "closed_gaps")
-
-    def _place_later(self, shape, box) -> None:
-        """Hold the images as crops ``box`` of a map of ``shape``: each is
-        placed on the whole map when first read (most jobs never read them)."""
-        self.__dict__["_crops"] = {n: self.__dict__.pop(n) for n in self.IMAGES}
-        self.__dict__["_box"] = (shape, box)
-
-    def __getattr__(self, name):
-        crops = self.__dict__.get("_crops")
-        if crops is None or name not in crops:
-            raise AttributeError(name)
-        shape, box = self.__dict__["_box"]
-        value = _paste(crops.pop(name), shape, box)
-        self.__dict__[name] = value
-        return value
-
-
-@dataclass
-class Segmentation:
-    """The result of a segmentation.
-
-    Attributes
-    ----------
-    grid : OccupancyGrid
-        The input map.
-    labels : (M, N) ndarray of int32
-        Label per cell, on every free cell, ``0`` elsewhere: rooms are
-        ``1..n_rooms``; the labels after them (``n_rooms + 1 ..``) are
-        fragments, free regions too small to be a room (scan specks, rays
-        through walls) and, last, the regions outside the building
-        (:attr:`outside`), which are not in the room graph.
-    doors : list of Door
-        Doors between two different rooms (see :class:`topomap.core.doors.Door`).
-    method : str
-        Name of the method that produced the result.
-    params : dict
-        The complete record of the options that ran (metres where they are
-        lengths): ``dataclasses.asdict(options)`` for the Voronoi methods,
-        the keyword options given for the baselines.
-    threshold : float or None
-        The map's own door threshold (metres), for the Voronoi methods.
-    free_graph, occupied_graph : networkx.MultiGraph or None
-        Skeleton graphs of free and occupied space (pixel paths, metres).
-    candidates : list of Candidate
-        Every narrow-passage candidate with the reason it was kept or not
-        (``status``, one of :data:`topomap.core.doors.STATUSES`).
-    timings : dict
-        Seconds per pipeline stage.
-    options : TopomapOptions or PaperOptions or None
-        The options object that ran (Voronoi methods; defaults that depend
-        on the map filled in).
-    intermediates : Intermediates or None
-        Masks and clearance images the Voronoi methods computed (see
-        :class:`Intermediates`).
-    room_count : int or None
-        Number of rooms when fragments follow them in ``labels`` (see
-        :attr:`n_rooms`); None: every label is a room.
-    outside : tuple of int
-        The labels (after the rooms, among the fragments' labels) of the
-        regions *outside* the building: free space a laser saw beyond the
-        facade, through a window or an open outer door
-        (``TopomapOptions.outside_enclosure``). Neither rooms nor in the
-        room graph; :attr:`outside_area` is their area.
-    """
-
-    grid: OccupancyGrid
-    labels: np.ndarray
-    doors: list
-    method: str
-    params: dict = field(default_factory=dict)
-    threshold: Optional[float] = None
-    free_graph: object = None
-    occupied_graph: object = None
-    candidates: list = field(default_factory=list)
-    timings: dict = field(default_factory=dict)
-    options: object = None
-    intermediates: Optional[Intermediates] = field(default=None, repr=False)
-    room_count: Optional[int] = None
-    outside: tuple = ()
-    _room_graph: object = field(default=None, repr=False)
-
-    @property
-    def n_rooms(self) -> int:
-        """Number of rooms: the labels ``1..n_rooms`` (the room graph's nodes)."""
-        if self.room_count is not None:
-            return int(self.room_count)
-        return int(self.labels.max()) if self.labels.size else 0
-
-    @property
-    def top_room_id(self) -> int:
-        """The largest room label (``n_rooms``; 0 without rooms): labels above it are fragments."""
-        return self.n_rooms
-
-    @property
-    def n_fragments(self) -> int:
-        """Number of fragments: the labels above :attr:`top_room_id` (free
-        regions too small to be a room, see ``TopomapOptions.min_room_area``,
-        and the regions outside the building, :attr:`outside`)."""
-        top = int(self.labels.max()) if self.labels.size else 0
-        return max(top - self.top_room_id, 0)
-
-    @property
-    def room_labels(self) -> np.ndarray:
-        """``labels`` with the fragments set to 0: rooms only."""
-        if self.n_fragments == 0:
-            return self.labels
-        return np.where(self.labels <= self.top_room_id, self.labels, 0)
-
-    @property
-    def fragment_area(self) -> float:
-        """Total area of the fragments, m²."""
-        return float((self.labels > self.top_room_id).sum()) * self.grid.resolution ** 2
-
-    @property
-    def outside_area(self) -> float:
-        """Total area of the regions outside the building (:attr:`outside`), m²."""
-        if not self.outside:
-            return 0.0
-        return float(np.isin(self.labels, self.outside).sum()) * self.grid.resolution ** 2
-
-    @property
-    def room_graph(self):
-        """The room–door graph (:func:`topomap.core.roomgraph.room_graph`), built once."""
-        if self._room_graph is None:
-            from .roomgraph import room_graph
-
-            t = time.perf_counter()
-            self._room_graph = room_graph(self)
-            self.timings["room_graph"] = time.perf_counter() - t
-        return self._room_graph
-
-    def room_at(self, x: float, y: float) -> int:
-        """Room label at map-frame point ``(x, y)`` metres (0 = not in a room)."""
-        r, c = self.grid.world_to_pixel(x, y)
-        r, c = int(np.rint(r)), int(np.rint(c))
-        if 0 <= r < self.labels.shape[0] and 0 <= c < self.labels.shape[1]:
-            return int(self.labels[r, c])
-        return 0
-
-
-class _Timer:
-    def __init__(self):
-        self.t = {}
-
-    @contextmanager
-    def __call__(self, name):
-        t0 = time.perf_counter()
-        try:
-            yield
-        finally:
-            self.t[name] = self.t.get(name, 0.0) + time.perf_counter() - t0
-
-
-# --------------------------------------------------------------------------
-# Stage "masks": preprocessed free and occupied space
-# --------------------------------------------------------------------------
-
-def preprocess_masks(grid: OccupancyGrid, opts, *, occupied=None, clearance: bool = True):
-    """Stage "masks": the free mask, clearance and occupied mask the skeletons are taken from.
-
-    Free space is eroded with a disk of ``opts.erosion_radius`` and
-    median-filtered (``opts.median_size``); occupied space (``occupied``,
-    default every non-free cell) is restricted to the band within
-    ``opts.wall_band`` of free space and dilated with a square of
-    ``opts.dilation_size``.
-
-    Parameters
-    ----------
-    grid : OccupancyGrid
-    opts : TopomapOptions or PaperOptions
-    occupied : (M, N) ndarray of bool, optional
-        The cells occupied space is made of (the paper: ``grid.occupied``).
-    clearance : bool
-        Whether to compute the clearance (False: None is returned in its
-        place, for a caller that computes ``edt(grid.free)`` itself).
-
-    Returns
-    -------
-    free_mask : (M, N) ndarray of bool
-    clearance : (M, N) ndarray of float32 or None
-        Distance (px) of every free cell to the nearest non-free cell (of
-        the map before preprocessing).
-    occupied_mask : (M, N) ndarray of bool
-    """
-    import cv2
-
-    from .._fast import edt
-
-    res = grid.resolution
-    er = metres_to_px(opts.erosion_radius, res)
-    med = metres_to_px(opts.median_size, res)
-    dil = metres_to_px(opts.dilation_size, res)
-    band = metres_to_px(opts.wall_band, res, 1)
-    free = grid.free
-    f = free.view(np.uint8)
-    if er > 0:
-        f = cv2.erode(f, disk(er), borderType=cv2.BORDER_CONSTANT, borderValue=0)
-    if med >= 3:
-        k = med if med % 2 else med + 1
-        if k <= 5:
-            f = cv2.medianBlur(f, k).view(bool)  # the median of 0 / 1 values is 0 / 1
-        else:  # the same (a majority of the k x k cells, edges replicated), in time independent of k
-            f = cv2.boxFilter(f, cv2.CV_16U, (k, k), normalize=False, borderType=cv2.BORDER_REPLICATE) > k * k // 2
-    else:
-        f = f.astype(bool)
-    d_free = edt(free) if clearance else None
-    solid = ~free
-    dist_out = edt(solid, exact=False)  # only compared with the band width
-    occ = (solid if occupied is None else occupied & solid) & (dist_out <= band)
-    if dil > 1:
-        occ = cv2.dilate(occ.view(np.uint8), np.ones((dil, dil), np.uint8)).view(bool)  # 0 / 1
-    return f, d_free, occ
-
-
-def furniture_keep(grid: OccupancyGrid, looked: OccupancyGrid, clutter, opts, *, parts=None,
-                   rows: bool = True) -> np.ndarray:
-    """Stage "furniture": the cells of bulky furniture that are not looked through.
-
-    They are the cells of the long walls of ``looked`` (``grid`` with its
-    small clutter, ``clutter``, looked through). With ``rows`` (a scanned
-    map) the long walls are chained from Hough lines only, and those at
-    least half of whose cells are bulky furniture in two or more separate
-    pieces — a row of desks or round tables
-    (:func:`topomap.core.walls.furniture_rows`) — keep none of it. On a drawn
-    plan (``rows=False``) such a row stays a wall, as a plan draws a
-    partition of solid blocks, and the long walls are chained from the runs
-    of wall faces (:func:`topomap.core.walls.straight_lines`), which find the
-    row in every orientation of the map. ``parts``: :func:`clutter_parts`
-    of ``grid.free`` with the furniture size, when already made.
-
-    Returns
-    -------
-    (M, N) ndarray of bool
-    """
-    from . import walls as W
-
-    res = grid.resolution
-    wk = _Walls(looked, opts, runs=not rows)
-    if not rows:
-        return wk.mask(looked.free.shape)
-    every = clutter_mask(grid.free, opts.min_wall_length / res, furniture_px=opts.furniture_size / res,
-                         wall_thickness_px=opts.wall_thickness / res, parts=parts)
-    bulky = every if clutter is None else every & ~clutter
-    rows = W.furniture_rows(W.scale_walls(wk.lw, wk.k), ~looked.free, bulky, band_px=opts.wall_wander / res)
-    return wk.mask(looked.free.shape, keep=~rows)
-
-
-def close_wall_gaps(grid: OccupancyGrid, wall_gap: float):
-    """Stage "masks": the map with gaps between obstacles narrower than
-    ``wall_gap`` (m) closed (a morphological closing of the non-free cells
-    with a disk of that diameter): scan gaps in walls, and the gap between a
-    cupboard and the wall behind it, neither make a door nor join two rooms.
-
-    Returns
-    -------
-    grid : OccupancyGrid
-        ``grid`` itself when nothing was closed (or ``wall_gap`` is 0).
-    closed : (M, N) ndarray of bool or None
-        The free cells that were closed (None when ``wall_gap`` is 0).
-    """
-    import cv2
-
-    r = metres_to_px(wall_gap / 2, grid.resolution)
-    if r <= 0:
-        return grid, None
-    free = grid.free
-    if r < _CLOSE_BY_DISTANCE:
-        shut = cv2.morphologyEx(np.logical_not(free).view(np.uint8), cv2.MORPH_CLOSE, disk(r),
-                                borderType=cv2.BORDER_CONSTANT, borderValue=0).view(bool)  # 0 / 1
-    else:
-        shut = _close_by_distance(free, r)
-    closed = shut & free
-    if closed.any():
-        grid = OccupancyGrid(np.where(closed, np.int8(OCCUPIED), grid.cells), grid.resolution,
-                             grid.origin, grid.source)
-    return grid, closed
-
-
-#: Disk radius (cells) from which :func:`close_wall_gaps` closes with two exact distance transforms
-#: (time linear in the map's area) instead of OpenCV's closing (time growing with the radius too).
-_CLOSE_BY_DISTANCE = 12
-
-
-def _close_by_distance(free: np.ndarray, r: int) -> np.ndarray:
-    """The closing of the non-free cells with ``disk(r)`` (nothing outside the image), exactly:
-    dilated = within ``r`` of a non-free cell, then eroded = farther than ``r`` from every cell
-    not dilated or outside the image (exact Euclidean distances: ``d <= r`` iff ``d**2 <= r**2``)."""
-    import cv2
-
-    from .._fast import edt
-
-    if free.all():
-        return np.zeros(free.shape, bool)
-    grown = edt(free) <= r
-    pad = cv2.copyMakeBorder(grown.view(np.uint8), r + 1, r + 1, r + 1, r + 1, cv2.BORDER_CONSTANT, value=0)
-    return edt(pad)[r + 1:-(r + 1), r + 1:-(r + 1)] > r
-
-
-def solid_components(free: np.ndarray):
-    """The 8-connected components of the non-free cells: ``(solid, comp, stats)``, the non-free
-    cells (uint8 0/1), their labels (0: the free cells) and OpenCV's statistics per label."""
-    from .._fast import label_stats
-
-    solid = np.logical_not(free).view(np.uint8)
-    _, comp, stats, _ = label_stats(solid, connectivity=8)
-    return solid, comp, stats
-
-
-def clutter_parts(free: np.ndarray, max_extent_px: float, *, furniture_px: float = 0.0,
-                  wall_thickness_px: float = np.inf, components=None):
-    """The 8-connected components of the non-free cells and which of them are
-    free-standing clutter (:func:`clutter_mask` before ``keep``).
-    ``components``: :func:`solid_components` of ``free``, when already made.
-
-    Returns
-    -------
-    comp : (M, N) ndarray of uint16 or int32
-        Component labels (0: the free cells).
-    clutter : (n + 1,) ndarray of bool
-        Per component: less than ``max_extent_px`` across, or less than
-        ``furniture_px`` across and thicker than ``wall_thickness_px``.
-    """
-    import cv2
-
-    solid, comp, stats = components if components is not None else solid_components(free)
-    extent = np.maximum(stats[:, cv2.CC_STAT_WIDTH], stats[:, cv2.CC_STAT_HEIGHT])
-    small = extent < max_extent_px
-    bulky = (extent < furniture_px) & ~small
-    bulky[0] = False
-    H, W = free.shape
-    for i in np.flatnonzero(bulky):
-        # the largest inscribed radius: the distance transform on the component's box grown by one cell
-        # (every cell beside the component is free, so its distances are those of the whole map's)
-        c0, r0, w, h = (int(v) for v in stats[i, :4])
-        r0, c0, r1, c1 = max(r0 - 1, 0), max(c0 - 1, 0), min(r0 + h + 1, H), min(c0 + w + 1, W)
-        inside = cv2.distanceTransform(np.ascontiguousarray(solid[r0:r1, c0:c1]), cv2.DIST_L2, 3)
-        small[i] = 2 * float(inside[comp[r0:r1, c0:c1] == i].max()) >= wall_thickness_px
-    small[0] = False  # label 0: the free cells themselves
-    return comp, small
-
-
-def clutter_mask(free: np.ndarray, max_extent_px: float, *, furniture_px: float = 0.0,
-                 wall_thickness_px: float = np.inf, keep=None, parts=None) -> np.ndarray:
-    """Obstacle cells of free-standing clutter (8-connected components of the
-    non-free cells): components less than ``max_extent_px`` across (bounding
-    box) — chairs, plants, small tables, pillars — and components less than
-    ``furniture_px`` across that are thicker than ``wall_thickness_px``
-    (twice their largest inscribed radius) — desks, cupboards, tables with
-    their chairs: no free-standing piece of wall is that thick — unless
-    it touches a cell of ``keep`` (a long wall runs along it).
-
-    ``parts``: :func:`clutter_parts` of the same arguments, when already
-    made (the furniture stage asks twice, with and without ``keep``)."""
-    from .._fast import lookup
-
-    comp, clutter = parts if parts is not None else clutter_parts(
-        free, max_extent_px, furniture_px=furniture_px, wall_thickness_px=wall_thickness_px)
-    if keep is not None:
-        clutter = clutter.copy()
-        clutter[np.unique(comp[keep])] = False
-    return lookup(clutter.view(np.uint8), comp).view(bool)
-
-
-def without_clutter(grid: OccupancyGrid, min_wall_length: float, *, furniture_size: float = 0.0,
-                    wall_thickness: float = np.inf, keep=None, parts=None, also=None):
-    """The map doors are searched in: free-standing clutter smaller than a
-    wall piece (``min_wall_length`` m across, 0 = none), and bulky furniture
-    (less than ``furniture_size`` m across, thicker than ``wall_thickness``
-    m, touching no cell of ``keep``; see :func:`clutter_mask`), made free.
-    ``parts``: :func:`clutter_parts` of ``grid.free`` with these sizes, when
-    already made. ``also``: cells looked through in any case (bool, the
-    map's shape), whatever ``keep`` says.
-
-    Returns
-    -------
-    grid : OccupancyGrid
-        ``grid`` itself when there is no clutter.
-    clutter : (M, N) ndarray of bool or None
-        The clutter cells (None when ``min_wall_length`` is 0).
-    """
-    if min_wall_length <= 0:
-        return grid, None
-    # doors are in walls: free-standing clutter smaller than a wall piece
-    # is looked through while doors are searched (rooms still use the map)
-    res = grid.resolution
-    clutter = clutter_mask(grid.free, min_wall_length / res, furniture_px=furniture_size / res,
-                           wall_thickness_px=wall_thickness / res, keep=keep, parts=parts)
-    if also is not None:
-        clutter |= also
-    if clutter.any():
-        grid = OccupancyGrid(np.where(clutter, np.int8(FREE), grid.cells), grid.resolution,
-                             grid.origin, grid.source)
-    return grid, clutter
 
 
 # --------------------------------------------------------------------------
@@ -514,12 +103,10 @@ def coarse_skeletons(free_mask: np.ndarray, occupied_mask: np.ndarray, factor: i
     A coarse free cell is free only if every map cell in it is (a one-cell
     wall survives), a coarse occupied cell is occupied if any is.
     """
-    from . import skeleton as S
-    from .._fast import Beside
 
     # the two thinnings run in compiled code without Python's lock: free space's on a second core
-    fs = Beside(lambda: S.skeletonize(S.downsample(free_mask, factor, keep="all")))
-    os_ = S.skeletonize(S.downsample(occupied_mask, factor, keep="any"))
+    fs = Beside(lambda: skeletonize(downsample(free_mask, factor, keep="all")))
+    os_ = skeletonize(downsample(occupied_mask, factor, keep="any"))
     return fs.result(), os_
 
 
@@ -532,9 +119,8 @@ def coarse_skeleton_graph(skel: np.ndarray, factor: int, radius: np.ndarray, gri
     and lengths use the map's resolution: the topology comes from the coarse
     skeleton, clearances and lengths from the map.
     """
-    from . import skeleton as S
 
-    topo = S.skeleton_topology(skel)
+    topo = skeleton_topology(skel)
     factor = max(int(factor), 1)
     if factor > 1 and topo.n_nodes:
         fh, fw = radius.shape
@@ -547,7 +133,7 @@ def coarse_skeleton_graph(skel: np.ndarray, factor: int, radius: np.ndarray, gri
             first = np.cumsum([0] + [len(p) for _, _, p in topo.edges]).tolist()
             moved = np.minimum(np.concatenate([p for _, _, p in topo.edges]) * factor + off, lim)
             topo.edges = [(u, v, moved[a:b]) for (u, v, _), a, b in zip(topo.edges, first[:-1], first[1:])]
-    return S.graph_from_topology(topo, radius=radius, resolution=grid.resolution, to_world=grid.pixel_to_world)
+    return graph_from_topology(topo, radius=radius, resolution=grid.resolution, to_world=grid.pixel_to_world)
 
 
 def topomap_graphs(fs, os_, factor, d_free, occupied_mask, grid, min_occupied_branch):
@@ -555,13 +141,11 @@ def topomap_graphs(fs, os_, factor, d_free, occupied_mask, grid, min_occupied_br
     occupied skeleton graphs on the map's cells, and the occupied clearance
     (px, distance of each occupied-mask cell to the mask's edge) the
     threshold is measured on."""
-    from . import skeleton as S
-    from .._fast import edt
 
     d_occ = edt(occupied_mask, exact=False)  # only averaged into the wall threshold
     Gf = coarse_skeleton_graph(fs, factor, d_free, grid)
     Go = coarse_skeleton_graph(os_, factor, d_occ, grid)
-    Go = S.prune_spurs(Go, min_occupied_branch, copy=False)
+    Go = prune_spurs(Go, min_occupied_branch, copy=False)
     return Gf, Go, d_occ
 
 
@@ -601,15 +185,6 @@ def crop_grid(grid: OccupancyGrid, box) -> OccupancyGrid:
     return OccupancyGrid(grid.cells[r0:r1, c0:c1], grid.resolution, origin, grid.source, gray)
 
 
-def _paste(a, shape, box):
-    """``a`` (a crop ``box`` of an image) placed on zeros of ``shape``."""
-    if a is None:
-        return None
-    r0, r1, c0, c1 = box
-    out = np.zeros(shape, a.dtype)
-    out[r0:r1, c0:c1] = a
-    return out
-
 
 def uncrop(seg: Segmentation, full: OccupancyGrid, box) -> Segmentation:
     """Move a segmentation of ``crop_grid(full, box)`` back onto ``full``:
@@ -617,7 +192,7 @@ def uncrop(seg: Segmentation, full: OccupancyGrid, box) -> Segmentation:
     shifted (world coordinates are unchanged)."""
     r0, r1, c0, c1 = box
     off = np.array([r0, c0], float)
-    labels = _paste(seg.labels, full.shape, box)
+    labels = paste(seg.labels, full.shape, box)
     for d in seg.doors:
         d.p1 = (d.p1[0] + r0, d.p1[1] + c0)
         d.p2 = (d.p2[0] + r0, d.p2[1] + c0)
@@ -681,30 +256,27 @@ def segment_paper(grid: OccupancyGrid, options: PaperOptions | None = None, **kw
     ParameterError
         An unknown option or an invalid value.
     """
-    from . import doors as D
-    from . import skeleton as S
-    from .._fast import edt
 
     opts = options_from_kwargs(PaperOptions, "paper", options, kwargs).resolved(grid.resolution)
     res = grid.resolution
-    T = _Timer()
+    T = StageTimer()
     with T("preprocess"):
         # the paper: occupied space is the occupied cells (unknown ones are not)
         f, d_free, occ = preprocess_masks(grid, opts, occupied=grid.occupied)
     with T("skeletons"):
-        fs = S.skeletonize(f)
-        os_ = S.skeletonize(occ)
+        fs = skeletonize(f)
+        os_ = skeletonize(occ)
     with T("graphs"):
-        Gf = S.prune_spurs(S.skeleton_graph(fs, radius=d_free, resolution=res, to_world=grid.pixel_to_world),
+        Gf = prune_spurs(skeleton_graph(fs, radius=d_free, resolution=res, to_world=grid.pixel_to_world),
                            opts.min_free_branch)
         d_occ = edt(occ)
-        Go = S.prune_spurs(S.skeleton_graph(os_, radius=d_occ, resolution=res, to_world=grid.pixel_to_world),
+        Go = prune_spurs(skeleton_graph(os_, radius=d_occ, resolution=res, to_world=grid.pixel_to_world),
                            opts.min_occupied_branch)
     with T("doors"):
-        thr_px = D.wall_threshold(d_occ, S.graph_pixels(Go))
-        cands = D.passage_candidates(Gf, min_branch_px=opts.min_free_branch / res)
-        D.intersection_points(cands, ~grid.free, max_px=opts.max_door_search / res)
-        kept = D.select_doors(cands, S.graph_endpoints(Go), thr_px, D.occupied_skeleton_lines(Go))
+        thr_px = wall_threshold(d_occ, graph_pixels(Go))
+        cands = passage_candidates(Gf, min_branch_px=opts.min_free_branch / res)
+        intersection_points(cands, ~grid.free, max_px=opts.max_door_search / res)
+        kept = select_doors(cands, graph_endpoints(Go), thr_px, occupied_skeleton_lines(Go))
         segs = [(c.ip1, c.ip2) for c in kept]
     with T("rooms"):
         labels, door_objs, _ = cut_rooms(grid, segs)
@@ -726,12 +298,11 @@ def _near_hits(search: OccupancyGrid, occupied: np.ndarray, radius_px: float, *,
     ``search``, when the caller has them."""
     import cv2
 
-    from . import walls as W
 
     r = max(int(np.floor(radius_px + 1e-9)), 0)
     near = cv2.dilate(occupied.view(np.uint8), disk(r)).view(bool) if r else occupied
     if faces is None:
-        faces = W.wall_faces(~search.free, search.free)
+        faces = wall_faces(~search.free, search.free)
     n = int(faces.sum())
     return near if n > 0 and int((faces & near).sum()) >= 0.5 * n else None
 
@@ -751,27 +322,24 @@ class _Walls:
     from them; without, both are from the Hough lines only."""
 
     def __init__(self, search: OccupancyGrid, opts, *, runs: bool = True):
-        from . import skeleton as S
-        from . import walls as W
 
         self.k = k = skeleton_factor(opts.wall_cell, search.resolution)
         self.res = res = search.resolution * k
-        self.free = S.downsample(search.free, k, keep="all") if k > 1 else search.free
+        self.free = downsample(search.free, k, keep="all") if k > 1 else search.free
         self.obstacle = ~self.free
-        self.faces = W.wall_faces(self.obstacle, self.free)
-        self.hough = W.wall_lines(self.faces, min_length_px=opts.min_wall_length / res)
-        self.lines = (W.straight_lines(self.faces, min_length_px=opts.min_wall_length / res,
+        self.faces = wall_faces(self.obstacle, self.free)
+        self.hough = wall_lines(self.faces, min_length_px=opts.min_wall_length / res)
+        self.lines = (straight_lines(self.faces, min_length_px=opts.min_wall_length / res,
                                        max_gap_px=opts.face_gap / res, hough=self.hough) if runs else self.hough)
-        self.lw = (W.long_walls(self.lines, max_gap_px=opts.max_door_width / res,
+        self.lw = (long_walls(self.lines, max_gap_px=opts.max_door_width / res,
                                 offset_px=opts.wall_wander / res, min_span_px=opts.long_wall / res)
                    if opts.long_wall > 0 else [])
-        self.index = W.WallIndex(W.scale_walls(self.lw, k))
+        self.index = WallIndex(scale_walls(self.lw, k))
 
     def straight_share(self) -> float:
         """The share of wall faces on straight lines (:func:`topomap.core.walls.straight_share`)."""
-        from . import walls as W
 
-        return W.straight_share(self.faces, self.hough)
+        return straight_share(self.faces, self.hough)
 
     def fine(self, pts):
         """Points ``(..., 2)`` of the wall grid in the map's cells."""
@@ -784,10 +352,9 @@ class _Walls:
     def mask(self, shape, keep=None):
         """The long walls' cells (:func:`topomap.core.walls.wall_mask`) on a map grid of ``shape``; with
         ``keep`` (a bool per long wall), those of the walls it marks only."""
-        from . import walls as W
 
         lw = self.lw if keep is None else [w for w, k in zip(self.lw, keep) if k]
-        m = W.wall_mask(lw, self.free.shape)
+        m = wall_mask(lw, self.free.shape)
         if self.k > 1:
             m = np.kron(m, np.ones((self.k, self.k), bool))[:shape[0], :shape[1]]
         return m
@@ -799,11 +366,9 @@ class _Walls:
         those across a corridor, as segments in the map's cells. ``hits``:
         the map's occupied cells (laser hits, clutter included), the
         evidence of a partition going on."""
-        from . import skeleton as S
-        from . import walls as W
 
         res = self.res
-        ops = W.wall_openings(self.obstacle, self.free, min_wall_px=opts.min_wall_length / res,
+        ops = wall_openings(self.obstacle, self.free, min_wall_px=opts.min_wall_length / res,
                               min_gap_px=opts.min_door_width / res, max_gap_px=opts.max_door_width / res,
                               side_px=opts.min_door_width / res, depth_px=opts.alcove_depth / res, faces=self.faces,
                               lines=self.lines, beside_px=opts.beside_wall / res,
@@ -811,35 +376,65 @@ class _Walls:
         if self.lw:
             # long straight walls: the gaps in them are openings, and an
             # opening from one of them to another spans a corridor
-            ops = ops + W.long_wall_gaps(self.obstacle, self.free, self.lw, min_gap_px=opts.min_door_width / res,
+            ops = ops + long_wall_gaps(self.obstacle, self.free, self.lw, min_gap_px=opts.min_door_width / res,
                                          max_gap_px=opts.max_door_width / res, depth_px=opts.alcove_depth / res,
                                          closet_px=opts.closet_depth / res, behind_px=opts.closet_behind / res)
         if opts.partition_wall > 0:
             # partitions mapped in part: the gap from a partition's end to the
             # wall it points at, with laser hits along it
-            ops = ops + W.partition_gaps(self.obstacle, self.free, self.lines, min_wall_px=opts.partition_wall / res,
+            ops = ops + partition_gaps(self.obstacle, self.free, self.lines, min_wall_px=opts.partition_wall / res,
                                          min_gap_px=opts.min_door_width / res, max_gap_px=opts.max_door_width / res,
                                          min_hits_px=opts.partition_hits / res, depth_px=opts.alcove_depth / res,
                                          hits_band_px=opts.wall_wander / res, min_structure_px=opts.partition_structure / res,
-                                         hits=None if hits is None else S.downsample(hits, self.k, keep="any"))
+                                         hits=None if hits is None else downsample(hits, self.k, keep="any"))
         if not ops:
             return []
         P, Q = self.fine(np.array([p for p, _ in ops])), self.fine(np.array([q for _, q in ops]))
         keep = np.ones(len(ops), bool)
         if self.lw:
-            keep = ~W.across_walls_many(P, Q, self.index, tol_px=opts.wall_wander / (res / self.k))
+            keep = ~across_walls_many(P, Q, self.index, tol_px=opts.wall_wander / (res / self.k))
         return [(P[i], Q[i]) for i in np.flatnonzero(keep)]
+
+def furniture_keep(grid: OccupancyGrid, looked: OccupancyGrid, clutter, opts, *, parts=None,
+                   rows: bool = True) -> np.ndarray:
+    """Stage "furniture": the cells of bulky furniture that are not looked through.
+
+    They are the cells of the long walls of ``looked`` (``grid`` with its
+    small clutter, ``clutter``, looked through). With ``rows`` (a scanned
+    map) the long walls are chained from Hough lines only, and those at
+    least half of whose cells are bulky furniture in two or more separate
+    pieces — a row of desks or round tables
+    (:func:`topomap.core.walls.furniture_rows`) — keep none of it. On a drawn
+    plan (``rows=False``) such a row stays a wall, as a plan draws a
+    partition of solid blocks, and the long walls are chained from the runs
+    of wall faces (:func:`topomap.core.walls.straight_lines`), which find the
+    row in every orientation of the map. ``parts``: :func:`clutter_parts`
+    of ``grid.free`` with the furniture size, when already made.
+
+    Returns
+    -------
+    (M, N) ndarray of bool
+    """
+
+    res = grid.resolution
+    wk = _Walls(looked, opts, runs=not rows)
+    if not rows:
+        return wk.mask(looked.free.shape)
+    every = clutter_mask(grid.free, opts.min_wall_length / res, furniture_px=opts.furniture_size / res,
+                         wall_thickness_px=opts.wall_thickness / res, parts=parts)
+    bulky = every if clutter is None else every & ~clutter
+    rows = furniture_rows(scale_walls(wk.lw, wk.k), ~looked.free, bulky, band_px=opts.wall_wander / res)
+    return wk.mask(looked.free.shape, keep=~rows)
 
 
 def _drop_outside(grid: OccupancyGrid, labels, doors, n_rooms: int, opts: TopomapOptions):
     """Stage "outside": the rooms a laser saw beyond the facade taken out of the rooms
     (:mod:`topomap.core.outside`)."""
-    from . import outside as O
 
-    encl = O.enclosure(grid.free, grid.occupied, grid.resolution, open_area=opts.open_unknown_area,
+    encl = enclosure(grid.free, grid.occupied, grid.resolution, open_area=opts.open_unknown_area,
                        window=opts.enclosure_window, gray=grid.gray)
-    is_out = O.outside_regions(labels, n_rooms, encl, threshold=8 * opts.outside_enclosure)
-    return O.drop_outside(labels, doors, n_rooms, is_out)
+    is_out = outside_regions(labels, n_rooms, encl, threshold=8 * opts.outside_enclosure)
+    return drop_outside(labels, doors, n_rooms, is_out)
 
 
 def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, *, prior=None,
@@ -888,14 +483,10 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
     ParameterError
         An unknown option or an invalid value.
     """
-    from . import doors as D
-    from . import skeleton as S
-    from . import walls as W
-    from .._fast import Beside, edt
 
     opts = options_from_kwargs(TopomapOptions, "topomap", options, kwargs)
     res = grid.resolution
-    T = _Timer()
+    T = StageTimer()
     # work on the bounding box of free space plus the wall band: the rest of
     # the map (unknown margins, solid outside) cannot hold a room or a door
     full = grid
@@ -963,21 +554,21 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
         d_free = clearance.result()
         Gf, Go, d_occ = topomap_graphs(fs, os_, factor, d_free, occ, search, opts.min_occupied_branch)
     with T("doors"):
-        thr_px = D.wall_threshold(d_occ, S.graph_pixels(Go))
+        thr_px = wall_threshold(d_occ, graph_pixels(Go))
         faces = wl.faces if wl.k == 1 else None  # the faces of ``walls``, when walls were found on the map's cells
-        cands = D.find_bottlenecks(Gf, walls, opts, res, thr_px, faces=faces)
-        accepted = D.judge_doors(cands, free, S.graph_endpoints(Go), thr_px, opts, res)
+        cands = find_bottlenecks(Gf, walls, opts, res, thr_px, faces=faces)
+        accepted = judge_doors(cands, free, graph_endpoints(Go), thr_px, opts, res)
         if wl.lw and opts.pillar_depth > 0:
-            accepted = D.across_corridor(accepted, wl.index, opts.pillar_depth / res)
+            accepted = across_corridor(accepted, wl.index, opts.pillar_depth / res)
         if opts.frontier_post > 0:
             seen = _near_hits(search, rooms_grid.occupied, opts.frontier_post / res, faces=faces)
             if seen is not None:
-                accepted = D.seen_posts(accepted, seen)
-        segs = D.suppress_duplicates(accepted, res)
+                accepted = seen_posts(accepted, seen)
+        segs = suppress_duplicates(accepted, res)
     if opts.openings:
         with T("openings"):
-            ops = D.opening_candidates(wl.openings(opts, hits=rooms_grid.occupied), res)
-            segs = segs + D.suppress_duplicates(ops, res, kept=segs)
+            ops = opening_candidates(wl.openings(opts, hits=rooms_grid.occupied), res)
+            segs = segs + suppress_duplicates(ops, res, kept=segs)
             cands = cands + [c for _, c in ops]
     if prior is not None:
         with T("prior doors"):
@@ -1009,13 +600,12 @@ def _baseline(name):
     def run(grid: OccupancyGrid, **params) -> Segmentation:
         import inspect
 
-        from . import baselines as baselines
 
         fn = getattr(baselines, name)
         allowed = {k for k, p in inspect.signature(fn).parameters.items()
                    if p.kind is p.KEYWORD_ONLY and k != "resolution"}
         check_keywords(name, params, allowed)
-        T = _Timer()
+        T = StageTimer()
         with T("segment"):
             # every baseline ends with fill_unlabeled: all free cells labelled
             labels, segs = fn(grid.free, resolution=grid.resolution, **params)
@@ -1042,14 +632,16 @@ DEFAULT_METHOD = "topomap"
 def segment(grid: OccupancyGrid, *, method: str = None, previous=None, **params) -> Segmentation:
     """Segment an occupancy grid into rooms and doors.
 
+    :func:`topomap.segment` is this function with ``previous`` also read from a file.
+
     Parameters
     ----------
     grid : OccupancyGrid
         The map (see :func:`topomap.io.load_map`).
     method : str, optional
         One of :data:`METHODS` (default :data:`DEFAULT_METHOD`).
-    previous : Segmentation or networkx.MultiGraph or str or os.PathLike, optional
-        An earlier result (or saved room graph file) of the same place: rooms
+    previous : Segmentation or networkx.MultiGraph or DoorPrior, optional
+        An earlier result of the same place (or its room graph): rooms
         keep its IDs (:func:`topomap.core.identity.match_rooms`; ``seg.changes``);
         with ``"topomap"`` its doors are a prior of the door stage
         (:class:`topomap.core.identity.DoorPrior`).
@@ -1077,17 +669,14 @@ def segment(grid: OccupancyGrid, *, method: str = None, previous=None, **params)
     t0 = time.perf_counter()
     t_prev = 0.0
     if previous is not None:
-        from .identity import DoorPrior
-
-        previous = DoorPrior(previous, within=grid)  # read once, for the door stage and the matching (of
-        # a previous room graph: only where it overlaps this map)
+        if not isinstance(previous, DoorPrior):
+            # read once, for the door stage and the matching (a room graph: only where it overlaps this map)
+            previous = DoorPrior(previous, within=grid)
         t_prev = time.perf_counter() - t0
         if method == "topomap":
             params = {**params, "prior": previous}
     seg = METHODS[method](grid, **params)
     if previous is not None:
-        from .identity import match_rooms
-
         t1 = time.perf_counter()
         seg, _ = match_rooms(previous.previous, seg)
         seg.timings["previous"] = t_prev
