@@ -24,6 +24,8 @@ from __future__ import annotations
 
 import logging
 import time
+from dataclasses import dataclass
+from typing import Optional
 
 import numpy as np
 
@@ -105,9 +107,9 @@ def coarse_skeletons(free_mask: np.ndarray, occupied_mask: np.ndarray, factor: i
     """
 
     # the two thinnings run in compiled code without Python's lock: free space's on a second core
-    fs = Beside(lambda: skeletonize(downsample(free_mask, factor, keep="all")))
-    os_ = skeletonize(downsample(occupied_mask, factor, keep="any"))
-    return fs.result(), os_
+    free_skeleton = Beside(lambda: skeletonize(downsample(free_mask, factor, keep="all")))
+    occupied_skeleton = skeletonize(downsample(occupied_mask, factor, keep="any"))
+    return free_skeleton.result(), occupied_skeleton
 
 
 def coarse_skeleton_graph(skel: np.ndarray, factor: int, radius: np.ndarray, grid: OccupancyGrid):
@@ -128,25 +130,24 @@ def coarse_skeleton_graph(skel: np.ndarray, factor: int, radius: np.ndarray, gri
         lim = np.array([fh - 1, fw - 1])
         topo.rep = np.minimum(topo.rep * factor + off, lim)
         topo.mr, topo.mc = topo.mr * factor + off, topo.mc * factor + off
-        if topo.edges:  # every path moved at once, then cut into its edges again (views of one array;
-            # 0.86 -> 0.19 ms per graph on the free graphs of 4 ipa mid maps, min of 25)
+        if topo.edges:  # every path moved at once, then cut into its edges again (views of one array)
             first = np.cumsum([0] + [len(p) for _, _, p in topo.edges]).tolist()
             moved = np.minimum(np.concatenate([p for _, _, p in topo.edges]) * factor + off, lim)
             topo.edges = [(u, v, moved[a:b]) for (u, v, _), a, b in zip(topo.edges, first[:-1], first[1:])]
     return graph_from_topology(topo, radius=radius, resolution=grid.resolution, to_world=grid.pixel_to_world)
 
 
-def topomap_graphs(fs, os_, factor, d_free, occupied_mask, grid, min_occupied_branch):
+def topomap_graphs(free_skeleton, occupied_skeleton, factor, d_free, occupied_mask, grid, min_occupied_branch):
     """Stage "graphs" of the default method: the free and (spur-pruned)
     occupied skeleton graphs on the map's cells, and the occupied clearance
     (px, distance of each occupied-mask cell to the mask's edge) the
     threshold is measured on."""
 
     d_occ = edt(occupied_mask, exact=False)  # only averaged into the wall threshold
-    Gf = coarse_skeleton_graph(fs, factor, d_free, grid)
-    Go = coarse_skeleton_graph(os_, factor, d_occ, grid)
-    Go = prune_spurs(Go, min_occupied_branch, copy=False)
-    return Gf, Go, d_occ
+    free_graph = coarse_skeleton_graph(free_skeleton, factor, d_free, grid)
+    occupied_graph = coarse_skeleton_graph(occupied_skeleton, factor, d_occ, grid)
+    occupied_graph = prune_spurs(occupied_graph, min_occupied_branch, copy=False)
+    return free_graph, occupied_graph, d_occ
 
 
 # --------------------------------------------------------------------------
@@ -259,31 +260,31 @@ def segment_paper(grid: OccupancyGrid, options: PaperOptions | None = None, **kw
 
     opts = options_from_kwargs(PaperOptions, "paper", options, kwargs).resolved(grid.resolution)
     res = grid.resolution
-    T = StageTimer()
-    with T("preprocess"):
+    timer = StageTimer()
+    with timer("preprocess"):
         # the paper: occupied space is the occupied cells (unknown ones are not)
         f, d_free, occ = preprocess_masks(grid, opts, occupied=grid.occupied)
-    with T("skeletons"):
-        fs = skeletonize(f)
-        os_ = skeletonize(occ)
-    with T("graphs"):
-        Gf = prune_spurs(skeleton_graph(fs, radius=d_free, resolution=res, to_world=grid.pixel_to_world),
+    with timer("skeletons"):
+        free_skeleton = skeletonize(f)
+        occupied_skeleton = skeletonize(occ)
+    with timer("graphs"):
+        free_graph = prune_spurs(skeleton_graph(free_skeleton, radius=d_free, resolution=res, to_world=grid.pixel_to_world),
                            opts.min_free_branch)
         d_occ = edt(occ)
-        Go = prune_spurs(skeleton_graph(os_, radius=d_occ, resolution=res, to_world=grid.pixel_to_world),
+        occupied_graph = prune_spurs(skeleton_graph(occupied_skeleton, radius=d_occ, resolution=res, to_world=grid.pixel_to_world),
                            opts.min_occupied_branch)
-    with T("doors"):
-        thr_px = wall_threshold(d_occ, graph_pixels(Go))
-        cands = passage_candidates(Gf, min_branch_px=opts.min_free_branch / res)
+    with timer("doors"):
+        thr_px = wall_threshold(d_occ, graph_pixels(occupied_graph))
+        cands = passage_candidates(free_graph, min_branch_px=opts.min_free_branch / res)
         intersection_points(cands, ~grid.free, max_px=opts.max_door_search / res)
-        kept = select_doors(cands, graph_endpoints(Go), thr_px, occupied_skeleton_lines(Go))
+        kept = select_doors(cands, graph_endpoints(occupied_graph), thr_px, occupied_skeleton_lines(occupied_graph))
         segs = [(c.ip1, c.ip2) for c in kept]
-    with T("rooms"):
+    with timer("rooms"):
         labels, door_objs, _ = cut_rooms(grid, segs)
     im = Intermediates(free_mask=f, occupied_mask=occ, clearance=d_free, occupied_clearance=d_occ)
     seg = Segmentation(grid=grid, labels=labels, doors=door_objs, method="paper", params=opts.as_params(),
-                       threshold=thr_px * res, free_graph=Gf, occupied_graph=Go, candidates=cands,
-                       timings=T.t, options=opts, intermediates=im)
+                       threshold=thr_px * res, free_graph=free_graph, occupied_graph=occupied_graph, candidates=cands,
+                       timings=timer.t, options=opts, intermediates=im)
     log.info("%s: %d rooms, %d doors, threshold %.3f m (%d candidates)", grid.name, seg.n_rooms,
              len(door_objs), thr_px * res, len(cands))
     return seg
@@ -437,6 +438,92 @@ def _drop_outside(grid: OccupancyGrid, labels, doors, n_rooms: int, opts: Topoma
     return drop_outside(labels, doors, n_rooms, is_out)
 
 
+@dataclass
+class _Looked:
+    """The map doors are searched in: ``looked`` (the map with its clutter made free), ``clutter`` (those
+    cells, or None), ``search`` (``looked`` with the gaps narrower than ``wall_gap`` closed) and ``closed``
+    (the cells of those gaps, or None)."""
+
+    looked: OccupancyGrid
+    clutter: Optional[np.ndarray]
+    search: OccupancyGrid
+    closed: Optional[np.ndarray]
+
+
+def _look_through_clutter(rooms_grid: OccupancyGrid, opts: TopomapOptions, furniture: float):
+    """Stage "preprocess" of the default method: the obstacles' components (labelled once for the clutter
+    of every size asked later, None when clutter is not looked through), the clutter of size
+    ``furniture`` (m) among them, and the map with that clutter made free and the wall gaps closed
+    (a :class:`_Looked`)."""
+    res = rooms_grid.resolution
+    solid = solid_components(rooms_grid.free) if opts.min_wall_length > 0 else None
+    parts = None if solid is None else clutter_parts(rooms_grid.free, opts.min_wall_length / res,
+                                                     furniture_px=furniture / res,
+                                                     wall_thickness_px=opts.wall_thickness / res, components=solid)
+    looked, clutter = without_clutter(rooms_grid, opts.min_wall_length, furniture_size=furniture,
+                                      wall_thickness=opts.wall_thickness, parts=parts)
+    search, closed = close_wall_gaps(looked, opts.wall_gap)
+    return solid, parts, _Looked(looked, clutter, search, closed)
+
+
+def _look_through_furniture(rooms_grid: OccupancyGrid, opts: TopomapOptions, straight: float, seen: _Looked,
+                            solid, small_parts):
+    """Stage "furniture" of the default method: bulky free-standing furniture is looked through too,
+    except where a long wall runs along it. The new :class:`_Looked`, or None when the furniture
+    changes nothing.
+
+    On a scanned map the long walls are chained from Hough lines only: the furniture is still on the
+    map, and runs of its faces along a main direction (a row of desks or cupboards) would chain into
+    long walls and keep it. On a drawn plan a row of solid blocks along a long wall is a partition,
+    and the long walls keep only the bulky pieces along them: the small clutter is looked through as
+    before, so a plan with no bulky piece at all is left as it is."""
+    res = rooms_grid.resolution
+    # the clutter of this size, found once for the furniture's long walls and with them
+    parts = (clutter_parts(rooms_grid.free, opts.min_wall_length / res, furniture_px=opts.furniture_size / res,
+                           wall_thickness_px=opts.wall_thickness / res, components=solid)
+             if solid is not None else None)
+    scanned = opts.scanned(straight)
+    if parts is None or (not scanned and not (parts[1] & ~small_parts[1]).any()):
+        return None
+    keep = furniture_keep(rooms_grid, seen.looked, seen.clutter, opts, parts=parts, rows=scanned)
+    looked, clutter = without_clutter(rooms_grid, opts.min_wall_length, furniture_size=opts.furniture_size,
+                                      wall_thickness=opts.wall_thickness, keep=keep, parts=parts,
+                                      also=None if scanned else seen.clutter)
+    if clutter is None or (seen.clutter is not None and np.array_equal(clutter, seen.clutter)):
+        return None
+    search, closed = close_wall_gaps(looked, opts.wall_gap)
+    return _Looked(looked, clutter, search, closed)
+
+
+def _find_doors(free_graph, occupied_graph, occupied_clearance, wall_grid, seen: _Looked,
+                rooms_grid: OccupancyGrid, opts: TopomapOptions):
+    """Stage "doors" of the default method: the map's threshold (px), every bottleneck candidate, and
+    the door segments kept (judged, not across a corridor between long walls, posts seen by the
+    laser, duplicates suppressed)."""
+    res = rooms_grid.resolution
+    free = seen.search.free
+    thr_px = wall_threshold(occupied_clearance, graph_pixels(occupied_graph))
+    faces = wall_grid.faces if wall_grid.k == 1 else None  # the faces of the walls, when found on the map's cells
+    cands = find_bottlenecks(free_graph, ~free, opts, res, thr_px, faces=faces)
+    accepted = judge_doors(cands, free, graph_endpoints(occupied_graph), thr_px, opts, res)
+    if wall_grid.lw and opts.pillar_depth > 0:
+        accepted = across_corridor(accepted, wall_grid.index, opts.pillar_depth / res)
+    if opts.frontier_post > 0:
+        near = _near_hits(seen.search, rooms_grid.occupied, opts.frontier_post / res, faces=faces)
+        if near is not None:
+            accepted = seen_posts(accepted, near)
+    return thr_px, cands, suppress_duplicates(accepted, res)
+
+
+def _cut_rooms(rooms_grid: OccupancyGrid, segs, space, clearance, opts: TopomapOptions):
+    """Stage "rooms" of the default method: labels, doors and room count of the rooms cut at ``segs``."""
+    res = rooms_grid.resolution
+    min_cells = int(np.ceil(opts.min_room_area / res ** 2 - 1e-9))
+    wide = clearance >= 0.5 * opts.wall_gap / res - 1e-6 if opts.wall_gap > 0 else None
+    return cut_rooms(rooms_grid, segs, space=space, min_room_cells=min_cells, wide=wide,
+                     max_door_width=opts.max_door_width)
+
+
 def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, *, prior=None,
                     **kwargs) -> Segmentation:
     """Segment ``grid`` with topomap's default method.
@@ -483,115 +570,70 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
     ParameterError
         An unknown option or an invalid value.
     """
-
     opts = options_from_kwargs(TopomapOptions, "topomap", options, kwargs)
     res = grid.resolution
-    T = StageTimer()
+    timer = StageTimer()
     # work on the bounding box of free space plus the wall band: the rest of
     # the map (unknown margins, solid outside) cannot hold a room or a door
-    full = grid
     box = crop_box(grid, metres_to_px(opts.wall_band + opts.dilation_size + opts.max_door_width, res))
     rooms_grid = crop_grid(grid, box) if box is not None else grid
     furniture = opts.furniture_size or 0.0  # None: measured on the map below
-    with T("preprocess"):
-        # the obstacles' components, labelled once for the clutter of every size asked below
-        solid = solid_components(rooms_grid.free) if opts.min_wall_length > 0 else None
-        parts0 = None if solid is None else clutter_parts(rooms_grid.free, opts.min_wall_length / res,
-                                                          furniture_px=furniture / res,
-                                                          wall_thickness_px=opts.wall_thickness / res,
-                                                          components=solid)
-        looked, clutter = without_clutter(rooms_grid, opts.min_wall_length, furniture_size=furniture,
-                                          wall_thickness=opts.wall_thickness, parts=parts0)
-        search, closed = close_wall_gaps(looked, opts.wall_gap)
-    with T("walls"):
-        wl = _Walls(search, opts)
-        straight = wl.straight_share()
+    with timer("preprocess"):
+        solid, small_parts, seen = _look_through_clutter(rooms_grid, opts, furniture)
+    with timer("walls"):
+        wall_grid = _Walls(seen.search, opts)
+        straight = wall_grid.straight_share()
         opts = opts.resolved(res, straight)  # rise and furniture measured on the map
     if opts.furniture_size > furniture:
-        with T("furniture"):
-            # bulky free-standing furniture is looked through too, except
-            # where a long wall runs along it; on a scanned map those long walls
-            # are chained from Hough lines only: on this map the furniture is still there,
-            # and runs of its faces along a main direction (a row of desks or
-            # cupboards) would chain into long walls and keep it (measured:
-            # precision -2.0 on the Freiburg partial maps, -4.6 on
-            # bremen_cartesium_full)
-            # the clutter of this size is found once, for the furniture's long walls and with them
-            parts = (clutter_parts(rooms_grid.free, opts.min_wall_length / res, furniture_px=opts.furniture_size / res,
-                                   wall_thickness_px=opts.wall_thickness / res, components=solid)
-                     if solid is not None else None)
-            # on a drawn plan a row of solid blocks along a long wall is a partition, and the long walls
-            # keep only the bulky pieces along them: the small clutter is looked through as before,
-            # so a plan with no bulky piece at all is left as it is
-            scanned = opts.scanned(straight)
-            if parts is None or (not scanned and not (parts[1] & ~parts0[1]).any()):
-                looked2, clutter2 = looked, clutter
-            else:
-                looked2, clutter2 = without_clutter(rooms_grid, opts.min_wall_length,
-                                                    furniture_size=opts.furniture_size,
-                                                    wall_thickness=opts.wall_thickness,
-                                                    keep=furniture_keep(rooms_grid, looked, clutter, opts,
-                                                                        parts=parts, rows=scanned),
-                                                    parts=parts, also=None if scanned else clutter)
-            del parts
-            if clutter2 is not None and (clutter is None or not np.array_equal(clutter2, clutter)):
-                looked, clutter = looked2, clutter2
-                search, closed = close_wall_gaps(looked, opts.wall_gap)
-                wl = _Walls(search, opts)
-    del solid, parts0
-    with T("preprocess"):
-        free = search.free  # read, never written, from here on
-        space = free if clutter is None else free & ~clutter
+        with timer("furniture"):
+            again = _look_through_furniture(rooms_grid, opts, straight, seen, solid, small_parts)
+            if again is not None:
+                seen = again
+                wall_grid = _Walls(seen.search, opts)
+    del solid, small_parts
+    with timer("preprocess"):
+        free = seen.search.free  # read, never written, from here on
+        space = free if seen.clutter is None else free & ~seen.clutter
         # the clearance (an exact distance transform, in OpenCV without Python's lock) on a second
         # core while the masks and the skeletons are made: the same array, needed from the graphs on
         clearance = Beside(edt, free)
-        f, _, occ = preprocess_masks(search, opts, clearance=False)
-    walls = ~free  # what bounds free space: door posts and wall faces lie on these cells
+        free_mask, _, occupied_mask = preprocess_masks(seen.search, opts, clearance=False)
     factor = skeleton_factor(opts.skeleton_cell, res)
-    with T("skeletons"):
-        fs, os_ = coarse_skeletons(f, occ, factor)
-    with T("graphs"):
+    with timer("skeletons"):
+        free_skeleton, occupied_skeleton = coarse_skeletons(free_mask, occupied_mask, factor)
+    with timer("graphs"):
         d_free = clearance.result()
-        Gf, Go, d_occ = topomap_graphs(fs, os_, factor, d_free, occ, search, opts.min_occupied_branch)
-    with T("doors"):
-        thr_px = wall_threshold(d_occ, graph_pixels(Go))
-        faces = wl.faces if wl.k == 1 else None  # the faces of ``walls``, when walls were found on the map's cells
-        cands = find_bottlenecks(Gf, walls, opts, res, thr_px, faces=faces)
-        accepted = judge_doors(cands, free, graph_endpoints(Go), thr_px, opts, res)
-        if wl.lw and opts.pillar_depth > 0:
-            accepted = across_corridor(accepted, wl.index, opts.pillar_depth / res)
-        if opts.frontier_post > 0:
-            seen = _near_hits(search, rooms_grid.occupied, opts.frontier_post / res, faces=faces)
-            if seen is not None:
-                accepted = seen_posts(accepted, seen)
-        segs = suppress_duplicates(accepted, res)
+        free_graph, occupied_graph, d_occ = topomap_graphs(free_skeleton, occupied_skeleton, factor, d_free,
+                                                           occupied_mask, seen.search, opts.min_occupied_branch)
+    with timer("doors"):
+        thr_px, cands, segs = _find_doors(free_graph, occupied_graph, d_occ, wall_grid, seen, rooms_grid, opts)
     if opts.openings:
-        with T("openings"):
-            ops = opening_candidates(wl.openings(opts, hits=rooms_grid.occupied), res)
+        with timer("openings"):
+            ops = opening_candidates(wall_grid.openings(opts, hits=rooms_grid.occupied), res)
             segs = segs + suppress_duplicates(ops, res, kept=segs)
             cands = cands + [c for _, c in ops]
     if prior is not None:
-        with T("prior doors"):
-            segs = prior.adjust(rooms_grid, segs, opts, walls=walls, space=space)
-    with T("rooms"):
-        min_cells = int(np.ceil(opts.min_room_area / res ** 2 - 1e-9))
-        wide = d_free >= 0.5 * opts.wall_gap / res - 1e-6 if opts.wall_gap > 0 else None
-        labels, door_objs, n_rooms = cut_rooms(rooms_grid, segs, space=space, min_room_cells=min_cells, wide=wide,
-                                               max_door_width=opts.max_door_width)
+        with timer("prior doors"):
+            segs = prior.adjust(rooms_grid, segs, opts, walls=~free, space=space)
+    with timer("rooms"):
+        labels, door_objs, n_rooms = _cut_rooms(rooms_grid, segs, space, d_free, opts)
     outside = ()
     if opts.outside_enclosure > 0 and n_rooms:
-        with T("outside"):
+        with timer("outside"):
             labels, door_objs, n_rooms, outside = _drop_outside(rooms_grid, labels, door_objs, n_rooms, opts)
-    im = Intermediates(free_mask=f, occupied_mask=occ, clearance=d_free, occupied_clearance=d_occ,
-                       clutter=clutter, skeleton_factor=factor, closed_gaps=closed, wall_lines=wl.fine_lines(),
-                       straight_share=straight)
-    seg = Segmentation(grid=rooms_grid, labels=labels, doors=door_objs, method="topomap",
-                       params=opts.as_params(), threshold=thr_px * res, free_graph=Gf, occupied_graph=Go,
-                       candidates=cands, timings=T.t, options=opts, intermediates=im, room_count=n_rooms,
+    params = opts.as_params()
+    if prior is not None:
+        params["prior"] = prior.previous.where  # the previous result whose doors were the prior
+    im = Intermediates(free_mask=free_mask, occupied_mask=occupied_mask, clearance=d_free,
+                       occupied_clearance=d_occ, clutter=seen.clutter, skeleton_factor=factor,
+                       closed_gaps=seen.closed, wall_lines=wall_grid.fine_lines(), straight_share=straight)
+    seg = Segmentation(grid=rooms_grid, labels=labels, doors=door_objs, method="topomap", params=params,
+                       threshold=thr_px * res, free_graph=free_graph, occupied_graph=occupied_graph,
+                       candidates=cands, timings=timer.t, options=opts, intermediates=im, room_count=n_rooms,
                        outside=outside)
     if box is not None:
-        seg = uncrop(seg, full, box)
-    log.info("%s: %d rooms, %d fragments, %d doors, threshold %.3f m (%d candidates)", full.name, seg.n_rooms,
+        seg = uncrop(seg, grid, box)
+    log.info("%s: %d rooms, %d fragments, %d doors, threshold %.3f m (%d candidates)", grid.name, seg.n_rooms,
              seg.n_fragments, len(door_objs), thr_px * res, len(cands))
     return seg
 
@@ -605,13 +647,13 @@ def _baseline(name):
         allowed = {k for k, p in inspect.signature(fn).parameters.items()
                    if p.kind is p.KEYWORD_ONLY and k != "resolution"}
         check_keywords(name, params, allowed)
-        T = StageTimer()
-        with T("segment"):
+        timer = StageTimer()
+        with timer("segment"):
             # every baseline ends with fill_unlabeled: all free cells labelled
             labels, segs = fn(grid.free, resolution=grid.resolution, **params)
-        with T("rooms"):
+        with timer("rooms"):
             doors = doors_between_rooms(grid, labels, segs)
-        return Segmentation(grid=grid, labels=labels, doors=doors, method=name, params=params, timings=T.t)
+        return Segmentation(grid=grid, labels=labels, doors=doors, method=name, params=params, timings=timer.t)
 
     run.__name__ = f"segment_{name}"
     run.__doc__ = f"Segment with :func:`topomap.core.baselines.{name}` and wrap the result."
