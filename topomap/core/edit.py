@@ -42,9 +42,15 @@ import unicodedata
 from pathlib import Path
 
 import numpy as np
+import networkx as nx
+from scipy import ndimage
 
 from ..errors import EditError, GraphFormatError, MapFileError, MapFileNotFoundError
+from ..options import TopomapOptions
+from .doors import Door
+from .geometry import line_pixels
 from .result import Segmentation, TrackedSegmentation
+from .rooms import fill_unlabeled
 
 log = logging.getLogger("topomap")
 
@@ -283,18 +289,48 @@ def split(seg, room: int, p1, p2, *, min_area: float | None = None):
         or one that does not cross the room, or a line that does not cut it
         into exactly two parts of at least ``min_area``.
     """
-    from scipy import ndimage as ndi
-
-    from .doors import Door
-    from .geometry import line_pixels
-    from ..options import TopomapOptions
-    from .rooms import fill_unlabeled
-
     ids = _room_ids(seg)
     room = _check_room(seg, ids, room)
     grid = seg.grid
+    min_area = _min_area(seg, min_area)
+    line, rr, cc = _split_line(seg, p1, p2)
+    on = seg.room_labels[rr, cc] == room
+    if not on.any():
+        raise _fail(seg, f"{line} does not cross room {room}")
+    new_id = _next_id(seg, ids)
+    rooms = _cut_in_two(seg, room, new_id, rr, cc, min_area, line)
+    doors = _copied(seg.doors)
+    new_doors = _doors_along(seg, rooms, room, new_id, rr, cc, on, max((d.id for d in doors), default=-1) + 1)
+    if not new_doors:
+        raise _fail(seg, f"{line} does not cross a passage between the two parts of room {room}")
+    doors = _doors_beside(doors, rooms, room, new_id)
+    attrs = _user_attributes(seg)
+    kept = attrs.get(room, {})
+    kept.pop("merged", None)
+    attrs[room] = kept
+    if kept.get("no_go"):
+        attrs[new_id] = {"no_go": True}
+    log.info("%s: room %d split along %s: room %d, new room %d, %d door(s)", grid.name, room, line, room, new_id,
+             len(new_doors))
+    return _result(seg, rooms, doors + new_doors, new_id + 1, attrs)
+
+
+def _min_area(seg, min_area) -> float:
+    """The smallest part of a split, m²: ``min_area``, by default the ``min_room_area`` of the options that
+    ran (of :class:`~topomap.options.TopomapOptions` for the other methods); EditError unless an area > 0."""
+    if min_area is None:
+        opts = seg.options if isinstance(seg.options, TopomapOptions) else TopomapOptions()
+        min_area = opts.min_room_area
+    if isinstance(min_area, bool) or not isinstance(min_area, (int, float)) or not (0 < min_area < math.inf):
+        raise _fail(seg, f"min_area must be an area > 0 (m²), got {min_area!r}")
+    return min_area
+
+
+def _split_line(seg, p1, p2):
+    """``(text, rows, cols)``: the split line from map-frame points ``p1`` to ``p2`` as the words messages
+    give it and its cells; EditError for an end off the map or a line shorter than a cell."""
+    grid = seg.grid
     H, W = grid.shape
-    res = grid.resolution
     (x1, y1), (x2, y2) = _point(seg, p1, "first"), _point(seg, p2, "second")
     ends = []
     for x, y in ((x1, y1), (x2, y2)):
@@ -303,18 +339,19 @@ def split(seg, room: int, p1, p2, *, min_area: float | None = None):
             raise _fail(seg, f"split line end ({x:g}, {y:g}) m is off the map ({_extent_text(grid)})")
         ends.append((r, c))
     if math.hypot(ends[0][0] - ends[1][0], ends[0][1] - ends[1][1]) < 1:
-        raise _fail(seg, f"split line ({x1:g}, {y1:g})-({x2:g}, {y2:g}) m is shorter than a cell ({res:g} m)")
-    if min_area is None:
-        opts = seg.options if isinstance(seg.options, TopomapOptions) else TopomapOptions()
-        min_area = opts.min_room_area
-    if isinstance(min_area, bool) or not isinstance(min_area, (int, float)) or not (0 < min_area < math.inf):
-        raise _fail(seg, f"min_area must be an area > 0 (m²), got {min_area!r}")
-    line = f"split line ({x1:g}, {y1:g})-({x2:g}, {y2:g}) m"
+        raise _fail(seg, f"split line ({x1:g}, {y1:g})-({x2:g}, {y2:g}) m is shorter than a cell "
+                         f"({grid.resolution:g} m)")
     rr, cc = line_pixels(ends[0], ends[1], (H, W))
+    return f"split line ({x1:g}, {y1:g})-({x2:g}, {y2:g}) m", rr, cc
+
+
+def _cut_in_two(seg, room: int, new_id: int, rr, cc, min_area: float, line: str) -> np.ndarray:
+    """The room labels with ``room`` cut along the cells ``rr, cc``: the larger of the two parts of at
+    least ``min_area`` keeps ``room``, the other becomes ``new_id``; the cut cells and small pieces go to
+    the nearest part. EditError unless the line cuts exactly two such parts."""
     L = seg.room_labels
-    on = L[rr, cc] == room
-    if not on.any():
-        raise _fail(seg, f"{line} does not cross room {room}")
+    H, W = L.shape
+    res = seg.grid.resolution
     mask = L == room
     rows, cols = np.flatnonzero(mask.any(1)), np.flatnonzero(mask.any(0))
     r0, r1 = max(rows[0] - 1, 0), min(rows[-1] + 2, H)
@@ -323,7 +360,7 @@ def split(seg, room: int, p1, p2, *, min_area: float | None = None):
     cut = np.zeros_like(m)
     inside = (rr >= r0) & (rr < r1) & (cc >= c0) & (cc < c1)
     cut[rr[inside] - r0, cc[inside] - c0] = True
-    parts, n = ndi.label(m & ~cut)  # 4-connected, as rooms are cut
+    parts, n = ndimage.label(m & ~cut)  # 4-connected, as rooms are cut
     size = np.bincount(parts.ravel(), minlength=n + 1)
     size[0] = 0
     min_cells = math.ceil(min_area / res ** 2 - 1e-9)
@@ -339,12 +376,16 @@ def split(seg, room: int, p1, p2, *, min_area: float | None = None):
     seeds[parts == b_part] = 2
     filled = fill_unlabeled(seeds, m)
     b_cell = tuple(np.argwhere(parts == b_part)[0])
-    new_id = _next_id(seg, ids)
     rooms = L.copy()
     rooms[r0:r1, c0:c1][filled == filled[b_cell]] = new_id
-    # the doors along the line: each run of its cells in the room that touches both parts
-    doors = _copied(seg.doors)
-    next_door = max((d.id for d in doors), default=-1) + 1
+    return rooms
+
+
+def _doors_along(seg, rooms: np.ndarray, room: int, new_id: int, rr, cc, on, next_door: int) -> list:
+    """The new doors along the split line: each run of its cells in the room (``on``) that touches both
+    parts, from the cell before it to the cell after it, numbered from ``next_door``."""
+    grid = seg.grid
+    res = grid.resolution
     runs = np.flatnonzero(np.diff(np.r_[0, on.view(np.int8), 0]))
     new_doors = []
     for i, j in zip(runs[0::2], runs[1::2] - 1):
@@ -358,24 +399,20 @@ def split(seg, room: int, p1, p2, *, min_area: float | None = None):
                               width=math.hypot(p[0] - q[0], p[1] - q[1]) * res, rooms=(room, new_id),
                               extra={"edit": "split"}))
         next_door += 1
-    if not new_doors:
-        raise _fail(seg, f"{line} does not cross a passage between the two parts of room {room}")
-    for k, d in enumerate(doors):  # the room's other doors lead into the part beside them
+    return new_doors
+
+
+def _doors_beside(doors: list, rooms: np.ndarray, room: int, new_id: int) -> list:
+    """``doors`` with the split room's other doors leading into the part beside them (a new list)."""
+    doors = list(doors)
+    for k, d in enumerate(doors):
         if room in d.rooms and new_id not in d.rooms:
-            lr, lc = line_pixels(d.p1, d.p2, (H, W))
+            lr, lc = line_pixels(d.p1, d.p2, rooms.shape)
             n_room, n_new = _neighbour_counts(rooms, lr, lc, (room, new_id))
             if n_new > n_room:
                 other = d.rooms[0] if d.rooms[1] == room else d.rooms[1]
                 doors[k] = dataclasses.replace(d, rooms=tuple(sorted((other, new_id))))
-    attrs = _user_attributes(seg)
-    A = attrs.get(room, {})
-    A.pop("merged", None)
-    attrs[room] = A
-    if A.get("no_go"):
-        attrs[new_id] = {"no_go": True}
-    log.info("%s: room %d split along %s: room %d, new room %d, %d door(s)", grid.name, room, line, room, new_id,
-             len(new_doors))
-    return _result(seg, rooms, doors + new_doors, new_id + 1, attrs)
+    return doors
 
 
 def _check_name(seg, name) -> str:
@@ -558,7 +595,6 @@ def keep_merges(previous, seg, *, min_overlap: float):
     Segmentation
         ``seg`` itself when nothing is merged, else a new result.
     """
-    import networkx as nx
 
     merged = [i for i, a in previous.attrs.items() if len(merged_ids(a.get("merged"))) >= 2]
     if not merged:

@@ -308,14 +308,14 @@ def _near_hits(search: OccupancyGrid, occupied: np.ndarray, radius_px: float, *,
     return near if n > 0 and int((faces & near).sum()) >= 0.5 * n else None
 
 
-class _Walls:
+class _WallGrid:
     """Stage "walls" of the default method on the grid walls are measured on:
     the map's own cells, or cells of ``opts.wall_cell`` when the map's are
     smaller (``k`` map cells per side), so that a wall's straightness, its
     gaps and its lines are judged in metres whatever the resolution.
 
     ``faces``, ``hough`` (:func:`topomap.core.walls.wall_lines`), ``lines`` and
-    ``lw`` (:func:`topomap.core.walls.long_walls`) are in the cells of that grid;
+    ``long_walls`` (:func:`topomap.core.walls.long_walls`) are in the cells of that grid;
     :meth:`fine` turns its points into map cells and :attr:`index` holds the
     long walls in map cells. With ``runs``, ``lines`` are the straight runs of
     faces on the main directions and the Hough lines off them
@@ -332,10 +332,10 @@ class _Walls:
         self.hough = wall_lines(self.faces, min_length_px=opts.min_wall_length / res)
         self.lines = (straight_lines(self.faces, min_length_px=opts.min_wall_length / res,
                                        max_gap_px=opts.face_gap / res, hough=self.hough) if runs else self.hough)
-        self.lw = (long_walls(self.lines, max_gap_px=opts.max_door_width / res,
+        self.long_walls = (long_walls(self.lines, max_gap_px=opts.max_door_width / res,
                                 offset_px=opts.wall_wander / res, min_span_px=opts.long_wall / res)
                    if opts.long_wall > 0 else [])
-        self.index = WallIndex(scale_walls(self.lw, k))
+        self.index = WallIndex(scale_walls(self.long_walls, k))
 
     def straight_share(self) -> float:
         """The share of wall faces on straight lines (:func:`topomap.core.walls.straight_share`)."""
@@ -354,8 +354,8 @@ class _Walls:
         """The long walls' cells (:func:`topomap.core.walls.wall_mask`) on a map grid of ``shape``; with
         ``keep`` (a bool per long wall), those of the walls it marks only."""
 
-        lw = self.lw if keep is None else [w for w, k in zip(self.lw, keep) if k]
-        m = wall_mask(lw, self.free.shape)
+        walls = self.long_walls if keep is None else [w for w, k in zip(self.long_walls, keep) if k]
+        m = wall_mask(walls, self.free.shape)
         if self.k > 1:
             m = np.kron(m, np.ones((self.k, self.k), bool))[:shape[0], :shape[1]]
         return m
@@ -374,10 +374,10 @@ class _Walls:
                               side_px=opts.min_door_width / res, depth_px=opts.alcove_depth / res, faces=self.faces,
                               lines=self.lines, beside_px=opts.beside_wall / res,
                               closet_px=opts.closet_depth / res, behind_px=opts.closet_behind / res)
-        if self.lw:
+        if self.long_walls:
             # long straight walls: the gaps in them are openings, and an
             # opening from one of them to another spans a corridor
-            ops = ops + long_wall_gaps(self.obstacle, self.free, self.lw, min_gap_px=opts.min_door_width / res,
+            ops = ops + long_wall_gaps(self.obstacle, self.free, self.long_walls, min_gap_px=opts.min_door_width / res,
                                          max_gap_px=opts.max_door_width / res, depth_px=opts.alcove_depth / res,
                                          closet_px=opts.closet_depth / res, behind_px=opts.closet_behind / res)
         if opts.partition_wall > 0:
@@ -392,7 +392,7 @@ class _Walls:
             return []
         P, Q = self.fine(np.array([p for p, _ in ops])), self.fine(np.array([q for _, q in ops]))
         keep = np.ones(len(ops), bool)
-        if self.lw:
+        if self.long_walls:
             keep = ~across_walls_many(P, Q, self.index, tol_px=opts.wall_wander / (res / self.k))
         return [(P[i], Q[i]) for i in np.flatnonzero(keep)]
 
@@ -418,14 +418,14 @@ def furniture_keep(grid: OccupancyGrid, looked: OccupancyGrid, clutter, opts, *,
     """
 
     res = grid.resolution
-    wk = _Walls(looked, opts, runs=not rows)
+    wall_grid = _WallGrid(looked, opts, runs=not rows)
     if not rows:
-        return wk.mask(looked.free.shape)
+        return wall_grid.mask(looked.free.shape)
     every = clutter_mask(grid.free, opts.min_wall_length / res, furniture_px=opts.furniture_size / res,
                          wall_thickness_px=opts.wall_thickness / res, parts=parts)
     bulky = every if clutter is None else every & ~clutter
-    rows = furniture_rows(scale_walls(wk.lw, wk.k), ~looked.free, bulky, band_px=opts.wall_wander / res)
-    return wk.mask(looked.free.shape, keep=~rows)
+    rows = furniture_rows(scale_walls(wall_grid.long_walls, wall_grid.k), ~looked.free, bulky, band_px=opts.wall_wander / res)
+    return wall_grid.mask(looked.free.shape, keep=~rows)
 
 
 def _drop_outside(grid: OccupancyGrid, labels, doors, n_rooms: int, opts: TopomapOptions):
@@ -506,7 +506,7 @@ def _find_doors(free_graph, occupied_graph, occupied_clearance, wall_grid, seen:
     faces = wall_grid.faces if wall_grid.k == 1 else None  # the faces of the walls, when found on the map's cells
     cands = find_bottlenecks(free_graph, ~free, opts, res, thr_px, faces=faces)
     accepted = judge_doors(cands, free, graph_endpoints(occupied_graph), thr_px, opts, res)
-    if wall_grid.lw and opts.pillar_depth > 0:
+    if wall_grid.long_walls and opts.pillar_depth > 0:
         accepted = across_corridor(accepted, wall_grid.index, opts.pillar_depth / res)
     if opts.frontier_post > 0:
         near = _near_hits(seen.search, rooms_grid.occupied, opts.frontier_post / res, faces=faces)
@@ -581,7 +581,7 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
     with timer("preprocess"):
         solid, small_parts, seen = _look_through_clutter(rooms_grid, opts, furniture)
     with timer("walls"):
-        wall_grid = _Walls(seen.search, opts)
+        wall_grid = _WallGrid(seen.search, opts)
         straight = wall_grid.straight_share()
         opts = opts.resolved(res, straight)  # rise and furniture measured on the map
     if opts.furniture_size > furniture:
@@ -589,7 +589,7 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
             again = _look_through_furniture(rooms_grid, opts, straight, seen, solid, small_parts)
             if again is not None:
                 seen = again
-                wall_grid = _Walls(seen.search, opts)
+                wall_grid = _WallGrid(seen.search, opts)
     del solid, small_parts
     with timer("preprocess"):
         free = seen.search.free  # read, never written, from here on
