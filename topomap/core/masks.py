@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._fast import edt, label_stats, lookup
 from ..grid import FREE, OCCUPIED, OccupancyGrid
 from .geometry import disk, metres_to_px
 
@@ -39,8 +40,6 @@ def preprocess_masks(grid: OccupancyGrid, opts, *, occupied=None, clearance: boo
     occupied_mask : (M, N) ndarray of bool
     """
     import cv2
-
-    from .._fast import edt
 
     res = grid.resolution
     er = metres_to_px(opts.erosion_radius, res)
@@ -111,8 +110,6 @@ def _close_by_distance(free: np.ndarray, r: int) -> np.ndarray:
     not dilated or outside the image (exact Euclidean distances: ``d <= r`` iff ``d**2 <= r**2``)."""
     import cv2
 
-    from .._fast import edt
-
     if free.all():
         return np.zeros(free.shape, bool)
     grown = edt(free) <= r
@@ -123,7 +120,6 @@ def _close_by_distance(free: np.ndarray, r: int) -> np.ndarray:
 def solid_components(free: np.ndarray):
     """The 8-connected components of the non-free cells: ``(solid, comp, stats)``, the non-free
     cells (uint8 0/1), their labels (0: the free cells) and OpenCV's statistics per label."""
-    from .._fast import label_stats
 
     solid = np.logical_not(free).view(np.uint8)
     _, comp, stats, _ = label_stats(solid, connectivity=8)
@@ -175,7 +171,6 @@ def clutter_mask(free: np.ndarray, max_extent_px: float, *, furniture_px: float 
 
     ``parts``: :func:`clutter_parts` of the same arguments, when already
     made (the furniture stage asks twice, with and without ``keep``)."""
-    from .._fast import lookup
 
     comp, clutter = parts if parts is not None else clutter_parts(
         free, max_extent_px, furniture_px=furniture_px, wall_thickness_px=wall_thickness_px)

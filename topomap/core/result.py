@@ -245,7 +245,7 @@ class Segmentation:
     def room_graph(self):
         """The room–door graph (:func:`topomap.core.roomgraph.room_graph`), built once."""
         if self._room_graph is None:
-            from .roomgraph import room_graph
+            from .roomgraph import room_graph  # here: shapely is imported only when a graph is built
 
             t = time.perf_counter()
             self._room_graph = room_graph(self)
