@@ -462,10 +462,10 @@ def benchmark_cmd(dataset_dir, methods, variant, jobs, out, maps):
     (map.yaml, plan.yaml, gt_rooms.png, gt_doors.json). Each map is loaded
     as `topomap segment` loads it; runtimes are of loading plus segmentation.
     """
-    from .bench.benchmark import _check_methods, format_table, run_benchmark, write_rows
+    from .bench.benchmark import check_methods, format_table, run_benchmark, write_rows
 
     try:
-        names = _check_methods(methods)
+        names = check_methods(methods)
         if out is not None and out.suffix.lower() not in (".csv", ".json"):
             from .errors import ParameterError
 
