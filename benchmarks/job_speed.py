@@ -37,7 +37,6 @@ from __future__ import annotations
 
 import argparse
 import glob
-import json
 import os
 import re
 import shutil
@@ -49,6 +48,9 @@ from pathlib import Path
 
 import numpy as np
 
+# PIL and topomap are imported inside the functions that use them: this file is also the child process of
+# the comparison jobs (``--_job``), which times its own imports.
+
 HERE = Path(__file__).resolve().parent
 SECTION = HERE / "sections" / "50_job_speed.md"
 SYNTH_TILES = (15, 15)
@@ -59,6 +61,7 @@ SYNTH_TILES = (15, 15)
 # --------------------------------------------------------------------------
 
 def _job(kind, out, res, maps):
+    # the imports are the job's "import" stage: made here, timed
     t_start = time.perf_counter()
     import numpy as np
     from PIL import Image
@@ -182,9 +185,9 @@ def _commit():
 
 def _machine():
     sys.path.insert(0, str(HERE))
-    from speed import _machine as m
+    from speed import _machine as machine  # benchmarks/speed.py, found through the path just set
 
-    return m()
+    return machine()
 
 
 def _load():
@@ -198,14 +201,17 @@ def _load():
 # the report
 # --------------------------------------------------------------------------
 
-#: Every stage --profile reports (topomap.run.batch's list), but the sums (segment/total, write, job).
+#: Every stage --profile reports (topomap.run.job.STAGES), but the sums (segment/total, write, job).
 WRITES = ["write_labels", "write_label_map_pgm", "write_label_map", "write_graphml", "write_json", "write_geojson",
           "write_overlay"]
 TOPO_STAGES = ["start", "import", "warmup", "load", "preprocess", "walls", "furniture", "skeletons", "graphs", "doors",
                "openings", "rooms", "room_graph", "travel", "overlay"] + WRITES
+#: The stages of the command itself, paid once before the first map.
+ONCE = ("start", "import", "warmup")
 
 
-def main(argv=None):
+def _arguments(argv):
+    """The parsed command line (and the parser, for its errors)."""
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("directory", nargs="?", default=None)
     ap.add_argument("--variant", choices=["unfurnished", "furnished", "both"], default="both")
@@ -215,113 +221,143 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true", help="one round; no growth and synthetic cases")
     ap.add_argument("--section", default=str(SECTION))
     ap.add_argument("--_job", nargs="+", default=None, help=argparse.SUPPRESS)
-    a = ap.parse_args(argv)
-    if a._job:
-        kind, out, res, *maps = a._job
+    return ap, ap.parse_args(argv)
+
+
+def _intro(args, maps, rounds):
+    """The section's heading and the paragraphs on how the jobs were run."""
+    cmdline = "python benchmarks/job_speed.py" + (" --quick" if args.quick else f" --rounds {rounds}") + \
+        ("" if args.variant == "both" else f" --variant {args.variant}")
+    return ["## Speed of the whole job", "",
+            f"`{cmdline}` (the data set's directory as argument), commit `{_commit()}`; {_machine()}; "
+            f"{_load()} at the start (the machine was shared: compare within the run).", "",
+            f"{len(maps)} images of ipa_room_segmentation ({args.variant} variants; each `NAME.png` read with "
+            "`--resolution 0.05`), every job one fresh process given all the maps. **topomap**: `topomap segment "
+            "MAPS... -o OUT --profile` with its default outputs (labels.png, rooms.graphml, rooms.json, "
+            "rooms.geojson, overlay.png; travel distances included). **watershed**: a plain script per map: "
+            "`topomap.load_map`, `scipy.ndimage.distance_transform_edt`, `skimage.feature.peak_local_max` "
+            "(markers 1.75 m apart), `skimage.segmentation.watershed`, a 16-bit label PNG (Pillow). The two "
+            "alternate, round after round. Per-map time: loading to the last file written, as each job reports "
+            "it; peak memory: `ru_maxrss` of the job's process.", ""]
+
+
+def _alternate(maps, res, rounds, tmp):
+    """Run the topomap and watershed jobs ``rounds`` times, alternating which goes first: a dict of each
+    kind's wall seconds per round (``walls``), per-map job seconds (``per_map``), peak MB (``peak``), and
+    the per-map stages of the last round (``stages``)."""
+    runs = {"walls": {"topomap": [], "watershed": []}, "per_map": {"topomap": {}, "watershed": {}},
+            "peak": {"topomap": 0.0, "watershed": 0.0}, "stages": {"topomap": {}, "watershed": {}}}
+    for r in range(rounds):
+        for kind in ("topomap", "watershed") if r % 2 == 0 else ("watershed", "topomap"):
+            wall, mb, st = run(kind, maps, res, Path(tmp) / f"{kind}{r}")
+            runs["walls"][kind].append(wall)
+            runs["peak"][kind] = max(runs["peak"][kind], mb)
+            for m, d in st.items():
+                runs["per_map"][kind].setdefault(m, []).append(d["job"])
+            runs["stages"][kind] = st
+            print(f"round {r + 1} {kind}: {wall:.2f} s, {mb:.0f} MB", file=sys.stderr, flush=True)
+    return runs
+
+
+def _totals(runs, rounds, floor_wall, floor_mb):
+    """The table of the rounds, the ratios of the totals and of the per-map medians, and the floor job."""
+    walls, per_map, peak = runs["walls"], runs["per_map"], runs["peak"]
+    lines = ["| round | topomap (s) | watershed (s) | ratio |", "| --- | ---: | ---: | ---: |"]
+    for r in range(rounds):
+        lines.append(f"| {r + 1} | {walls['topomap'][r]:.2f} | {walls['watershed'][r]:.2f} | "
+                     f"{walls['topomap'][r] / walls['watershed'][r]:.2f} |")
+    tt, tw = np.median(walls["topomap"]), np.median(walls["watershed"])
+    mt = np.median([np.median(v) for v in per_map["topomap"].values()])
+    mw = np.median([np.median(v) for v in per_map["watershed"].values()])
+    return lines + ["", f"**Ratio of the totals (median of the rounds): {tt / tw:.2f}** ({tt:.2f} s against "
+                        f"{tw:.2f} s); **ratio of the per-map medians: {mt / mw:.2f}** ({mt * 1000:.0f} ms against "
+                        f"{mw * 1000:.0f} ms). Peak memory: topomap {peak['topomap']:.0f} MB, watershed "
+                        f"{peak['watershed']:.0f} MB.", "",
+                    f"Physical floor (one process: `topomap.load_map`, one OpenCV distance transform, the 16-bit "
+                    f"PNG of the free space's components, per map): {floor_wall:.2f} s, {floor_mb:.0f} MB; the whole "
+                    f"topomap job is **{tt / floor_wall:.1f} x** the floor, the watershed job {tw / floor_wall:.1f} x.",
+                    ""]
+
+
+def _time_split(profile, watershed):
+    """Where the time of the whole topomap job goes, summed over the maps (last round), beside the
+    watershed job's own stages."""
+    groups = [("start, imports, warm-up (once)", list(ONCE)), ("load", ["load"]),
+              ("segmentation (`segment()`)", ["total"]), ("room graph", ["room_graph"]),
+              ("travel distances", ["travel"]), ("overlay drawn", ["overlay"]),
+              ("files written", WRITES)]
+    topo_sum = {k: sum(d.get(k, 0.0) for d in profile.values()) for k in
+                [*ONCE, "load", "total", "room_graph", "travel", "overlay", *WRITES, "job"]}
+    water_sum = {k: sum(d.get(k, 0.0) for d in watershed.values())
+                 for k in ["import", "load", "distance", "segment", "write", "job"]}
+    lines = ["Where the time goes, summed over the maps (last round; the watershed job's own stages beside "
+             "it):", "", "| topomap stage | s | watershed stage | s |", "| --- | ---: | --- | ---: |"]
+    water_rows = [("imports (once)", water_sum["import"]), ("load", water_sum["load"]),
+                  ("distance transform + watershed", water_sum["distance"] + water_sum["segment"]), ("", None),
+                  ("", None), ("", None), ("label PNG written", water_sum["write"])]
+    for (label, keys), (water_label, water_value) in zip(groups, water_rows):
+        lines.append(f"| {label} | {sum(topo_sum[k] for k in keys):.2f} | {water_label} | "
+                     f"{'' if water_value is None else f'{water_value:.2f}'} |")
+    return lines + [f"| **maps, load to last file** | {topo_sum['job']:.2f} | **maps** | {water_sum['job']:.2f} |",
+                    ""]
+
+
+def _largest_map(maps, profile, floor):
+    """The stages of the largest map from the last topomap round's ``--profile``, and its floor job."""
+    big = max(maps, key=_cells)
+    name = Path(big).stem
+    st = dict(profile.get(name, {}))
+    for d in profile.values():  # start and import: on the first map's line, once per command
+        for k in ONCE:
+            if k in d:
+                st[k] = d[k]
+    job = st.get("job", float("nan"))
+    lines = [f"Stages of the largest map, {name} ({_cells(big) / 1e6:.2f} M cells), from `--profile` of the "
+             "last topomap round (`start`: process start to the command; `import`: every module the "
+             "command uses, loaded once before the first map; `warmup`: the job once on a tiny map, so "
+             "one-off first-call costs are not in the first map; all three paid once per command, so "
+             "shared by all maps of a batch; the clearance is computed on a second thread during "
+             "`preprocess` and `skeletons`, and the overlay and the labels.png image during `travel`: "
+             "`overlay` is what the job still waits for them after it):", "",
+             "| stage | ms | share of the map's job |", "| --- | ---: | ---: |"]
+    for k in TOPO_STAGES:
+        if k in st:
+            share = "" if k in ONCE else f"{100 * st[k] / job:.0f} %"
+            lines.append(f"| {k} | {st[k] * 1000:.0f} | {share} |")
+    lines.append(f"| **job** (load to last file) | {job * 1000:.0f} | 100 % |")
+    floor_stages = floor.get(name, {})
+    return lines + ["", f"Same map, floor job: load {floor_stages.get('load', 0) * 1000:.0f} ms, distance transform "
+                        f"{floor_stages.get('distance', 0) * 1000:.0f} ms, write "
+                        f"{floor_stages.get('write', 0) * 1000:.0f} ms.", ""]
+
+
+def main(argv=None):
+    ap, args = _arguments(argv)
+    if args._job:
+        kind, out, res, *maps = args._job
         _job(kind, out, float(res), maps)
         return 0
     from topomap.bench.datasets import benchmark_dir
 
-    directory = a.directory or benchmark_dir()
+    directory = args.directory or benchmark_dir()
     if directory is None:
         ap.error("no benchmark directory given and benchmark_dir() found none")
-    maps = _ipa_maps(directory, a.variant)
-    rounds = 1 if a.quick else a.rounds
-    cmdline = "python benchmarks/job_speed.py" + (" --quick" if a.quick else f" --rounds {rounds}") + \
-        ("" if a.variant == "both" else f" --variant {a.variant}")
-    lines = ["## Speed of the whole job", "",
-             f"`{cmdline}` (the data set's directory as argument), commit `{_commit()}`; {_machine()}; "
-             f"{_load()} at the start (the machine was shared: compare within the run).", "",
-             f"{len(maps)} images of ipa_room_segmentation ({a.variant} variants; each `NAME.png` read with "
-             "`--resolution 0.05`), every job one fresh process given all the maps. **topomap**: `topomap segment "
-             "MAPS... -o OUT --profile` with its default outputs (labels.png, rooms.graphml, rooms.json, "
-             "rooms.geojson, overlay.png; travel distances included). **watershed**: a plain script per map: "
-             "`topomap.load_map`, `scipy.ndimage.distance_transform_edt`, `skimage.feature.peak_local_max` "
-             "(markers 1.75 m apart), `skimage.segmentation.watershed`, a 16-bit label PNG (Pillow). The two "
-             "alternate, round after round. Per-map time: loading to the last file written, as each job reports "
-             "it; peak memory: `ru_maxrss` of the job's process.", ""]
+    maps = _ipa_maps(directory, args.variant)
+    rounds = 1 if args.quick else args.rounds
+    lines = _intro(args, maps, rounds)
     res = 0.05
-    walls = {"topomap": [], "watershed": []}
-    per_map = {"topomap": {}, "watershed": {}}
-    peak = {"topomap": 0.0, "watershed": 0.0}
-    prof, ws_last = {}, {}
     with tempfile.TemporaryDirectory() as tmp:
-        for r in range(rounds):
-            for kind in ("topomap", "watershed") if r % 2 == 0 else ("watershed", "topomap"):
-                wall, mb, st = run(kind, maps, res, Path(tmp) / f"{kind}{r}")
-                walls[kind].append(wall)
-                peak[kind] = max(peak[kind], mb)
-                for m, d in st.items():
-                    per_map[kind].setdefault(m, []).append(d["job"])
-                if kind == "topomap":
-                    prof = st
-                else:
-                    ws_last = st
-                print(f"round {r + 1} {kind}: {wall:.2f} s, {mb:.0f} MB", file=sys.stderr, flush=True)
-        fwall, fmb, fst = run("floor", maps, res, Path(tmp) / "floor")
-        lines += ["| round | topomap (s) | watershed (s) | ratio |", "| --- | ---: | ---: | ---: |"]
-        for r in range(rounds):
-            lines.append(f"| {r + 1} | {walls['topomap'][r]:.2f} | {walls['watershed'][r]:.2f} | "
-                         f"{walls['topomap'][r] / walls['watershed'][r]:.2f} |")
-        tt, tw = np.median(walls["topomap"]), np.median(walls["watershed"])
-        mt = np.median([np.median(v) for v in per_map["topomap"].values()])
-        mw = np.median([np.median(v) for v in per_map["watershed"].values()])
-        lines += ["", f"**Ratio of the totals (median of the rounds): {tt / tw:.2f}** ({tt:.2f} s against "
-                      f"{tw:.2f} s); **ratio of the per-map medians: {mt / mw:.2f}** ({mt * 1000:.0f} ms against "
-                      f"{mw * 1000:.0f} ms). Peak memory: topomap {peak['topomap']:.0f} MB, watershed "
-                      f"{peak['watershed']:.0f} MB.", "",
-                  f"Physical floor (one process: `topomap.load_map`, one OpenCV distance transform, the 16-bit "
-                  f"PNG of the free space's components, per map): {fwall:.2f} s, {fmb:.0f} MB; the whole "
-                  f"topomap job is **{tt / fwall:.1f} x** the floor, the watershed job {tw / fwall:.1f} x.", ""]
-        # where the time of the whole topomap job goes, summed over the maps (last round)
-        groups = [("start, imports, warm-up (once)", ["start", "import", "warmup"]), ("load", ["load"]),
-                  ("segmentation (`segment()`)", ["total"]), ("room graph", ["room_graph"]),
-                  ("travel distances", ["travel"]), ("overlay drawn", ["overlay"]),
-                  ("files written", WRITES)]
-        wsum = {k: sum(d.get(k, 0.0) for d in prof.values()) for k in
-                ["start", "import", "warmup", "load", "total", "room_graph", "travel", "overlay", *WRITES, "job"]}
-        wsh = {k: sum(d.get(k, 0.0) for d in ws_last.values()) for k in ["import", "load", "distance", "segment",
-                                                                          "write", "job"]}
-        lines += ["Where the time goes, summed over the maps (last round; the watershed job's own stages beside "
-                  "it):", "", "| topomap stage | s | watershed stage | s |", "| --- | ---: | --- | ---: |"]
-        wrows = [("imports (once)", wsh["import"]), ("load", wsh["load"]),
-                 ("distance transform + watershed", wsh["distance"] + wsh["segment"]), ("", None), ("", None),
-                 ("", None), ("label PNG written", wsh["write"])]
-        for (lbl, keys), (wl, wv) in zip(groups, wrows):
-            lines.append(f"| {lbl} | {sum(wsum[k] for k in keys):.2f} | {wl} | "
-                         f"{'' if wv is None else f'{wv:.2f}'} |")
-        lines += [f"| **maps, load to last file** | {wsum['job']:.2f} | **maps** | {wsh['job']:.2f} |", ""]
-        # largest map, stage by stage
-        big = max(maps, key=_cells)
-        name = Path(big).stem
-        st = dict(prof.get(name, {}))
-        for d in prof.values():  # start and import: on the first map's line, once per command
-            for k in ("start", "import", "warmup"):
-                if k in d:
-                    st[k] = d[k]
-        job = st.get("job", float("nan"))
-        lines += [f"Stages of the largest map, {name} ({_cells(big) / 1e6:.2f} M cells), from `--profile` of the "
-                  "last topomap round (`start`: process start to the command; `import`: every module the "
-                  "command uses, loaded once before the first map; `warmup`: the job once on a tiny map, so "
-                  "one-off first-call costs are not in the first map; all three paid once per command, so "
-                  "shared by all maps of a batch; the clearance is computed on a second thread during "
-                  "`preprocess` and `skeletons`, and the overlay and the labels.png image during `travel`: "
-                  "`overlay` is what the job still waits for them after it):", "",
-                  "| stage | ms | share of the map's job |", "| --- | ---: | ---: |"]
-        for k in TOPO_STAGES:
-            if k in st:
-                share = "" if k in ("start", "import", "warmup") else f"{100 * st[k] / job:.0f} %"
-                lines.append(f"| {k} | {st[k] * 1000:.0f} | {share} |")
-        lines.append(f"| **job** (load to last file) | {job * 1000:.0f} | 100 % |")
-        ws = fst.get(name, {})
-        lines += ["", f"Same map, floor job: load {ws.get('load', 0) * 1000:.0f} ms, distance transform "
-                      f"{ws.get('distance', 0) * 1000:.0f} ms, write {ws.get('write', 0) * 1000:.0f} ms.", ""]
-        if not a.quick:
-            lines += _growth(directory, a.growth_map, [int(s) for s in a.scales.split(",")], tmp)
+        runs = _alternate(maps, res, rounds, tmp)
+        floor_wall, floor_mb, floor = run("floor", maps, res, Path(tmp) / "floor")
+        lines += _totals(runs, rounds, floor_wall, floor_mb)
+        lines += _time_split(runs["stages"]["topomap"], runs["stages"]["watershed"])
+        lines += _largest_map(maps, runs["stages"]["topomap"], floor)
+        if not args.quick:
+            lines += _growth(directory, args.growth_map, [int(s) for s in args.scales.split(",")], tmp)
             lines += _synthetic_case(tmp)
     text = "\n".join(lines) + "\n"
-    Path(a.section).parent.mkdir(parents=True, exist_ok=True)
-    Path(a.section).write_text(text, encoding="utf-8")
+    Path(args.section).parent.mkdir(parents=True, exist_ok=True)
+    Path(args.section).write_text(text, encoding="utf-8")
     print(text)
     return 0
 

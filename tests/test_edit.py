@@ -1,4 +1,4 @@
-"""Editing rooms (topomap.core.edit, ``topomap edit``): merges, splits, names and no-go marks keep the
+"""Editing rooms (topomap.core.edit, topomap.run.editing, ``topomap edit``): merges, splits, names and no-go marks keep the
 labels, the doors and the room graph consistent; bad edits change nothing; edits last through
 ``--previous``."""
 
@@ -17,6 +17,7 @@ from topomap.io.export import load_graph, load_label_map, save_graph
 from topomap.core.identity import match_rooms
 from topomap.io import from_array, save_map
 from topomap.core.segmentation import segment
+from topomap.run.editing import load_segmentation
 
 SPECKS = [(2, 20), (3, 100), (125, 40), (124, 200)]  # free 3 x 3 specks outside the building: fragments
 
@@ -301,7 +302,7 @@ def test_any_sequence_of_edits_keeps_rooms_doors_and_graph_consistent(base, data
 # Output folders and the command line
 
 def test_load_segmentation_reads_back_what_segment_wrote(out_dir, base):
-    seg = E.load_segmentation(out_dir)
+    seg = load_segmentation(out_dir)
     assert np.array_equal(seg.labels, base.labels) and np.array_equal(seg.grid.cells, base.grid.cells)
     assert [(d.id, d.rooms, d.p1, d.p2) for d in seg.doors] == [(d.id, d.rooms, d.p1, d.p2) for d in base.doors]
     G, H = seg.room_graph, base.room_graph
@@ -312,21 +313,21 @@ def test_load_segmentation_reads_back_what_segment_wrote(out_dir, base):
 
 def test_load_segmentation_without_the_map(out_dir, caplog):
     (out_dir.parent / "map.pgm").unlink()
-    seg = E.load_segmentation(out_dir)
+    seg = load_segmentation(out_dir)
     assert "map.yaml cannot be read" in caplog.text and "taken as the free space" in caplog.text
     assert np.array_equal(seg.grid.free, seg.labels > 0)
 
 
 def test_load_segmentation_refuses(tmp_path, out_dir):
     with pytest.raises(MapFileNotFoundError, match="no such output folder"):
-        E.load_segmentation(tmp_path / "nope")
+        load_segmentation(tmp_path / "nope")
     with pytest.raises(MapFileNotFoundError, match="holds no rooms.graphml"):
-        E.load_segmentation(tmp_path)
+        load_segmentation(tmp_path)
     G = load_graph(out_dir / "rooms.graphml")
     G.remove_node(1)
     save_graph(G, out_dir / "rooms.graphml")
     with pytest.raises(GraphFormatError, match="disagree: room 1 is in one of them only"):
-        E.load_segmentation(out_dir)
+        load_segmentation(out_dir)
 
 
 def _run(*args):
@@ -352,7 +353,7 @@ def test_cli_edit_rewrites_every_output(out_dir, base):
     new = _snapshot(out_dir)
     for name in ("labels.png", "labels.pgm", "rooms.graphml", "rooms.json", "rooms.geojson", "overlay.png"):
         assert new[name] != old[name], name
-    seg = E.load_segmentation(out_dir)
+    seg = load_segmentation(out_dir)
     check_consistent(seg, base)
     from PIL import Image
 
@@ -392,7 +393,7 @@ BAD = [
 
 @pytest.mark.parametrize("args, msg", BAD, ids=[str(i) for i in range(len(BAD))])
 def test_cli_bad_edit_changes_no_file(out_dir, args, msg):
-    seg = E.load_segmentation(out_dir)
+    seg = load_segmentation(out_dir)
     assert seg.room_graph.degree[4] == 3  # the corridor is room 4 (the lines above are drawn for it)
     old = _snapshot(out_dir)
     r = _run("edit", out_dir, *args)

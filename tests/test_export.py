@@ -232,7 +232,7 @@ def test_write_outputs_only_writes(hand, tmp_path):
 
 
 def test_write_outputs(hand, tmp_path):
-    from topomap.cli import write_segmentation
+    from topomap.run.job import write_segmentation
 
     out = write_segmentation(hand, tmp_path / "out", overlay=False)
     assert set(out) >= {"labels", "graphml", "json", "geojson"}

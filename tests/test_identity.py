@@ -188,7 +188,7 @@ def test_bad_previous():
 
 
 def test_planning_pictures_and_files_with_gaps_in_the_ids(tmp_path):
-    from topomap.cli import write_segmentation
+    from topomap.run.job import write_segmentation
     from topomap.planning import plan_path, plan_tour, travel_graph
 
     grid = topomap.load_map(topomap.example_map_path())

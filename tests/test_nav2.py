@@ -233,7 +233,7 @@ def test_write_and_cli(tmp_path):
     tm = corridor_with_rooms()
     grid = topomap.from_array(tm.array)
     out = tmp_path / "out"
-    from topomap.cli import write_segmentation
+    from topomap.run.job import write_segmentation
 
     seg = topomap.segment(grid)
     write_segmentation(seg, out, overlay=False)
@@ -269,7 +269,7 @@ def test_write_and_cli(tmp_path):
 ])
 def test_export_bad_input(tmp_path, argv, code, words):
     seg = topomap.segment(topomap.from_array(corridor_with_rooms().array))
-    from topomap.cli import write_segmentation
+    from topomap.run.job import write_segmentation
 
     write_segmentation(seg, tmp_path / "out", overlay=False)
     (tmp_path / "n.geojson").write_text("earlier")
@@ -291,7 +291,7 @@ def test_graph_without_door_ends_is_a_one_line_error():
 
 
 def test_export_labels_of_another_map(tmp_path):
-    from topomap.cli import write_segmentation
+    from topomap.run.job import write_segmentation
 
     write_segmentation(topomap.segment(topomap.from_array(corridor_with_rooms().array)), tmp_path / "a",
                        overlay=False)

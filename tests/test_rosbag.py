@@ -444,7 +444,7 @@ def test_example_node_builds_messages_from_an_rclpy_like_message():
 # --------------------------------------------------------------------------
 
 def test_label_map_pair_reads_as_map_server_raw(tmp_path, seg):
-    from topomap.cli import write_segmentation
+    from topomap.run.job import write_segmentation
 
     out = write_segmentation(seg, tmp_path, overlay=False)
     assert out["label_map"] == tmp_path / "labels.yaml" and (tmp_path / "labels.pgm").is_file()

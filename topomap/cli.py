@@ -8,6 +8,8 @@ the traceback of any error.
 
 from __future__ import annotations
 
+# The commands import what they use inside their functions, so that ``topomap --help`` starts fast.
+
 import logging
 import sys
 import traceback
@@ -18,6 +20,15 @@ import click
 EXIT_OK, EXIT_INPUT, EXIT_USAGE, EXIT_INTERNAL = 0, 1, 2, 3
 
 log = logging.getLogger("topomap")
+
+
+def __getattr__(name):
+    # ``topomap.cli.write_segmentation``, its earlier place, imported on first use (start-up stays fast)
+    if name == "write_segmentation":
+        from .run.job import write_segmentation
+
+        return write_segmentation
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def _method_names():
@@ -60,115 +71,6 @@ def main(debug, verbose):
     logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
 
 
-def write_segmentation(seg, outdir, *, overlay: bool = True, skeletons: bool = False, geojson: bool = True,
-                       timings: dict | None = None) -> dict:
-    """The files ``topomap segment`` writes for ``seg`` into ``outdir``.
-
-    Computes what is saved — the travel graph
-    (:func:`topomap.planning.travel_graph`: the room–door graph with
-    in-room door-to-door distances, so ``topomap plan`` works from
-    ``rooms.graphml`` or ``rooms.json`` alone) and, unless ``overlay`` is
-    False, the overlay picture (:func:`topomap.io.plot.overlay_png`) — then
-    writes everything with :func:`topomap.io.export.write_outputs` (all files
-    or none; ``rooms.geojson`` only when ``geojson``).
-
-    ``timings``, when given, receives the seconds of each step: ``travel``,
-    ``overlay`` and ``write_<file>`` per file. The overlay and the
-    ``labels.png`` image are made on a second thread while the travel
-    distances are measured: ``overlay`` is the time still waited for them
-    after the travel distances, ``write_labels`` the writing of the file.
-
-    Returns
-    -------
-    dict
-        ``{name: path}`` of the files written.
-    """
-    import time
-
-    from ._fast import Beside
-    from .io.export import write_outputs
-    from .planning.paths import travel_graph
-
-    t = {} if timings is None else timings
-    seg.room_graph  # made here, before the thread below reads it
-    # the pictures (OpenCV's drawing, zlib: mostly without Python's lock) on a second core while the
-    # travel distances are measured; ``overlay`` is the time the job then still waits for them
-    pictures = Beside(_pictures, seg, overlay, skeletons)
-    t0 = time.perf_counter()
-    G = travel_graph(seg)
-    t["travel"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    png, labels_png = pictures.result()
-    if overlay:
-        t["overlay"] = time.perf_counter() - t0
-    return write_outputs(seg, outdir, G, overlay_png=png, geojson=geojson, timings=t, labels_png=labels_png)
-
-
-def _pictures(seg, overlay, skeletons):
-    """``(overlay.png bytes or None, labels.png bytes)`` of ``seg``."""
-    import io as _io
-
-    from .io.export import save_labels
-
-    png = None
-    if overlay:
-        from .io.plot import overlay_png
-
-        png = overlay_png(seg, skeletons=skeletons)
-    buf = _io.BytesIO()
-    save_labels(seg, buf)
-    return png, buf.getvalue()
-
-
-#: Modules the segment command uses, imported up front (their import time is the
-#: ``import`` stage of ``--profile``, not hidden in the first map's stages).
-_PRELOAD = ("numpy", "scipy.ndimage", "scipy.sparse.csgraph", "scipy.spatial", "cv2", "PIL.Image",
-            "PIL.PngImagePlugin", "networkx", "shapely", "shapely.geometry", "skimage.draw",
-            "skimage.graph", "skimage.morphology", "skimage.segmentation", "topomap.io", "topomap.core.segmentation",
-            "topomap.core.roomgraph", "topomap.planning", "topomap.io.export", "topomap.io.plot")
-
-
-def _preload(maps=()) -> float:
-    """Import :data:`_PRELOAD` (and the YAML reader when a map of ``maps`` is a YAML file); returns the
-    seconds it took."""
-    import importlib
-    import time
-
-    t0 = time.perf_counter()
-    yaml = any(str(m).lower().endswith((".yaml", ".yml")) for m in maps)
-    for name in _PRELOAD + (("yaml",) if yaml else ()):
-        importlib.import_module(name)
-    return time.perf_counter() - t0
-
-
-def _warm_up(method) -> float:
-    """Run the whole job once on a tiny map in memory (nothing written); returns the seconds.
-
-    First calls pay one-off costs (lazy imports inside libraries, caches,
-    font set-up); paid here they are the ``warmup`` stage of ``--profile``
-    instead of hiding in the first map's stages.
-    """
-    import time
-
-    import numpy as np
-
-    from .io.maps import from_array
-    from .planning.paths import travel_graph
-    from .io.plot import overlay_png
-    from .api import segment
-
-    t0 = time.perf_counter()
-    free = np.zeros((60, 100), bool)
-    free[4:56, 4:48] = True
-    free[4:56, 52:96] = True
-    free[24:36, 48:52] = True
-    seg = segment(from_array(free, resolution=0.05), method=method)
-    seg.room_graph
-    travel_graph(seg)
-    overlay_png(seg)
-    return time.perf_counter() - t0
-
-
 def _process_age() -> float | None:
     """Seconds since this process started (Linux ``/proc``), or None."""
     import os
@@ -181,52 +83,6 @@ def _process_age() -> float | None:
         return max(up - start / os.sysconf("SC_CLK_TCK"), 0.0)
     except (OSError, ValueError, IndexError):
         return None
-
-
-def _segment_one(path, outdir, resolution, method, skeletons, topic=None, at=None, bag=None, previous=None,
-                 overlay=True, geojson=True):
-    import time
-
-    from . import io
-    from .api import segment
-
-    # a --previous path goes to segment() as it is: its messages then name the file
-    t0 = time.perf_counter()
-    source = path
-    if resolution is None:  # map.pgm beside the map.yaml that names it: read through the YAML
-        beside, why = io.yaml_beside(path)
-        if beside is not None:
-            log.info("%s: read through %s beside it (its resolution, origin and thresholds); give --resolution "
-                     "to read the image alone", path, beside.name)
-            source = beside
-        elif why is not None:
-            log.warning("%s: %s at %g m per cell", path, why, io.DEFAULT_RESOLUTION)
-    grid = io.load_map(source, resolution=resolution, topic=topic, time=at)
-    t1 = time.perf_counter()
-    seg = segment(grid, method=method, previous=previous)
-    seg.room_graph  # built here so its time is its own stage (timings["room_graph"])
-    t2 = time.perf_counter()
-    # the map's outputs land together or not at all: the bag and changes.json are written to temporaries
-    # first and renamed into place only after write_segmentation renamed its files (an error anywhere
-    # removes every temporary; the earlier outputs stay as they were)
-    from contextlib import ExitStack
-
-    with ExitStack() as stack:
-        if bag is not None:
-            from .io.ros import staged_bag
-
-            stack.enter_context(staged_bag(seg, bag))
-        if previous is not None:  # the change record beside the graph (room IDs follow the previous graph)
-            import json
-
-            fh = stack.enter_context(io.atomic_write(Path(outdir) / "changes.json", "w"))
-            json.dump(seg.changes.as_dict(), fh, indent=1)
-        write_segmentation(seg, outdir, skeletons=skeletons, overlay=overlay, geojson=geojson,
-                           timings=seg.timings)
-    seg.timings["load"] = t1 - t0
-    seg.timings["write"] = time.perf_counter() - t2
-    seg.timings["job"] = time.perf_counter() - t0
-    return seg
 
 
 def _id_changes(path) -> str:
@@ -259,10 +115,10 @@ def _summary(row) -> str:
 
 def _print_profile(path, row):
     """One line per stage on stderr (``row``: a summary row, ``t_<stage>`` seconds): where the time of a map went."""
-    from .run.batch import _STAGES
+    from .run.job import STAGES
 
     t = {k[2:]: v for k, v in row.items() if k.startswith("t_") and v is not None and v == v}
-    stages = [k for k in _STAGES if k in t] + sorted(k for k in t if k not in _STAGES)
+    stages = [k for k in STAGES if k in t] + sorted(k for k in t if k not in STAGES)
     click.echo(f"{path}: " + ", ".join(f"{k} {t[k] * 1000:.0f} ms" for k in stages), err=True)
 
 
@@ -342,14 +198,20 @@ def segment_cmd(maps, outdir, resolution, method, skeletons, no_overlay, no_geoj
     from ._fast import keep_freed_memory
 
     keep_freed_memory()  # a batch reuses the pages of the maps before (see there)
-    imported = _preload(maps)
+    import time
+
+    t0 = time.perf_counter()  # the import stage: the modules of the job, then the rest of preload's list
     from .run.batch import ERROR, FAILED, OK, SKIPPED, segment_many
+    from .run.job import preload, warm_up
+
+    preload(maps)
+    imported = time.perf_counter() - t0
     from .errors import ParameterError
 
     warm = None
     if profile:  # one-off first-call costs as a stage of their own, not inside the first map's
         try:
-            warm = _warm_up(method)
+            warm = warm_up(method)
         except Exception:  # noqa: BLE001 - a failed warm-up only leaves those costs in the first map
             warm = None
     # the modules just imported (hundreds of thousands of objects) live as long as the command:
@@ -426,9 +288,10 @@ def segment_cmd(maps, outdir, resolution, method, skeletons, no_overlay, no_geoj
 def demo_cmd(outdir, method):
     """Segment the embedded example office map and write the outputs."""
     from .io.example import example_map_path
+    from .run.job import segment_file
 
     try:
-        seg = _segment_one(example_map_path(), outdir, None, method, True)
+        seg = segment_file(example_map_path(), outdir, None, method, True)
     except Exception as exc:  # noqa: BLE001
         sys.exit(_fail(exc))
     click.echo(f"example office: {_count(seg.n_rooms, 'room')}, {_count(len(seg.doors), 'door')} "
@@ -462,10 +325,10 @@ def benchmark_cmd(dataset_dir, methods, variant, jobs, out, maps):
     (map.yaml, plan.yaml, gt_rooms.png, gt_doors.json). Each map is loaded
     as `topomap segment` loads it; runtimes are of loading plus segmentation.
     """
-    from .bench.benchmark import _check_methods, format_table, run_benchmark, write_rows
+    from .bench.benchmark import check_methods, format_table, run_benchmark, write_rows
 
     try:
-        names = _check_methods(methods)
+        names = check_methods(methods)
         if out is not None and out.suffix.lower() not in (".csv", ".json"):
             from .errors import ParameterError
 
@@ -610,8 +473,8 @@ def tour_cmd(graph, start, start_room, rooms, return_to_start, robot_width, as_j
     click.echo("order: " + " -> ".join(str(r) for r in tour["order"]) + (" -> start" if return_to_start else ""))
     click.echo(f"length: {tour['length']:.2f} m ({tour['method']})")
     stops = tour["order"][1:] + (["start"] if return_to_start else [])
-    for r, L in zip(stops, tour["legs"]):
-        click.echo(f"  {'room ' + str(r) if r != 'start' else 'start':<10} +{L:.2f} m")
+    for r, leg in zip(stops, tour["legs"]):
+        click.echo(f"  {'room ' + str(r) if r != 'start' else 'start':<10} +{leg:.2f} m")
     click.echo("doors: " + " ".join(str(d) for d in tour["doors"]))
     if tour["unreachable"]:
         click.echo("unreachable rooms: " + ", ".join(str(r) for r in tour["unreachable"]))
@@ -736,7 +599,7 @@ def export_cmd(source, target, nav2, clearance):
 
 
 class _EditCommand(click.Command):
-    """A command that keeps the order its options were given in (``ctx.meta["topomap.core.edit.order"]``:
+    """A command that keeps the order its options were given in (``ctx.meta["topomap.cli.edit.order"]``:
     one parameter name per occurrence), for edits applied in the order typed."""
 
     def make_parser(self, ctx):
@@ -745,7 +608,7 @@ class _EditCommand(click.Command):
 
         def parse_args(args):
             opts, rest, order = parse(args=args)
-            ctx.meta["topomap.core.edit.order"] = [p.name for p in order]
+            ctx.meta["topomap.cli.edit.order"] = [p.name for p in order]
             return opts, rest, order
 
         parser.parse_args = parse_args
@@ -773,13 +636,13 @@ def edit_cmd(outdir, merges, splits, names, no_gos):
     graph keeps names, no-go marks and merges for `topomap segment NEW_MAP
     --previous OUT_DIR/rooms.graphml`.
     """
-    from .core.edit import edit_outputs
+    from .run.editing import edit_outputs
 
     given = {"merges": [("merge", *v) for v in merges], "splits": [("split", *v) for v in splits],
              "names": [("name", *v) for v in names], "no_gos": [("no_go", v) for v in no_gos]}
     if not any(given.values()):
         raise click.UsageError("nothing to edit: give --merge, --split, --name or --no-go")
-    order = click.get_current_context().meta.get("topomap.core.edit.order") or list(given)
+    order = click.get_current_context().meta.get("topomap.cli.edit.order") or list(given)
     edits, taken = [], {k: 0 for k in given}
     for name in order:  # each option's values in the order typed, interleaved as typed
         if name in given and taken[name] < len(given[name]):

@@ -41,19 +41,29 @@ Conventions:
 
 from __future__ import annotations
 
+import concurrent.futures
 import csv
 import gc
-import io as _io
+import io
 import json
 import math
+import signal
 import time
 from pathlib import Path
 from typing import Callable, Iterable, Optional, Sequence
 
 import numpy as np
 
-from .datasets import LABELLED_VARIANT, SIMULATED_VARIANTS, VARIANTS
-from ..errors import ParameterError
+from ..core import segmentation
+from ..core.segmentation import METHODS
+from ..errors import MapError, ParameterError
+from ..grid import share_memory
+from ..io.files import atomic_write
+from ..io.maps import from_array
+from ..run.batch import worker_count
+from .datasets import LABELLED_VARIANT, SIMULATED_VARIANTS, VARIANTS, detect_layout, door_cells, load_benchmark, \
+    load_labelled, load_simulated
+from .evaluation import evaluate
 
 __all__ = [
     "VARIANTS",
@@ -63,6 +73,7 @@ __all__ = [
     "segment_map",
     "run_benchmark",
     "run_map",
+    "check_methods",
     "format_table",
     "write_rows",
 ]
@@ -114,21 +125,34 @@ def segment_map(bm, method: str):
     seconds cover loading and segmentation (``seg.timings["load"]`` is set
     to the loading part).
     """
-    from ..core.segmentation import segment
-
     gc.collect()
     t0 = time.perf_counter()
     grid = bm.load()
     t1 = time.perf_counter()
-    seg = segment(grid, method=method)
+    seg = segmentation.segment(grid, method=method)
     t2 = time.perf_counter()
     seg.timings["load"] = t1 - t0
     return grid, seg, t2 - t0
 
 
-def _check_methods(methods) -> list:
-    from ..core.segmentation import METHODS
+def check_methods(methods) -> list:
+    """The segmentation methods asked for, checked, in order and each once.
 
+    Parameters
+    ----------
+    methods : sequence of str or str or None
+        Method names, or one comma-separated string of them; None: every
+        method of :data:`topomap.core.segmentation.METHODS`.
+
+    Returns
+    -------
+    list of str
+
+    Raises
+    ------
+    ParameterError
+        An unknown method, or none given.
+    """
     if methods is None:
         return list(METHODS)
     if isinstance(methods, str):
@@ -185,15 +209,12 @@ def _warm_up(method: str) -> None:
     if method in _WARM:
         return
     _WARM.add(method)
-    from ..io.maps import from_array
-    from ..core.segmentation import segment
-
     free = np.zeros((80, 120), bool)
     free[5:75, 5:58] = True
     free[5:75, 62:115] = True
     free[35:47, 58:62] = True
     try:
-        segment(from_array(free, resolution=0.05), method=method)
+        segmentation.segment(from_array(free, resolution=0.05), method=method)
     except Exception:  # noqa: BLE001 - a failing method fails again, timed, on the real maps
         pass
 
@@ -208,10 +229,6 @@ def _error_row(row, exc, runtime, jobs):
 
 def _score(bm, grid, seg) -> dict:
     """:func:`topomap.bench.evaluation.evaluate` of one segmentation of ``bm`` (the grid as loaded)."""
-    from .datasets import door_cells
-    from ..errors import MapError
-    from .evaluation import evaluate
-
     if grid.shape != bm.gt_rooms.shape:
         raise MapError(f"{bm.load_path}: map is {grid.shape[1]} x {grid.shape[0]} cells, its ground truth "
                        f"{bm.gt_path.name} {bm.gt_rooms.shape[1]} x {bm.gt_rooms.shape[0]}")
@@ -283,11 +300,8 @@ def _ordered(row: dict) -> dict:
 
 
 def _pool_init(jobs: int = 1):
-    # workers ignore Ctrl-C; the parent cancels them
-    import signal
-
-    from ..grid import share_memory
-
+    """Set up a worker process: it ignores Ctrl-C (the parent cancels it), and ``jobs`` maps share the
+    memory."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     share_memory(jobs)  # the maps running at once share the memory the size limit is taken from
 
@@ -298,8 +312,6 @@ def _pool_task(bm, method, jobs):
 
 def _load_maps(directory, variants, maps) -> dict:
     """``{variant: [BenchmarkMap]}`` for any layout (the labelled one has one variant)."""
-    from .datasets import detect_layout, load_benchmark, load_labelled, load_simulated
-
     layout = detect_layout(directory)
     if layout == "labelled":
         return {LABELLED_VARIANT: load_labelled(directory, names=maps)}
@@ -311,8 +323,6 @@ def _execute(tasks, jobs, progress) -> dict:
     """Run ``(variant, map, method)`` tasks; ``{(method, variant, name): row}``."""
     results = {}
     total = len(tasks)
-    from ..run.batch import worker_count
-
     jobs = worker_count(jobs, len(tasks))
     if jobs == 1:
         for m in dict.fromkeys(t[2] for t in tasks):
@@ -323,12 +333,10 @@ def _execute(tasks, jobs, progress) -> dict:
             if progress is not None:
                 progress(i + 1, total, row)
         return results
-    from concurrent.futures import ProcessPoolExecutor, as_completed
-
-    with ProcessPoolExecutor(max_workers=jobs, initializer=_pool_init, initargs=(jobs,)) as ex:
+    with concurrent.futures.ProcessPoolExecutor(max_workers=jobs, initializer=_pool_init, initargs=(jobs,)) as ex:
         futs = {ex.submit(_pool_task, bm, m, jobs): (m, v, bm.name) for v, bm, m in tasks}
         try:
-            for i, fut in enumerate(as_completed(futs)):
+            for i, fut in enumerate(concurrent.futures.as_completed(futs)):
                 row = fut.result()
                 results[futs[fut]] = row
                 if progress is not None:
@@ -390,7 +398,7 @@ def run_benchmark(directory, *, methods: Optional[Sequence[str]] = None,
     topomap.bench.datasets.BenchmarkNotFoundError
         No benchmark maps in ``directory``, or a ``maps`` pattern matches none.
     """
-    methods = _check_methods(methods)
+    methods = check_methods(methods)
     variants = _check_variants(variants)
     try:
         jobs = int(jobs)
@@ -551,7 +559,7 @@ def _jsonable(v):
 def write_rows(rows: Sequence[dict], path) -> Path:
     """Write per-map rows to ``path``: CSV (``.csv``) or JSON (``.json``).
 
-    The file is written atomically (:func:`topomap.io.export.atomic_write`).
+    The file is written atomically (:func:`topomap.io.atomic_write`).
     CSV columns are :data:`ROW_COLUMNS` then every other key in first-seen
     order (missing values empty); JSON is a list of objects with NaN as
     ``null``.
@@ -561,8 +569,6 @@ def write_rows(rows: Sequence[dict], path) -> Path:
     ParameterError
         Another file extension.
     """
-    from ..io.export import atomic_write
-
     path = Path(path)
     ext = path.suffix.lower()
     if ext not in (".csv", ".json"):
@@ -575,7 +581,7 @@ def write_rows(rows: Sequence[dict], path) -> Path:
         cols = [c for c in ROW_COLUMNS if any(c in r for r in rows)]
         for r in rows:
             cols += [k for k in r if k not in cols]
-        buf = _io.StringIO()
+        buf = io.StringIO()
         w = csv.DictWriter(buf, fieldnames=cols, restval="", lineterminator="\n")
         w.writeheader()
         for r in rows:

@@ -34,6 +34,7 @@ benchmark layout.
 
 from __future__ import annotations
 
+import concurrent.futures
 import dataclasses
 import json
 import logging
@@ -45,9 +46,14 @@ from pathlib import Path
 from typing import Optional, Sequence
 
 import numpy as np
+from tqdm.auto import tqdm
 
-from ..run.batch import FAILED, OK, SKIPPED, output_dirs
-from ..errors import MapFileError, OutputExistsError, ParameterError
+from ..errors import MapFileError, OutputExistsError, ParameterError, first_line
+from ..io.export import save_labels
+from ..io.maps import save_map
+from ..run.batch import FAILED, OK, SKIPPED, output_dirs, worker_count
+from .floorplan import plan_grid, read_plan
+from .simulate import ScanOptions, shown_doors, shown_rooms, simulate_scan
 
 __all__ = ["CASE_FILES", "case_seed", "scan_options", "write_case", "simulate_case", "simulate_many"]
 
@@ -72,8 +78,6 @@ def scan_options(*, explore=None, glass_share=None, closed_doors=None, no_drift:
     name or a value of the wrong kind is a :class:`~topomap.errors.ParameterError`
     naming it.
     """
-    from .simulate import ScanOptions
-
     names = {f.name: f for f in dataclasses.fields(ScanOptions)}
     values = {}
     for text in extra:
@@ -107,8 +111,6 @@ def scan_options(*, explore=None, glass_share=None, closed_doors=None, no_drift:
 def _doors_json(plan, shown=None) -> dict:
     """The plan's doors (numbered from 1 in the plan's order); with ``shown`` (the scan's rooms) only
     the doors of :func:`topomap.bench.simulate.shown_doors`, with their plan numbers."""
-    from .simulate import shown_doors
-
     doors = list(enumerate(plan.doors, start=1))
     if shown is not None:
         keep = {id(d) for d in shown_doors(plan.doors, shown)}
@@ -167,11 +169,6 @@ def write_case(out_dir, plan, scan_grid, *, meta: Optional[dict] = None) -> Path
     pathlib.Path
         ``out_dir``.
     """
-    from ..io.export import save_labels
-    from .floorplan import plan_grid
-    from ..io.maps import save_map
-    from .simulate import shown_rooms
-
     out = Path(out_dir)
     if scan_grid.shape != plan.shape:
         raise ParameterError(f"{out}: the scan's grid {scan_grid.shape} is not the plan's {plan.shape}")
@@ -246,9 +243,6 @@ def simulate_case(plan_path, out_dir, *, seed: int = 0, options=None, resolution
         ``free_share`` (share of the home's cells the scan saw free),
         ``shown_rooms`` (the rooms of the scan's ground truth).
     """
-    from .floorplan import read_plan
-    from .simulate import ScanOptions, shown_rooms, simulate_scan
-
     options = ScanOptions() if options is None else options
     out = Path(out_dir)
     meta = {"plan": os.path.abspath(plan_path), "seed": int(seed), "resolution": float(resolution),
@@ -273,8 +267,6 @@ def _case_task(args):
     try:
         return simulate_case(path, out, seed=seed, options=options, resolution=resolution, overwrite=overwrite)
     except Exception as exc:  # noqa: BLE001 - one bad plan never stops the corpus; its row says why
-        from ..errors import first_line
-
         return {"plan": str(path), "output": str(out), "status": FAILED, "error": first_line(exc)}
 
 
@@ -292,7 +284,6 @@ def simulate_many(plan_paths: Sequence, out_dir, *, seed: int = 0, options=None,
     list of dict
         One summary row per plan (see :func:`simulate_case`), in the order given.
     """
-
     paths = [Path(p) for p in plan_paths]
     if not paths:
         raise ParameterError("no plan given")
@@ -304,29 +295,19 @@ def simulate_many(plan_paths: Sequence, out_dir, *, seed: int = 0, options=None,
     dirs = output_dirs(paths, out)
     tasks = [(p, d, case_seed(seed, p.stem) if len(paths) > 1 else int(seed), options, resolution, overwrite)
              for p, d in zip(paths, dirs)]
-    jobs = max(1, min(jobs, len(tasks), os.cpu_count() or 1))
+    jobs = worker_count(jobs, len(tasks))
     rows = []
-    try:
-        from tqdm.auto import tqdm
-    except ImportError:  # pragma: no cover - tqdm is a dependency
-        tqdm = None
-    bar = tqdm(total=len(tasks), unit="plan", disable=len(tasks) < 2 or not log.isEnabledFor(logging.WARNING)) \
-        if tqdm else None
+    bar = tqdm(total=len(tasks), unit="plan", disable=len(tasks) < 2 or not log.isEnabledFor(logging.WARNING))
     if jobs == 1:
         for t in tasks:
             rows.append(_case_task(t))
-            if bar is not None:
-                bar.update()
+            bar.update()
     else:
-        from concurrent.futures import ProcessPoolExecutor
-
-        with ProcessPoolExecutor(jobs) as pool:
+        with concurrent.futures.ProcessPoolExecutor(jobs) as pool:
             for row in pool.map(_case_task, tasks, chunksize=1):
                 rows.append(row)
-                if bar is not None:
-                    bar.update()
-    if bar is not None:
-        bar.close()
+                bar.update()
+    bar.close()
     failed = [r for r in rows if r["status"] == FAILED]
     if failed:
         log.info("%d of %d plans failed: %s", len(failed), len(rows), "; ".join(r["error"] for r in failed))

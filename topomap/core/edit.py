@@ -26,9 +26,8 @@ What the room graph says of an edit
     a later map finds again, each lying in the room (see :func:`keep_merges`),
     is merged again and keeps its ID and name.
 
-An output folder of ``topomap segment`` is read back with
-:func:`load_segmentation` and written again with :func:`save_edits`;
-:func:`edit_outputs` does both, as ``topomap edit OUT_DIR ...``.
+An output folder of ``topomap segment`` is edited, as ``topomap edit OUT_DIR ...``
+does, by :mod:`topomap.run.editing`.
 """
 
 from __future__ import annotations
@@ -37,15 +36,13 @@ import dataclasses
 import json
 import logging
 import math
-import time
 import unicodedata
-from pathlib import Path
 
 import numpy as np
 import networkx as nx
 from scipy import ndimage
 
-from ..errors import EditError, GraphFormatError, MapFileError, MapFileNotFoundError
+from ..errors import EditError
 from ..options import TopomapOptions
 from .doors import Door
 from .geometry import line_pixels
@@ -54,8 +51,8 @@ from .rooms import fill_unlabeled
 
 log = logging.getLogger("topomap")
 
-__all__ = ["merge", "split", "rename", "no_go", "apply_edits", "load_segmentation", "save_edits", "edit_outputs",
-           "keep_merges", "merged_ids", "EDIT_ATTRIBUTES", "MAX_NAME_LENGTH"]
+__all__ = ["merge", "split", "rename", "no_go", "apply_edits", "keep_merges", "merged_ids", "EDIT_ATTRIBUTES",
+           "MAX_NAME_LENGTH"]
 
 #: Node attributes an edit sets (and ``topomap.segment(..., previous=...)`` carries to the next map).
 EDIT_ATTRIBUTES = ("name", "no_go", "merged")
@@ -626,192 +623,3 @@ def keep_merges(previous, seg, *, min_overlap: float):
                  ", ".join(map(str, part)), i, previous.name)
     ids = _room_ids(seg)
     return _result(seg, rooms, doors, _next_id(seg, ids), {})
-
-
-# --------------------------------------------------------------------------
-# Output folders
-# --------------------------------------------------------------------------
-
-def _grid_of(folder: Path, record: dict, labels: np.ndarray, res: float, origin, graph_map):
-    """The map the folder's rooms were cut from, in the labels' frame (``res``, ``origin``): the file the run
-    record names when it is unchanged since the run, else the file the room graph names (``graph_map``), when
-    its free cells are the labelled cells; else a map of the labels' cells (free: the rooms and fragments),
-    with a warning."""
-    from ..run.batch import _fingerprint
-    from ..errors import first_line
-    from ..io.maps import FREE, OCCUPIED, OccupancyGrid, load_map
-
-    path, why = record.get("input"), "named neither in the run record nor in rooms.graphml"
-    settings = record.get("settings") or {}
-    if path and _fingerprint(Path(path)) != (record.get("inputs") or {}):
-        path, why = None, f"{record.get('input')} changed or is missing since the run"
-    if not path and graph_map and Path(graph_map).exists():
-        path, settings = graph_map, {}
-    if path:
-        try:
-            grid = load_map(path, resolution=res, origin=origin, topic=settings.get("topic"), time=settings.get("at"))
-            if grid.shape == labels.shape and np.array_equal(grid.free, labels > 0):
-                return grid
-            why = f"{path} is not the map of these labels"
-        except Exception as exc:  # noqa: BLE001 - any reason the map cannot be used: the labels' map below
-            why = f"{path} cannot be read ({first_line(exc)})"
-    log.warning("%s: the map: %s; the rooms' cells are taken as the free space (overlay.png shows the rest as "
-                "walls)", folder, why)
-    cells = np.where(labels > 0, FREE, OCCUPIED).astype(np.int8)
-    return OccupancyGrid(cells, res, origin, source=str(graph_map or folder))
-
-
-def load_segmentation(out_dir):
-    """Read an output folder of ``topomap segment`` back as a segmentation.
-
-    The rooms, fragments and their IDs come from ``labels.pgm`` +
-    ``labels.yaml``; the doors, the room IDs, ``next_room_id`` and the
-    rooms' user attributes (``name``, ``no_go``, ``merged``, ...) from
-    ``rooms.graphml``; the map from the file the run record
-    (``topomap_run.json``) names when that file is unchanged, else the
-    labels' cells stand for the free space.
-
-    Parameters
-    ----------
-    out_dir : str or os.PathLike
-
-    Returns
-    -------
-    TrackedSegmentation
-        No skeleton graphs, candidates or intermediate images (the folder
-        does not hold them).
-
-    Raises
-    ------
-    MapFileNotFoundError
-        No such folder, or a file missing in it.
-    MapFileError
-        Not a folder.
-    GraphFormatError
-        A file cannot be read, or ``rooms.graphml`` and the labels
-        disagree (different sizes, a room in one and not in the other).
-    """
-    from ..run.batch import RECORD, _read_record
-    from .doors import Door
-    from ..io.export import NODE_TYPES, load_graph, load_label_map
-    from .identity import TrackedSegmentation
-
-    folder = Path(out_dir)
-    if not folder.exists():
-        raise MapFileNotFoundError(f"{folder}: no such output folder")
-    if not folder.is_dir():
-        raise MapFileError(f"{folder}: is not a folder (give the output folder of topomap segment)")
-    for name in ("rooms.graphml", "labels.yaml", "labels.pgm"):
-        if not (folder / name).is_file():
-            raise MapFileNotFoundError(f"{folder}: holds no {name}: not an output folder of topomap segment")
-    G = load_graph(folder / "rooms.graphml")
-    labels, res, origin = load_label_map(folder / "labels.yaml")
-    where = f"{folder}: rooms.graphml and labels.pgm disagree"
-    shape = tuple(G.graph.get("shape") or ())
-    if shape and shape != labels.shape:
-        raise GraphFormatError(f"{where}: {shape[1]} x {shape[0]} and {labels.shape[1]} x {labels.shape[0]} cells")
-    nodes = sorted(G.nodes)
-    if any(not isinstance(n, int) or n <= 0 for n in nodes):
-        raise GraphFormatError(f"{folder / 'rooms.graphml'}: node {next(n for n in nodes if not isinstance(n, int) or n <= 0)!r} "
-                               "is not a room ID")
-    top = max(nodes, default=0)
-    cnt = np.bincount(labels.ravel(), minlength=top + 1)
-    in_labels = [int(i) for i in np.flatnonzero(cnt[:top + 1]) if i > 0]
-    if in_labels != nodes:
-        odd = sorted(set(in_labels) ^ set(nodes))
-        raise GraphFormatError(f"{where}: room {odd[0]} is in one of them only")
-    bad = [n for n in nodes if int(G.nodes[n].get("cells", cnt[n])) != cnt[n]]
-    if bad:
-        raise GraphFormatError(f"{where}: room {bad[0]} has {G.nodes[bad[0]]['cells']} cells in the graph and "
-                               f"{cnt[bad[0]]} in the labels")
-    doors = []
-    for u, v, k, d in G.edges(keys=True, data=True):
-        try:
-            doors.append(Door(id=int(d.get("door", k)), p1=tuple(float(t) for t in d["p1"]),
-                              p2=tuple(float(t) for t in d["p2"]), xy1=(float(d["x1"]), float(d["y1"])),
-                              xy2=(float(d["x2"]), float(d["y2"])), width=float(d["width"]),
-                              rooms=(min(u, v), max(u, v))))
-        except (KeyError, TypeError, ValueError) as exc:
-            raise GraphFormatError(f"{folder / 'rooms.graphml'}: door {u}-{v} has no {exc} (not a graph topomap "
-                                   "segment wrote)") from None
-    record = _read_record(folder) or {}
-    grid = _grid_of(folder, record, labels, res, origin, G.graph.get("map"))
-    computed = set(NODE_TYPES)
-    attrs = {}
-    for n, d in G.nodes(data=True):
-        extra = {k: v for k, v in d.items() if k not in computed}
-        if "merged" in extra:
-            extra["merged"] = merged_ids(extra["merged"])
-        if extra:
-            attrs[n] = extra
-    nxt = G.graph.get("next_room_id")
-    try:
-        nxt = max(int(nxt), top + 1) if nxt not in (None, "") else top + 1
-    except (TypeError, ValueError):
-        raise GraphFormatError(f"{folder / 'rooms.graphml'}: next_room_id {nxt!r} is not an integer") from None
-    threshold = G.graph.get("threshold")
-    return TrackedSegmentation(grid=grid, labels=labels.astype(np.int32), doors=sorted(doors, key=lambda d: d.id),
-                               method=str(G.graph.get("method") or "loaded"), params={},
-                               threshold=None if threshold is None else float(threshold), room_ids=tuple(nodes),
-                               next_room_id=nxt, room_attributes=attrs)
-
-
-def save_edits(seg, out_dir, records) -> dict:
-    """Rewrite every output of ``out_dir`` from ``seg`` and add ``records`` to its run record.
-
-    The files ``topomap segment`` wrote there (labels, room graph in each
-    format, overlay; :func:`topomap.cli.write_segmentation`) are all
-    replaced or none is; the run record's ``edits`` list gets ``records``
-    (each with the time, ``"at"``, UTC), its ``files`` and ``row`` are
-    updated, so a later ``topomap segment`` of the same unchanged map into
-    the same folder finds it up to date and keeps the edits. A failed write
-    leaves the earlier files and record as they were.
-
-    Returns
-    -------
-    dict
-        ``{name: path}`` of the files written.
-    """
-    from .. import __version__
-    from ..run.batch import COMPLETE, INCOMPLETE, OUTPUT_NAMES, RECORD, _read_record, _restore_record, _stat, _write_record
-    from ..cli import write_segmentation
-
-    folder = Path(out_dir)
-    old = (folder / RECORD).read_text(encoding="utf-8") if (folder / RECORD).is_file() else None
-    rec = dict(_read_record(folder) or {})
-    rec.setdefault("topomap", __version__)
-    at = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
-    rec["edits"] = list(rec.get("edits") or []) + [dict(r, at=at) for r in records]
-    _write_record(folder, dict(rec, status=INCOMPLETE))
-    try:
-        written = write_segmentation(seg, folder, overlay=(folder / "overlay.png").exists(),
-                                     geojson=(folder / "rooms.geojson").exists())
-        files = {n: _stat(folder / n) for n in (*OUTPUT_NAMES, "changes.json") if (folder / n).exists()}
-        res2 = seg.grid.resolution ** 2
-        row = dict(rec.get("row") or {}, rooms=seg.n_rooms, doors=len(seg.doors), fragments=seg.n_fragments,
-                   room_area_m2=float((seg.room_labels > 0).sum()) * res2, fragment_area_m2=float(seg.fragment_area))
-        _write_record(folder, dict(rec, status=COMPLETE, files={**(rec.get("files") or {}), **files}, row=row))
-    except BaseException:
-        _restore_record(folder, old, True)
-        raise
-    return written
-
-
-def edit_outputs(out_dir, edits):
-    """Apply ``edits`` (as :func:`apply_edits`) to the output folder ``out_dir`` of ``topomap segment``.
-
-    Reads the folder (:func:`load_segmentation`), makes every edit in
-    memory — a bad one raises before any file is touched — then rewrites
-    the outputs and the run record (:func:`save_edits`).
-
-    Returns
-    -------
-    seg : TrackedSegmentation
-        The edited result.
-    records : list of dict
-        The edits as recorded (see :func:`apply_edits`).
-    """
-    seg = load_segmentation(out_dir)
-    seg, records = apply_edits(seg, edits, source=str(out_dir))
-    save_edits(seg, out_dir, records)
-    return seg, records

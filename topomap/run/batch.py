@@ -18,6 +18,7 @@ Run record
     is written first as ``"status": "incomplete"`` and rewritten as
     ``"complete"`` after the last output file, always atomically; a map that
     fails puts the earlier record back (its earlier outputs are untouched).
+    See :mod:`topomap.run.record`.
 Refusal
     A folder that holds another map's results, or output files without a
     run record (results topomap did not write, or of unknown origin), is
@@ -59,17 +60,19 @@ Executors
 
 from __future__ import annotations
 
+import concurrent.futures
 import csv
-import io as _io
-import json
+import io
 import logging
 import math
+import numbers
 import os
+import signal
 import sys
 import time
 import traceback
 from collections import Counter
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from pathlib import Path
 from typing import Optional, Sequence
 
@@ -78,8 +81,19 @@ try:
 except ImportError:  # not a POSIX system: an O_EXCL lock file instead
     fcntl = None
 
-from ..io import export as _export
-from ..errors import MapFileError, MissingDependencyError, OutputExistsError, ParameterError, TopomapError, first_line
+from tqdm import tqdm
+from tqdm.contrib.logging import logging_redirect_tqdm
+
+from .. import __version__
+from .._fast import keep_freed_memory, one_thread
+from ..core.segmentation import METHODS
+from ..errors import MapFileError, MissingDependencyError, OutputExistsError, ParameterError, TopomapError, \
+    first_line, named
+from ..grid import share_memory
+from ..io.files import atomic_write
+from .job import STAGES, segment_file, summary_counts
+from .record import COMPLETE, INCOMPLETE, OUTPUT_NAMES, RECORD, file_stamp, fingerprint, input_files, \
+    output_stamps, read_record, restore_record, up_to_date, write_record
 
 __all__ = ["segment_many", "output_dirs", "read_summary", "RECORD", "SUMMARY", "SUMMARY_COLUMNS",
            "OUTPUT_NAMES", "STATUSES", "OK", "SKIPPED", "FAILED", "ERROR", "PENDING", "INCOMPLETE", "COMPLETE",
@@ -87,14 +101,10 @@ __all__ = ["segment_many", "output_dirs", "read_summary", "RECORD", "SUMMARY", "
 
 log = logging.getLogger("topomap.run.batch")
 
-#: Name of the run record in every output folder.
-RECORD = "topomap_run.json"
 #: Name of the batch summary table in ``out``.
 SUMMARY = "summary.csv"
 #: Name of the lock file a running batch holds in ``out``.
 LOCK = ".topomap.lock"
-#: Output files a map's folder may hold (what ``topomap segment`` writes).
-OUTPUT_NAMES = tuple(_export.OUTPUT_FILES.values())
 #: First columns of ``summary.csv`` (``t_<stage>`` columns and ``error`` follow).
 SUMMARY_COLUMNS = ("map", "output", "status", "rooms", "doors", "fragments", "room_area_m2",
                    "fragment_area_m2", "outside_area_m2", "seconds")
@@ -103,18 +113,8 @@ SUMMARY_COLUMNS = ("map", "output", "status", "rooms", "doors", "fragments", "ro
 #: (exit code 3); not run because the batch was interrupted.
 OK, SKIPPED, FAILED, ERROR, PENDING = "ok", "skipped", "failed", "error", "pending"
 STATUSES = (OK, SKIPPED, FAILED, ERROR, PENDING)
-#: ``status`` of a run record: being written (the map must run again), or complete.
-INCOMPLETE, COMPLETE = "incomplete", "complete"
 #: Seconds between two rewrites of ``summary.csv`` while a batch runs.
 SUMMARY_EVERY = 10.0
-
-#: Stages of a map's job in their order (``t_<stage>`` columns, ``--profile``): ``total`` is the
-#: segmentation call (its stages before it); ``write`` is travel distances, overlay and every
-#: ``write_<file>``; ``job`` is the map from loading to the last file; ``start``, ``import`` and
-#: ``warmup`` are the command's own, before the first map.
-_STAGES = ("start", "import", "warmup", "load", "previous", "preprocess", "walls", "furniture", "skeletons",
-           "graphs", "doors", "openings", "prior doors", "rooms", "match", "segment", "total", "room_graph", "travel", "overlay", "write_labels", "write_label_map_pgm",
-           "write_label_map", "write_graphml", "write_json", "write_geojson", "write_overlay", "write", "job")
 
 
 # --------------------------------------------------------------------------
@@ -182,13 +182,11 @@ def _output_lock(out: Path):
     dies); the file is removed at the end, and ``out`` too when this created
     it and it is left empty.
     """
-    from ..errors import named as _msg
-
     created = not out.exists()
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise MapFileError(_msg(out, f"cannot create the output folder: {exc.strerror or exc}")) from None
+        raise MapFileError(named(out, f"cannot create the output folder: {exc.strerror or exc}")) from None
     path = out / LOCK
     busy = OutputExistsError(f"{out}: another topomap run is writing into this folder (it holds {LOCK}); "
                              "nothing was written; wait for it to end, or use another output folder")
@@ -198,7 +196,7 @@ def _output_lock(out: Path):
         except FileExistsError:  # no flock on this system: the file itself is the lock
             raise busy from None
         except OSError as exc:
-            raise MapFileError(_msg(path, f"cannot create the lock file: {exc.strerror or exc}")) from None
+            raise MapFileError(named(path, f"cannot create the lock file: {exc.strerror or exc}")) from None
         if fcntl is None:
             break
         try:
@@ -230,72 +228,8 @@ def _output_lock(out: Path):
 
 
 # --------------------------------------------------------------------------
-# Run records and the resume check
+# Inputs that would be outputs, and the resume check
 # --------------------------------------------------------------------------
-
-def _stat(path) -> Optional[list]:
-    try:
-        st = os.stat(path)
-    except OSError:
-        return None
-    return [st.st_size, st.st_mtime_ns]
-
-
-def _input_files(path: Path) -> list:
-    """The map file and, for a YAML, the image it names; for an image, a YAML beside it of the same stem
-    (read or not: see :func:`topomap.io.yaml_beside`) (absolute paths)."""
-    files = [Path(os.path.abspath(path))]
-    if path.suffix.lower() not in (".yaml", ".yml"):
-        for suffix in (".yaml", ".yml"):
-            if path.with_suffix(suffix).is_file():
-                files.append(Path(os.path.abspath(path.with_suffix(suffix))))
-    if path.suffix.lower() in (".yaml", ".yml"):
-        try:
-            import yaml
-
-            image = yaml.safe_load(path.read_text()).get("image")
-            if isinstance(image, str):
-                files.append(Path(os.path.abspath(path.parent / image)))
-        except Exception:  # noqa: BLE001 - a bad YAML fails in load_map with its own message
-            pass
-    return files
-
-
-def _fingerprint(path: Path) -> dict:
-    return {str(f): _stat(f) for f in _input_files(path)}
-
-
-def _read_record(folder: Path) -> Optional[dict]:
-    try:
-        rec = json.loads((folder / RECORD).read_text())
-    except FileNotFoundError:
-        return None
-    except (OSError, ValueError):
-        return {}
-    return rec if isinstance(rec, dict) else {}
-
-
-def _write_record(folder: Path, record: dict):
-    from ..io.files import atomic_write
-
-    with atomic_write(folder / RECORD, "w") as fh:
-        fh.write(json.dumps(record, indent=1, sort_keys=True, allow_nan=False) + "\n")
-
-
-def _version() -> str:
-    from .. import __version__
-
-    return __version__
-
-
-def _up_to_date(rec: dict, settings: dict, folder: Path) -> bool:
-    if rec.get("status") != COMPLETE or rec.get("settings") != settings or rec.get("topomap") != _version():
-        return False
-    inputs, files = rec.get("inputs") or {}, rec.get("files") or {}
-    if not files or any(_stat(f) != v for f, v in inputs.items()):
-        return False
-    return all(_stat(folder / name) == v for name, v in files.items())
-
 
 def _same_file(a, b) -> bool:
     if os.path.realpath(a) == os.path.realpath(b):
@@ -309,7 +243,7 @@ def _same_file(a, b) -> bool:
 def _refuse_inputs_as_outputs(paths, dirs, write_options):
     """ParameterError when an output file of the run (a map's files, changes.json, summary.csv, the
     --bag) would be one of its input files (a map, the image its YAML names, the --previous graph)."""
-    inputs = [f for p in paths for f in _input_files(Path(p))]
+    inputs = [f for p in paths for f in input_files(Path(p))]
     if write_options.get("previous") is not None:
         inputs.append(Path(os.path.abspath(write_options["previous"])))
     outs = [(d / n, None) for d in dirs for n in (*OUTPUT_NAMES, RECORD, "changes.json")]
@@ -330,7 +264,7 @@ def _plan(paths, dirs, settings, overwrite):
             refused.append(f"{d} exists and is not a folder (the results of {p} go into a folder of that name)")
             plan.append(("run", None))
             continue
-        rec = _read_record(d)
+        rec = read_record(d)
         mine = str(Path(os.path.abspath(p)))
         if rec is None:
             theirs = [n for n in OUTPUT_NAMES if (d / n).exists()]
@@ -341,7 +275,7 @@ def _plan(paths, dirs, settings, overwrite):
             other = rec.get("input") or "an unreadable run record"
             refused.append(f"{d} holds the results of {other}, not of {p}")
             plan.append(("run", None))
-        elif not overwrite and rec.get("input") == mine and _up_to_date(rec, settings, d):
+        elif not overwrite and rec.get("input") == mine and up_to_date(rec, settings, d):
             plan.append(("skip", rec.get("row") or {}))
         else:
             plan.append(("run", None))
@@ -356,19 +290,21 @@ def _plan(paths, dirs, settings, overwrite):
 # One map (runs on a worker)
 # --------------------------------------------------------------------------
 
-def _restore_record(folder: Path, previous: Optional[str], existed: bool):
-    from ..io.files import atomic_write
-
-    try:
-        if previous is None:
-            (folder / RECORD).unlink()
-            if not existed:
-                folder.rmdir()  # only if empty
-        else:
-            with atomic_write(folder / RECORD, "w") as fh:
-                fh.write(previous)
-    except OSError:
-        pass
+def _new_record(task: dict) -> tuple:
+    """``(run record, extra outputs)`` of a map about to run: the record (without its status) names the
+    input files with their stamps (the --previous graph is one), the settings and the version; the extra
+    outputs (the --bag) are absolute paths whose stamps go into the record's ``files``."""
+    inputs = fingerprint(Path(task["path"]))
+    extra_out = []
+    for key in ("previous", "bag"):  # the --previous graph is an input, the --bag an output
+        given = task["write_options"].get(key)
+        if given is not None:
+            if key == "previous":
+                inputs[os.path.abspath(given)] = file_stamp(given)
+            else:
+                extra_out.append(os.path.abspath(given))
+    record = {"topomap": __version__, "input": task["input"], "inputs": inputs, "settings": task["settings"]}
+    return record, extra_out
 
 
 def _run_one(task: dict) -> dict:
@@ -380,35 +316,21 @@ def _run_one(task: dict) -> dict:
     existed = folder.exists()
     previous = claimed = None
     try:
-        inputs = _fingerprint(Path(task["path"]))
-        extra_out = []
-        for key in ("previous", "bag"):  # the --previous graph is an input, the --bag an output
-            given = task["write_options"].get(key)
-            if given is not None:
-                if key == "previous":
-                    inputs[os.path.abspath(given)] = _stat(given)
-                else:
-                    extra_out.append(os.path.abspath(given))
-        record = {"topomap": _version(), "input": task["input"], "inputs": inputs, "settings": s}
+        record, extra_out = _new_record(task)
         folder.mkdir(parents=True, exist_ok=True)
         # writing the record removes the temporaries a killed run left here (io.atomic_write)
         if (folder / RECORD).exists():
             previous = (folder / RECORD).read_text()
-        _write_record(folder, dict(record, status=INCOMPLETE))  # a kill from here on: the map runs again
+        write_record(folder, dict(record, status=INCOMPLETE))  # a kill from here on: the map runs again
         claimed = True
-        from ..cli import _segment_one
-
-        seg = _segment_one(task["path"], folder, s["resolution"], s["method"], s["skeletons"],
+        seg = segment_file(task["path"], folder, s["resolution"], s["method"], s["skeletons"],
                            **task["write_options"])
-        res2 = seg.grid.resolution ** 2
-        row.update(rooms=seg.n_rooms, doors=len(seg.doors), fragments=seg.n_fragments,
-                   room_area_m2=float((seg.room_labels > 0).sum()) * res2,
-                   fragment_area_m2=float(seg.fragment_area), outside_area_m2=float(seg.outside_area))
+        row.update(summary_counts(seg), outside_area_m2=float(seg.outside_area))
         row["seconds"] = time.perf_counter() - t0
         row.update({f"t_{k}": float(v) for k, v in seg.timings.items()})
-        files = {n: _stat(folder / n) for n in (*OUTPUT_NAMES, "changes.json") if (folder / n).exists()}
-        files.update({f: _stat(f) for f in extra_out})
-        _write_record(folder, dict(record, status=COMPLETE, files=files, row=row))
+        files = output_stamps(folder)
+        files.update({f: file_stamp(f) for f in extra_out})
+        write_record(folder, dict(record, status=COMPLETE, files=files, row=row))
         row["error"] = ""
         row["traceback"] = ""
     except Exception as exc:  # noqa: BLE001 - reported in the row, the batch goes on
@@ -418,7 +340,7 @@ def _run_one(task: dict) -> dict:
                "error": first_line(exc) if bad_input else f"{type(exc).__name__}: {first_line(exc)}",
                "traceback": "".join(traceback.format_exception(exc))}
         if claimed:  # the outputs are as they were (all files or none are replaced): so is the record
-            _restore_record(folder, previous, existed)
+            restore_record(folder, previous, existed)
     return row
 
 
@@ -433,12 +355,8 @@ def worker_count(jobs: int, tasks: int) -> int:
 
 
 def _pool_init(jobs: int = 1):
-    # local workers ignore Ctrl-C; the parent stops them
-    import signal
-
-    from ..grid import share_memory
-    from .._fast import keep_freed_memory, one_thread
-
+    """Set up a local worker process: it ignores Ctrl-C (the parent stops it), and ``jobs`` maps share
+    the memory."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     share_memory(jobs)  # the maps running at once share the memory the size limit is taken from
     keep_freed_memory()  # each worker runs many maps
@@ -452,8 +370,9 @@ def _crashed(task, exc) -> dict:
 
 
 def _client(scheduler):
+    """``(client, whether this batch made it)`` of ``scheduler`` (an address or a distributed.Client)."""
     try:
-        from distributed import Client
+        from distributed import Client  # the optional extra topomap[dask]
     except ImportError:
         raise MissingDependencyError("running on a Dask cluster needs dask.distributed: "
                                      "pip install 'topomap-rooms[dask]'") from None
@@ -471,19 +390,7 @@ def _client(scheduler):
 def _execute(tasks, jobs, scheduler):
     """Yield ``(index, row)`` as maps finish."""
     if scheduler is not None:
-        client, own = _client(scheduler)
-        try:
-            from distributed import as_completed
-
-            futures = client.map(_run_one, tasks, pure=False)
-            index = {f.key: i for i, f in enumerate(futures)}
-            try:
-                yield from _collect(as_completed(futures), lambda f: index[f.key], tasks)
-            finally:
-                client.cancel(futures)
-        finally:
-            if own:
-                client.close()
+        yield from _execute_on_cluster(tasks, scheduler)
         return
     n = worker_count(jobs, len(tasks))
     if n < jobs:
@@ -493,15 +400,30 @@ def _execute(tasks, jobs, scheduler):
         for i, t in enumerate(tasks):
             yield i, _run_one(t)
         return
-    from concurrent.futures import ProcessPoolExecutor, as_completed
-
-    with ProcessPoolExecutor(max_workers=n, initializer=_pool_init, initargs=(n,)) as ex:
+    with concurrent.futures.ProcessPoolExecutor(max_workers=n, initializer=_pool_init, initargs=(n,)) as ex:
         futures = {ex.submit(_run_one, t): i for i, t in enumerate(tasks)}
         try:
-            yield from _collect(as_completed(futures), futures.get, tasks)
+            yield from _collect(concurrent.futures.as_completed(futures), futures.get, tasks)
         finally:
             for f in futures:
                 f.cancel()
+
+
+def _execute_on_cluster(tasks, scheduler):
+    """Yield ``(index, row)`` as maps finish on the Dask cluster ``scheduler``."""
+    client, own = _client(scheduler)
+    try:
+        from distributed import as_completed  # the optional extra topomap[dask]: only for a cluster
+
+        futures = client.map(_run_one, tasks, pure=False)
+        index = {f.key: i for i, f in enumerate(futures)}
+        try:
+            yield from _collect(as_completed(futures), lambda f: index[f.key], tasks)
+        finally:
+            client.cancel(futures)
+    finally:
+        if own:
+            client.close()
 
 
 def _collect(finished, index_of, tasks):
@@ -523,7 +445,7 @@ def _columns(rows) -> list:
     stages = []
     for r in rows:
         stages += [k for k in r if k.startswith("t_") and k not in stages]
-    order = {f"t_{s}": i for i, s in enumerate(_STAGES)}
+    order = {f"t_{s}": i for i, s in enumerate(STAGES)}
     stages.sort(key=lambda k: order.get(k, len(order)))
     return [*SUMMARY_COLUMNS, *stages, "error"]
 
@@ -537,9 +459,7 @@ def _cell(v):
 
 
 def _write_summary(rows, path: Path):
-    from ..io.files import atomic_write
-
-    buf = _io.StringIO()
+    buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=_columns(rows), restval="", extrasaction="ignore", lineterminator="\n")
     w.writeheader()
     w.writerows([{k: _cell(v) for k, v in r.items()} for r in rows])
@@ -605,7 +525,7 @@ def segment_many(paths: Sequence, out, *, jobs: int = 1, scheduler=None, overwri
         Draw both skeleton graphs in ``overlay.png``.
     write_options : dict, optional
         More keyword options of the single-map writer
-        (:func:`topomap.cli.write_segmentation`).
+        (:func:`topomap.run.job.segment_file`).
     progress : bool, optional
         A progress bar on stderr (tqdm); default: when stderr is a terminal.
         Without the bar every finished map is logged at INFO level on the
@@ -630,22 +550,7 @@ def segment_many(paths: Sequence, out, *, jobs: int = 1, scheduler=None, overwri
         ``scheduler`` without Dask installed.
     """
     paths = [Path(p) for p in paths]
-    if not paths:
-        raise ParameterError("no maps given")
-    import numbers
-
-    if isinstance(jobs, bool) or not isinstance(jobs, numbers.Integral) or jobs < 1:
-        raise ParameterError(f"jobs must be an integer >= 1, got {jobs!r}")
-    jobs = int(jobs)
-    if scheduler is not None and jobs != 1:
-        raise ParameterError(f"jobs={jobs} and a scheduler: the cluster decides how many maps run at once")
-    if resolution is not None and not (isinstance(resolution, (int, float)) and resolution > 0):
-        raise ParameterError(f"resolution must be > 0 m/px, got {resolution!r}")
-    if method is not None:
-        from ..core.segmentation import METHODS
-
-        if method not in METHODS:
-            raise ParameterError(f"unknown method {method!r}; methods: {', '.join(METHODS)}")
+    jobs = _check_options(paths, jobs, scheduler, resolution, method)
     out = Path(out)
     write_options = dict(write_options or {})
     settings = {"resolution": None if resolution is None else float(resolution), "method": method,
@@ -656,14 +561,46 @@ def segment_many(paths: Sequence, out, *, jobs: int = 1, scheduler=None, overwri
         return _run_batch(paths, out, dirs, settings, overwrite, jobs, scheduler, write_options, progress)
 
 
+def _check_options(paths, jobs, scheduler, resolution, method) -> int:
+    """``jobs`` as an int; ParameterError for no maps, or options that are wrong or do not go together."""
+    if not paths:
+        raise ParameterError("no maps given")
+    if isinstance(jobs, bool) or not isinstance(jobs, numbers.Integral) or jobs < 1:
+        raise ParameterError(f"jobs must be an integer >= 1, got {jobs!r}")
+    jobs = int(jobs)
+    if scheduler is not None and jobs != 1:
+        raise ParameterError(f"jobs={jobs} and a scheduler: the cluster decides how many maps run at once")
+    if resolution is not None and not (isinstance(resolution, (int, float)) and resolution > 0):
+        raise ParameterError(f"resolution must be > 0 m/px, got {resolution!r}")
+    if method is not None and method not in METHODS:
+        raise ParameterError(f"unknown method {method!r}; methods: {', '.join(METHODS)}")
+    return jobs
+
+
 def _run_batch(paths, out, dirs, settings, overwrite, jobs, scheduler, write_options, progress) -> list:
-    """The batch of :func:`segment_many` once it holds the lock of ``out``."""
+    """The batch of :func:`segment_many` once it holds the lock of ``out``: the rows of every map."""
     plan = _plan(paths, dirs, settings, overwrite)
-    many = len(paths) > 1
     rows = [dict(earlier, map=str(p), output=str(d), status=SKIPPED) if what == "skip"
             else {"map": str(p), "output": str(d), "status": PENDING}
             for p, d, (what, earlier) in zip(paths, dirs, plan)]
-    remote = scheduler is not None
+    tasks, where = _tasks(paths, dirs, plan, settings, write_options, remote=scheduler is not None)
+    skipped = len(paths) - len(tasks)
+    if skipped:
+        log.info("%d of %d maps up to date in %s, skipped (overwrite to run them again)", skipped, len(paths), out)
+    many = len(paths) > 1
+    if many:
+        out.mkdir(parents=True, exist_ok=True)
+    try:
+        _run_tasks(tasks, where, rows, out, jobs, scheduler, progress)
+    finally:
+        if many:
+            _write_summary(rows, out / SUMMARY)
+    return rows
+
+
+def _tasks(paths, dirs, plan, settings, write_options, remote: bool) -> tuple:
+    """``(tasks, where)``: a task (the dict :func:`_run_one` takes) per map the plan runs, and the index of
+    each one's map; on a cluster (``remote``) with absolute paths."""
     tasks, where = [], []
     for i, (p, d, (what, _)) in enumerate(zip(paths, dirs, plan)):
         if what == "run":
@@ -672,35 +609,28 @@ def _run_batch(paths, out, dirs, settings, overwrite, jobs, scheduler, write_opt
                           "path": os.path.abspath(p) if remote else str(p),
                           "folder": os.path.abspath(d) if remote else str(d),
                           "settings": settings, "write_options": write_options})
-    total, skipped = len(paths), len(paths) - len(tasks)
-    if skipped:
-        log.info("%d of %d maps up to date in %s, skipped (overwrite to run them again)", skipped, total, out)
-    from contextlib import nullcontext
+    return tasks, where
 
-    from tqdm import tqdm
-    from tqdm.contrib.logging import logging_redirect_tqdm
 
-    show = sys.stderr.isatty() if progress is None else bool(progress)
-    show = show and many
+def _run_tasks(tasks, where, rows, out, jobs, scheduler, progress) -> None:
+    """Run ``tasks``, putting each finished map's row into ``rows`` (at its index of ``where``); with a
+    progress bar or a log line per map, and ``summary.csv`` rewritten every :data:`SUMMARY_EVERY` seconds
+    when the batch has several maps."""
+    total = len(rows)
+    many = total > 1
+    show = (sys.stderr.isatty() if progress is None else bool(progress)) and many
     level = logging.DEBUG if show else logging.INFO
-    if many:
-        out.mkdir(parents=True, exist_ok=True)
     last = time.monotonic()
-    done = skipped
-    try:
-        with tqdm(total=total, initial=skipped, desc="segmenting", unit="map", file=sys.stderr,
-                  disable=not show, dynamic_ncols=True) as bar, \
-                (logging_redirect_tqdm() if show else nullcontext()):
-            for k, row in _execute(tasks, jobs, scheduler):
-                rows[where[k]] = row
-                done += 1
-                bar.set_postfix_str(Path(row["map"]).name, refresh=False)
-                bar.update(1)
-                log.log(level, "%s", _line(done, total, row))
-                if many and time.monotonic() - last > SUMMARY_EVERY:
-                    _write_summary(rows, out / SUMMARY)
-                    last = time.monotonic()
-    finally:
-        if many:
-            _write_summary(rows, out / SUMMARY)
-    return rows
+    done = total - len(tasks)
+    with tqdm(total=total, initial=done, desc="segmenting", unit="map", file=sys.stderr,
+              disable=not show, dynamic_ncols=True) as bar, \
+            (logging_redirect_tqdm() if show else nullcontext()):
+        for k, row in _execute(tasks, jobs, scheduler):
+            rows[where[k]] = row
+            done += 1
+            bar.set_postfix_str(Path(row["map"]).name, refresh=False)
+            bar.update(1)
+            log.log(level, "%s", _line(done, total, row))
+            if many and time.monotonic() - last > SUMMARY_EVERY:
+                _write_summary(rows, out / SUMMARY)
+                last = time.monotonic()
