@@ -15,7 +15,8 @@ from scipy import ndimage as ndi
 import topomap
 from topomap.cli import main
 from topomap.errors import ParameterError, PlanningError
-from topomap.planning.nav2 import DEFAULT_CLEARANCE, route_graph, write_route_graph
+from topomap.io.nav2 import write_route_graph
+from topomap.planning.nav2 import DEFAULT_CLEARANCE, route_graph
 
 from _testdata import corridor_with_rooms
 

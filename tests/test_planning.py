@@ -4,6 +4,7 @@ import numpy as np
 import networkx as nx
 import pytest
 
+from topomap.core.roommap import RoomMap
 from topomap.planning import paths as P
 from topomap.errors import TopomapError
 from topomap.io import FREE, OCCUPIED, OccupancyGrid, load_map
@@ -121,9 +122,9 @@ def test_room_cells_recovered_from_graph_polygons(method, yaw):
 
     g = load_map(example_map_path())
     seg = segment(OccupancyGrid(g.cells, g.resolution, (2.0, -1.0, yaw)), method=method)
-    ctx = P._Ctx(seg.room_graph)
+    room_map = RoomMap(seg.room_graph)
     H, W = seg.labels.shape
-    got = ctx.window_labels(list(seg.room_graph.nodes), (0, H, 0, W))
+    got = room_map.window_labels(list(seg.room_graph.nodes), (0, H, 0, W))
     np.testing.assert_array_equal(got, seg.labels)
 
 
@@ -411,8 +412,8 @@ def test_coarse_distance_goes_around_a_thin_partition():
     seg = hall_with_partition()
     (hall,) = set(seg.doors[0].rooms) & set(seg.doors[1].rooms)
     assert seg.n_rooms == 3
-    ctx = P._Ctx(seg)
-    assert P._RoomSpace(ctx, hall).mask.size > P.EXACT_CELLS  # the coarse grid is used
+    room_map = RoomMap(seg)
+    assert P.RoomSpace(room_map, hall).mask.size > P.EXACT_CELLS  # the coarse grid is used
     (fast,) = P.room_distances(seg, hall).values()
     (exact,) = P.room_distances(seg, hall, exact=True).values()
     (x0, y0), (x1, y1) = seg.doors[0].midpoint, seg.doors[1].midpoint
@@ -428,7 +429,7 @@ def test_doors_in_sight_get_the_exact_distance():
     """Without the partition the two doors see each other: the distance is the map-grid geodesic itself."""
     seg = hall_with_partition(partition=False)
     (hall,) = set(seg.doors[0].rooms) & set(seg.doors[1].rooms)
-    assert P._RoomSpace(P._Ctx(seg), hall).mask.size > P.EXACT_CELLS
+    assert P.RoomSpace(RoomMap(seg), hall).mask.size > P.EXACT_CELLS
     (fast,) = P.room_distances(seg, hall).values()
     (exact,) = P.room_distances(seg, hall, exact=True).values()
     assert fast == pytest.approx(exact, rel=1e-9)
@@ -454,7 +455,7 @@ def test_small_rooms_get_the_exact_distance():
     seg = Segmentation(grid=OccupancyGrid(cells, RES, (0.0, 0.0, 0.0)), labels=labels, doors=doors,
                        method="manual")
     hall = int(labels[32, 45])
-    sp = P._RoomSpace(P._Ctx(seg), hall)
+    sp = P.RoomSpace(RoomMap(seg), hall)
     assert len(sp.door_px) == 4 and sp.mask.size <= P.EXACT_CELLS
     ids = sorted(sp.door_px)
     sight = P._in_sight(sp.mask, np.array([sp.door_px[d] for d in ids], float))
@@ -465,25 +466,25 @@ def test_small_rooms_get_the_exact_distance():
         assert fast[k] == pytest.approx(L, rel=1e-9), k
 
 
-def _door_cells_one_by_one(ctx, r):
-    """The reference of ``_RoomSpace``'s door cells: door by door, the cells of its segment on the
+def _door_cells_one_by_one(room_map, r):
+    """The reference of ``RoomSpace``'s door cells: door by door, the cells of its segment on the
     two rooms it joins; of those the ones with a cell of each of the two rooms in their 3 x 3
     neighbourhood (where the rooms meet; all of them when there is none), the one nearest its
     midpoint (the first of equals)."""
-    sp = P._RoomSpace(ctx, r)
+    sp = P.RoomSpace(room_map, r)
     r0, _, c0, _ = sp.win
     out = {}
-    for d in ctx.doors_of(r):
-        a, b = ctx.doors[d][:2]
-        L = np.pad(ctx.window_labels({a, b}, sp.win), 1)
-        rr, cc = ctx.door_cells(d)
+    for d in room_map.doors_of(r):
+        a, b = room_map.doors[d][:2]
+        L = np.pad(room_map.window_labels({a, b}, sp.win), 1)
+        rr, cc = room_map.door_cells(d)
         rr, cc = rr - r0, cc - c0
         ok = L[rr + 1, cc + 1] > 0
         if ok.any():
             around = [set(L[i:i + 3, j:j + 3].ravel().tolist()) for i, j in zip(rr, cc)]
             meet = ok & np.array([{a, b} <= s for s in around])
             pick = meet if meet.any() else ok
-            p1, p2 = ctx.doors[d][2:4]
+            p1, p2 = room_map.doors[d][2:4]
             mr, mc = (p1[0] + p2[0]) / 2 - r0, (p1[1] + p2[1]) / 2 - c0
             i = int(np.argmin((rr[pick] - mr) ** 2 + (cc[pick] - mc) ** 2))
             out[d] = (int(rr[pick][i]), int(cc[pick][i]))
@@ -495,9 +496,9 @@ def test_door_cells_are_the_cells_nearest_the_midpoints(example):
     """Every room's door cells, all doors at once, as found door by door; from the segmentation and
     from its graph alone (the room polygons rasterised)."""
     checked = 0
-    for ctx in (P._Ctx(example), P._Ctx(example.room_graph)):
+    for room_map in (RoomMap(example), RoomMap(example.room_graph)):
         for r in example.room_graph.nodes:
-            got, want = _door_cells_one_by_one(ctx, r)
+            got, want = _door_cells_one_by_one(room_map, r)
             assert got == want and list(got) == list(want), r
             checked += len(want)
     assert checked >= 2 * example.room_graph.number_of_edges()
@@ -506,12 +507,12 @@ def test_door_cells_are_the_cells_nearest_the_midpoints(example):
 def test_door_cells_first_of_equally_near_cells():
     """A door whose midpoint lies between two cells takes the first of them along its segment."""
     seg = corridor_of_rooms(widths_px=(15,), offsets=[0])
-    ctx = P._Ctx(seg)
-    (d,) = ctx.doors
-    got, want = _door_cells_one_by_one(ctx, 1)
+    room_map = RoomMap(seg)
+    (d,) = room_map.doors
+    got, want = _door_cells_one_by_one(room_map, 1)
     assert got == want and d in got
-    rr, cc = ctx.door_cells(d)
-    p1, p2 = ctx.doors[d][2:4]
+    rr, cc = room_map.door_cells(d)
+    p1, p2 = room_map.doors[d][2:4]
     mid = ((p1[0] + p2[0]) / 2, (p1[1] + p2[1]) / 2)
     d2 = (rr - mid[0]) ** 2 + (cc - mid[1]) ** 2
     assert np.count_nonzero(d2 == d2.min()) == 2  # a tie, broken by the order along the segment
@@ -530,18 +531,18 @@ def test_coarse_distances_of_a_real_map_within_tolerance(example):
 
 
 def test_window_room_test_of_door_cells_is_membership_in_the_rooms():
-    # _Ctx.window_room's test "on one of these rooms" (a table over the labels) against np.isin,
+    # RoomMap.window_room's test "on one of these rooms" (a table over the labels) against np.isin,
     # with labels below, between and above the rooms asked for
     seg = hall_with_partition()
     labels = seg.labels.copy()
     labels[0, :5] = [-1, -7, seg.n_rooms + 5, 0, 1]
     seg.labels = labels
-    ctx = P._Ctx(seg)
+    room_map = RoomMap(seg)
     H, W = labels.shape
     rr, cc = np.divmod(np.arange(H * W), W)
     for r in range(1, seg.n_rooms + 1):
         for rooms in ({r}, {r} | {x for d in seg.doors for x in d.rooms if r in d.rooms}):
-            mask, on = ctx.window_room(r, rooms, (0, H, 0, W))
+            mask, on = room_map.window_room(r, rooms, (0, H, 0, W))
             np.testing.assert_array_equal(mask, labels == r)
             np.testing.assert_array_equal(on(rr, cc), np.isin(labels[rr, cc], sorted(rooms)))
 
@@ -570,4 +571,4 @@ def test_route_across_a_door_whose_segment_runs_on_through_a_wall():
         # start -> (25, 30) -> goal, octile steps in open floor (round the wall would be longer)
         want = (15 + 10 * (np.sqrt(2) - 1) + 15 * np.sqrt(2)) * RES
         assert route["length"] == pytest.approx(want, rel=1e-9)
-    assert P._Ctx(seg).door_point(0) == (25, 30)  # beside both rooms, nearest the midpoint
+    assert RoomMap(seg).door_point(0) == (25, 30)  # beside both rooms, nearest the midpoint

@@ -14,7 +14,7 @@ import pytest
 from scipy import ndimage as ndi
 
 from topomap.planning import paths as P
-from topomap.planning.paths import _block_any, _block_components
+from topomap.planning.paths import _block_components, block_any
 
 
 def _reference(mask, f):
@@ -55,7 +55,7 @@ def test_block_components(density, f):
 def test_block_any(f):
     rng = np.random.default_rng(f)
     m = rng.random((7 * f, 11 * f)) < 0.02
-    np.testing.assert_array_equal(_block_any(m, f), m.reshape(7, f, 11, f).any(axis=(1, 3)))
+    np.testing.assert_array_equal(block_any(m, f), m.reshape(7, f, 11, f).any(axis=(1, 3)))
 
 
 def test_merged_nodes_only_inside_open_floor():

@@ -15,11 +15,12 @@ import numpy as np
 import networkx as nx
 from scipy import ndimage as ndi
 
-from .._fast import lookup
-from .geometry import label_rings, mask_rings
+from .._fast import edt, lookup
+from .geometry import label_rings, mask_rings, true_bbox
 from .kinds import annotate_kinds
 
-__all__ = ["room_graph", "room_polygons", "interior_points", "OUTLINE_MIN_RINGS", "OUTLINE_CELLS_PER_RING"]
+__all__ = ["room_graph", "room_polygons", "interior_points", "cached_room_boxes", "OUTLINE_MIN_RINGS",
+           "OUTLINE_CELLS_PER_RING"]
 
 log = logging.getLogger("topomap")
 
@@ -31,9 +32,30 @@ OUTLINE_MIN_RINGS = 4000
 #: See :data:`OUTLINE_MIN_RINGS`.
 OUTLINE_CELLS_PER_RING = 64
 
-#: graph -> (weak reference to the labels, their rooms' boxes) of the graphs room_graph built, for
-#: topomap.planning's room windows (beside the graph, not in it: never saved, copied or pickled)
+#: graph -> (weak reference to the labels, their rooms' boxes) of the graphs room_graph built, read by
+#: :func:`cached_room_boxes` (beside the graph, not in it: never saved, copied or pickled)
 _BOXES = weakref.WeakKeyDictionary()
+
+
+def cached_room_boxes(G: nx.Graph, labels: np.ndarray):
+    """The rooms' bounding boxes :func:`room_graph` found when it built ``G`` from ``labels``, if it did.
+
+    Parameters
+    ----------
+    G : networkx.MultiGraph
+        A room graph.
+    labels : (M, N) ndarray of int
+        The label image of its segmentation (``Segmentation.labels``, the very array).
+
+    Returns
+    -------
+    list or None
+        As ``scipy.ndimage.find_objects(labels)`` for the rooms ``1..N`` (``None`` for a label
+        without cells); None when ``G`` was not built by :func:`room_graph` from this array (a
+        copy, a graph loaded from a file, or labels that have been replaced).
+    """
+    ref, boxes = _BOXES.get(G, (lambda: None, None))
+    return boxes if ref() is labels else None
 
 
 def room_polygons(labels: np.ndarray, to_world=None) -> dict:
@@ -290,9 +312,6 @@ def interior_points(labels: np.ndarray, n: int, centroids=None):
         4-neighbour of another label, of no room or off the map). Time and memory linear in the
         cells of the labels' bounding box.
     """
-    from .._fast import edt
-    from .geometry import true_bbox
-
     rows = np.full(n + 1, -1, np.int64)
     cols = np.full(n + 1, -1, np.int64)
     L = np.asarray(labels)

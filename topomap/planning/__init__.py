@@ -1,8 +1,9 @@
 """Planning over the room graph: which room a point is in, travel distances through doors, routes
 (:func:`plan_path`), room orders (:func:`plan_tour`) and Nav2 route graphs.
 
-:mod:`topomap.planning.paths` holds rooms, doors and routes; :mod:`topomap.planning.tour`
-the order of rooms; :mod:`topomap.planning.nav2` the route graph for Nav2.
+:mod:`topomap.planning.paths` holds rooms, doors and routes (over the rasterised rooms of
+:class:`topomap.core.roommap.RoomMap`); :mod:`topomap.planning.tour` the order of rooms;
+:mod:`topomap.planning.nav2` the route graph for Nav2 (its files: :mod:`topomap.io.nav2`).
 """
 
 from __future__ import annotations

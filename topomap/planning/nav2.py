@@ -1,9 +1,10 @@
 """Route graphs for the Nav2 Route Server (``nav2_route``), as GeoJSON.
 
 :func:`route_graph` turns the rooms and doors of a segmentation into the
-graph file the Route Server's GeoJSON loader reads; :func:`write_route_graph`
-writes it (atomically). ``topomap export OUT_DIR/rooms.graphml --nav2
-graph.geojson`` does both from a segment output folder.
+graph file the Route Server's GeoJSON loader reads;
+:func:`topomap.io.nav2.write_route_graph` writes it (atomically).
+``topomap export OUT_DIR/rooms.graphml --nav2 graph.geojson`` does both from a
+segment output folder.
 
 The file follows the loader of ``nav2_route`` (``GeoJsonGraphFileLoader``):
 
@@ -38,19 +39,20 @@ is straightened into as few straight edges as keep every point of every edge
 
 from __future__ import annotations
 
-import json
 import logging
 import math
-from pathlib import Path
 
 import numpy as np
 import networkx as nx
 from scipy import ndimage as ndi
 
+from ..core.roommap import RoomMap
 from ..errors import ParameterError, PlanningError
+from ..options import check_length
+from .paths import block_any
 
-__all__ = ["route_graph", "write_route_graph", "labels_beside", "free_clearance", "segment_clear", "DEFAULT_CLEARANCE",
-           "FRAME", "SAMPLES_PER_CELL", "REACH", "MAX_IDS"]
+__all__ = ["route_graph", "free_clearance", "segment_clear", "DEFAULT_CLEARANCE", "FRAME", "SAMPLES_PER_CELL",
+           "REACH", "MAX_IDS"]
 
 log = logging.getLogger("topomap")
 
@@ -205,11 +207,59 @@ def route_graph(seg_or_G, labels=None, *, clearance: float = DEFAULT_CLEARANCE, 
         No edge (no door has the clearance and no room is large enough for a way through it), or more than
         :data:`MAX_IDS` nodes and edges.
     """
-    from skimage.graph import MCP_Geometric
-
-    from ..options import check_length
-
     clearance = check_length("clearance", clearance)
+    G, labels = _graph_and_labels(seg_or_G, labels)
+    room_map = RoomMap(G)  # the map frame and the doors' ends, checked (PlanningError naming what is missing)
+    if room_map.shape != tuple(labels.shape):
+        raise ParameterError(f"labels of shape {tuple(labels.shape)} do not match the room graph's map "
+                             f"(shape {room_map.shape})")
+    clear = free_clearance(labels > 0, room_map.resolution)
+    ok = clear >= clearance
+    room_meta = _room_metadata(G)
+    doors = _door_openings(room_map, labels, clear, ok, clearance)
+    nodes = []  # (pixel, metadata)
+    door_node = {}  # door id -> node index
+    for did in sorted(doors):
+        a, b, w, px, _ = doors[did]
+        door_node[did] = len(nodes)
+        nodes.append((px, {"type": "door", "door": did, "rooms": [_plain(a), _plain(b)], "width": w}))
+    if not all(isinstance(r, (int, np.integer)) and not isinstance(r, bool) for r in G.nodes):
+        raise PlanningError("room graph: room IDs must be integers (the labels of the label image), got "
+                            f"{sorted(map(repr, G.nodes))[:5]}")
+    edges = []  # (node a, node b, metadata)
+    boxes = ndi.find_objects(np.where(labels > 0, labels, 0).astype(np.int64, copy=False))
+    for r in sorted(G.nodes):
+        ri = int(r)
+        if ri < 1 or ri > len(boxes) or boxes[ri - 1] is None:
+            continue
+        mine = [did for did in sorted(doors) if r in doors[did][:2]]
+        win, region, own = _room_window(labels, ok, r, boxes[ri - 1], [doors[did][4] for did in mine])
+        if not region.any():
+            log.info("room %s has no cell with a clearance of %.2f m: no node", r, clearance)
+            continue
+        off = (win[0].start, win[1].start)
+        start = _room_point(G.nodes[r], own, clear[win], off, room_map.grid)
+        if start is None:
+            continue
+        nodes.append(((start[0] + off[0], start[1] + off[1]), dict(room_meta[r], type="room")))
+        key = {start: len(nodes) - 1}  # window pixel -> node index
+        mcp, cum, targets = _room_paths(region, clear[win], start, off, {did: doors[did][3] for did in mine},
+                                        door_node, key, r, clearance)
+        targets += _far_points(mcp, cum, start, targets, own, room_map.resolution)
+        _tree_edges(mcp, start, targets, key, ok[win], nodes, edges, off, room_meta[r], doors, door_node)
+    if not edges:
+        raise PlanningError(f"no route graph: no door has a clearance of {clearance:g} m on both sides and no "
+                            f"room is more than {REACH:g} m across at that clearance")
+    if len(nodes) + 2 * len(edges) > MAX_IDS:
+        raise PlanningError(f"route graph of {len(nodes)} nodes and {2 * len(edges)} edges: more IDs than the "
+                            f"{MAX_IDS} Nav2's messages hold (16-bit node and edge IDs); a larger clearance "
+                            "gives fewer")
+    return _collection(nodes, edges, room_map.grid.pixel_to_world, frame)
+
+
+def _graph_and_labels(seg_or_G, labels):
+    """``(room graph, label image)`` of :func:`route_graph`'s input; ParameterError when a graph comes
+    without its labels or the labels are not 2-D."""
     if isinstance(seg_or_G, nx.Graph):
         G = seg_or_G
         if labels is None:
@@ -219,20 +269,12 @@ def route_graph(seg_or_G, labels=None, *, clearance: float = DEFAULT_CLEARANCE, 
     labels = np.asarray(labels)
     if labels.ndim != 2:
         raise ParameterError(f"labels must be a 2-D array, got shape {labels.shape}")
-    from .paths import _Ctx
+    return G, labels
 
-    ctx = _Ctx(G)  # the map frame and the doors' ends, checked (PlanningError naming what is missing)
-    if ctx.shape != tuple(labels.shape):
-        raise ParameterError(f"labels of shape {tuple(labels.shape)} do not match the room graph's map "
-                             f"(shape {ctx.shape})")
-    res, to_world = ctx.res, ctx.grid.pixel_to_world
-    clear = free_clearance(labels > 0, res)
-    ok = clear >= clearance
-    H, W = labels.shape
 
-    nodes = []  # (pixel, metadata)
-    door_node = {}  # door id -> node index
-    edges = []  # (node a, node b, metadata)
+def _room_metadata(G) -> dict:
+    """``room -> metadata`` of the nodes and edges in that room: ``room`` (its ID) and its ``name`` and
+    ``room_kind`` when it has them."""
     room_meta = {}
     for r, d in G.nodes(data=True):
         m = {"room": _plain(r)}
@@ -241,9 +283,15 @@ def route_graph(seg_or_G, labels=None, *, clearance: float = DEFAULT_CLEARANCE, 
             if v is not None and v != "":
                 m[key] = v
         room_meta[r] = m
+    return room_meta
 
-    doors = {}  # id -> (a, b, width, best cell)
-    for did, (a, b, p1, p2, width, _) in sorted(ctx.doors.items()):
+
+def _door_openings(room_map, labels, clear, ok, clearance) -> dict:
+    """``door id -> (room a, room b, width, cell, line)`` of the doors with a cell of clearance
+    ``clearance`` on their line (the ``line`` of cells, :func:`_door_line`): ``cell`` the one of
+    largest clearance (``clear``), where the door's node goes. Narrower doors are left out."""
+    doors = {}
+    for did, (a, b, p1, p2, width, _) in sorted(room_map.doors.items()):
         line = _door_line(p1, p2, labels.shape)
         cells = [p for p in line if ok[p]]
         if not cells:
@@ -251,69 +299,53 @@ def route_graph(seg_or_G, labels=None, *, clearance: float = DEFAULT_CLEARANCE, 
             continue
         best = max(cells, key=lambda p: clear[p])
         doors[did] = (a, b, width, best, line)
-    for did in sorted(doors):
-        a, b, w, px, _ = doors[did]
-        door_node[did] = len(nodes)
-        nodes.append((px, {"type": "door", "door": did, "rooms": [_plain(a), _plain(b)], "width": w}))
+    return doors
 
-    if not all(isinstance(r, (int, np.integer)) and not isinstance(r, bool) for r in G.nodes):
-        raise PlanningError("room graph: room IDs must be integers (the labels of the label image), got "
-                            f"{sorted(map(repr, G.nodes))[:5]}")
-    boxes = ndi.find_objects(np.where(labels > 0, labels, 0).astype(np.int64, copy=False))
-    for r in sorted(G.nodes):
-        ri = int(r)
-        if ri < 1 or ri > len(boxes) or boxes[ri - 1] is None:
+
+def _room_window(labels, ok, r, box, lines):
+    """``(window, region, own)`` of room ``r`` (its bounding box ``box`` in ``labels``) and the lines
+    of cells of its doors (``lines``): ``window`` the slices of the box grown to hold every door cell
+    and :data:`_DOOR_REACH` cells around it; ``region`` the window's cells a way in the room may use
+    (the room's and, around its doors' cells, any free cell, all of them ``ok``); ``own`` those of
+    ``region`` in the room."""
+    H, W = labels.shape
+    r0, r1, c0, c1 = box[0].start, box[0].stop, box[1].start, box[1].stop
+    g = _DOOR_REACH
+    for line in lines:
+        for p in line:
+            r0, r1 = max(min(r0, p[0] - g), 0), min(max(r1, p[0] + g + 1), H)
+            c0, c1 = max(min(c0, p[1] - g), 0), min(max(c1, p[1] + g + 1), W)
+    win = (slice(r0, r1), slice(c0, c1))
+    region = labels[win] == r
+    for line in lines:  # the door's cells and the free cells around them: the way through the opening
+        for p in line:
+            a = slice(max(p[0] - g, 0) - r0, p[0] + g + 1 - r0)
+            b = slice(max(p[1] - g, 0) - c0, p[1] + g + 1 - c0)
+            region[a, b] |= labels[win][a, b] > 0
+    region &= ok[win]
+    return win, region, region & (labels[win] == r)
+
+
+def _room_paths(region, clear, start, off, door_cells, door_node, key, r, clearance):
+    """``(mcp, cum, targets)``: the cheapest paths over ``region`` from window pixel ``start`` (cells
+    near walls cost more, up to 3 times within :data:`_PREFER` m of one: ``clear`` is each cell's
+    clearance), their cumulative costs, and the window pixels of the doors they reach
+    (``door_cells``: door id -> map pixel), each put in ``key`` as its door's node."""
+    from skimage.graph import MCP_Geometric
+
+    cost = np.where(region, 1.0 + 2.0 * np.clip(1.0 - clear / _PREFER, 0.0, 1.0), np.inf)
+    mcp = MCP_Geometric(cost, fully_connected=False)
+    cum, _ = mcp.find_costs([start])
+    targets = []
+    for did, px in door_cells.items():
+        q = (px[0] - off[0], px[1] - off[1])
+        if not np.isfinite(cum[q]):
+            log.info("door %d cannot be reached from the middle of room %s with a clearance of %.2f m",
+                     did, r, clearance)
             continue
-        mine = [did for did in sorted(doors) if r in doors[did][:2]]
-        sl = boxes[ri - 1]
-        r0, r1, c0, c1 = sl[0].start, sl[0].stop, sl[1].start, sl[1].stop
-        g = _DOOR_REACH
-        for did in mine:
-            for p in doors[did][4]:
-                r0, r1 = max(min(r0, p[0] - g), 0), min(max(r1, p[0] + g + 1), H)
-                c0, c1 = max(min(c0, p[1] - g), 0), min(max(c1, p[1] + g + 1), W)
-        win = (slice(r0, r1), slice(c0, c1))
-        region = labels[win] == r
-        for did in mine:  # the door's cells and the free cells around them: the way through the opening
-            for p in doors[did][4]:
-                a = slice(max(p[0] - g, 0) - r0, p[0] + g + 1 - r0)
-                b = slice(max(p[1] - g, 0) - c0, p[1] + g + 1 - c0)
-                region[a, b] |= labels[win][a, b] > 0
-        region &= ok[win]
-        if not region.any():
-            log.info("room %s has no cell with a clearance of %.2f m: no node", r, clearance)
-            continue
-        own = region & (labels[win] == r)
-        start = _room_point(G.nodes[r], own, clear[win], (r0, c0), ctx.grid)
-        if start is None:
-            continue
-        meta = dict(room_meta[r], type="room")
-        root = len(nodes)
-        nodes.append(((start[0] + r0, start[1] + c0), meta))
-        cost = np.where(region, 1.0 + 2.0 * np.clip(1.0 - clear[win] / _PREFER, 0.0, 1.0), np.inf)
-        mcp = MCP_Geometric(cost, fully_connected=False)
-        cum, _ = mcp.find_costs([start])
-        key = {start: root}  # window pixel -> node index
-        targets = []
-        for did in mine:
-            px = doors[did][3]
-            q = (px[0] - r0, px[1] - c0)
-            if not np.isfinite(cum[q]):
-                log.info("door %d cannot be reached from the middle of room %s with a clearance of %.2f m",
-                         did, r, clearance)
-                continue
-            key[q] = door_node[did]
-            targets.append(q)
-        targets += _far_points(mcp, cum, start, targets, own, res)
-        _tree_edges(mcp, start, targets, key, ok[win], nodes, edges, (r0, c0), ri, room_meta[r], doors, door_node)
-    if not edges:
-        raise PlanningError(f"no route graph: no door has a clearance of {clearance:g} m on both sides and no "
-                            f"room is more than {REACH:g} m across at that clearance")
-    if len(nodes) + 2 * len(edges) > MAX_IDS:
-        raise PlanningError(f"route graph of {len(nodes)} nodes and {2 * len(edges)} edges: more IDs than the "
-                            f"{MAX_IDS} Nav2's messages hold (16-bit node and edge IDs); a larger clearance "
-                            "gives fewer")
-    return _collection(nodes, edges, to_world, res, frame)
+        key[q] = door_node[did]
+        targets.append(q)
+    return mcp, cum, targets
 
 
 def _room_point(d, own, clear, off, grid):
@@ -337,8 +369,6 @@ def _far_points(mcp, cum, start, targets, own, res):
 
     Distances are taken on blocks of about 0.25 m (one block of the tree's cells or the room's
     reachable cells: any of its cells), a tenth of the reach."""
-    from .paths import _block_any
-
     reach = np.isfinite(cum) & own
     if not reach.any():
         return []
@@ -352,11 +382,11 @@ def _far_points(mcp, cum, start, targets, own, res):
         tree[tuple(np.asarray(p).T)] = True
     big = np.zeros((Hf, Wf), bool)
     big[:H, :W] = reach
-    reach_b = _block_any(big, f)
+    reach_b = block_any(big, f)
     out = []
     limit = int(reach.sum() * res * res / (REACH * REACH)) + 1  # never more than the room has REACH-squares
     while len(out) < limit:
-        d = ndi.distance_transform_edt(~_block_any(tree, f)) * (res * f)
+        d = ndi.distance_transform_edt(~block_any(tree, f)) * (res * f)
         d[~reach_b] = 0.0
         k = int(np.argmax(d))
         if d.flat[k] <= REACH:
@@ -369,7 +399,7 @@ def _far_points(mcp, cum, start, targets, own, res):
     return out
 
 
-def _tree_edges(mcp, start, targets, key, ok, nodes, edges, off, room, meta, doors, door_node):
+def _tree_edges(mcp, start, targets, key, ok, nodes, edges, off, meta, doors, door_node):
     """Edges of the tree of cheapest paths from ``start`` to ``targets`` (window pixels), cut at its
     branch points and at ``key`` pixels, each branch straightened (:func:`_straighten`)."""
     parent, children = {}, {}
@@ -408,7 +438,7 @@ def _tree_edges(mcp, start, targets, key, ok, nodes, edges, off, room, meta, doo
                 edges.append((a, b, em))
 
 
-def _collection(nodes, edges, to_world, res, frame):
+def _collection(nodes, edges, to_world, frame):
     """The GeoJSON dict of ``nodes`` (pixel, metadata) and ``edges`` (a, b, metadata), both ways."""
     px = np.array([p for p, _ in nodes], float)
     x, y = to_world(px[:, 0], px[:, 1])
@@ -428,55 +458,3 @@ def _collection(nodes, edges, to_world, res, frame):
     return {"type": "FeatureCollection", "name": "graph",
             "crs": {"type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::3857"}},
             "features": feats}
-
-
-def write_route_graph(graph: dict, path) -> Path:
-    """Write a :func:`route_graph` dict to ``path`` as JSON (atomically: a temporary renamed into place).
-
-    Returns
-    -------
-    pathlib.Path
-    """
-    from ..io.files import atomic_write
-
-    path = Path(path)
-    text = json.dumps(graph, indent=1, allow_nan=False)
-    with atomic_write(path) as f:
-        f.write(text.encode("utf-8"))
-    return path
-
-
-def labels_beside(graph_path) -> np.ndarray:
-    """The label image ``topomap segment`` wrote beside a room graph file.
-
-    Parameters
-    ----------
-    graph_path : str or os.PathLike
-        ``rooms.graphml`` (or ``.json``, ``.geojson``) in a segment output folder.
-
-    Returns
-    -------
-    (M, N) ndarray of int
-        From ``labels.yaml`` + ``labels.pgm`` (:func:`topomap.io.export.load_label_map`), else from
-        ``labels.png``.
-
-    Raises
-    ------
-    MapFileNotFoundError
-        Neither file is in the folder.
-    MapError
-        ``labels.png`` cannot be read.
-    """
-    from ..errors import MapFileNotFoundError
-    from ..io.export import load_label_map
-
-    folder = Path(graph_path).parent
-    if (folder / "labels.yaml").is_file():
-        return load_label_map(folder / "labels.yaml")[0]
-    png = folder / "labels.png"
-    if not png.is_file():
-        raise MapFileNotFoundError(f"{folder}: no labels.yaml + labels.pgm or labels.png beside the room graph "
-                                   "(the folder topomap segment wrote)")
-    from ..bench.datasets import read_label_image
-
-    return read_label_image(png).astype(np.int64)

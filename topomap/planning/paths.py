@@ -88,280 +88,89 @@ import numpy as np
 import networkx as nx
 
 from ..errors import NoPathError, NotInRoomError, PlanningError  # noqa: F401  (re-exported)
-from .._fast import lookup, ranges
-from ..core.geometry import line_pixels
+from .._fast import ranges
+from ..core.roommap import RoomMap
 
 __all__ = ["PlanningError", "NotInRoomError", "NoPathError", "room_at", "neighbors", "doors_between",
            "room_distances", "travel_graph", "door_graph", "plan_path"]
 
-
-# --------------------------------------------------------------------------
-# Context: labels and frame of a segmentation or a room graph
-# --------------------------------------------------------------------------
-
-#: Offset (px) of the point at which a cell is tested against room polygons.
-#: Room outlines (:func:`topomap.core.roomgraph.room_polygons`) run along cell
-#: edges on the top/left side of a room and may run through the cell centres
-#: on its bottom/right side; a point a quarter cell up and left of the centre
-#: is inside every cell of the room under either convention and outside the
-#: cells of its neighbours, so rasterising the polygons gives back the label
-#: image exactly (checked by the tests for every segmentation method).
-_PROBE = -0.25
+_Ctx = RoomMap  # alias until core.identity imports topomap.core.roommap.RoomMap
 
 
-class _Ctx:
-    """Room cells, doors and the pixel <-> metre frame of ``seg_or_G``."""
+class RoomSpace:
+    """The traversable cells of one room and the cells its doors are crossed at.
 
-    def __init__(self, seg_or_G):
-        from ..io.maps import OccupancyGrid
+    The traversable cells are the room's cells plus the cells of its doors'
+    segments that lie on the room or on the room across the door, in a window
+    (the room's bounding box with its doors, one cell around).
 
-        if isinstance(seg_or_G, nx.Graph):
-            G = seg_or_G
-            self.seg = None
-            try:
-                shape = tuple(int(v) for v in G.graph["shape"])
-                res = float(G.graph["resolution"])
-                origin = tuple(float(v) for v in G.graph["origin"])
-            except (KeyError, TypeError, ValueError):
-                raise PlanningError("room graph lacks the map frame (graph attributes 'shape', 'resolution', "
-                                    "'origin'); build it with topomap.room_graph or load it with "
-                                    "topomap.io.export.load_graph") from None
-            # frame only: a read-only all-zero view of the map's shape (no memory)
-            self.grid = OccupancyGrid(np.broadcast_to(np.int8(0), shape), res, origin)
-        elif hasattr(seg_or_G, "labels") and hasattr(seg_or_G, "grid"):
-            self.seg = seg_or_G
-            G = seg_or_G.room_graph
-            self.grid = seg_or_G.grid
-        else:
-            raise PlanningError(f"expected a Segmentation or a room graph, got {type(seg_or_G).__name__}")
-        self.G = G
-        self.shape = tuple(self.grid.shape)
-        self.res = self.grid.resolution
-        self.doors = {}  # id -> (a, b, p1, p2, width, (x, y))
-        for a, b, k, d in G.edges(keys=True, data=True):
-            try:
-                did = int(d.get("door", k))
-                p1 = tuple(float(v) for v in d["p1"])
-                p2 = tuple(float(v) for v in d["p2"])
-                self.doors[did] = (int(a), int(b), p1, p2, float(d["width"]), (float(d["x"]), float(d["y"])))
-                if len(p1) != 2 or len(p2) != 2:
-                    raise ValueError("p1 and p2 must be (row, col)")
-            except KeyError as exc:
-                raise PlanningError(f"room graph: door {a}-{b} lacks the attribute {exc.args[0]!r} (doors need "
-                                    "p1, p2, width, x, y)") from None
-            except (TypeError, ValueError) as exc:
-                raise PlanningError(f"room graph: door {a}-{b} has a bad attribute: {exc}") from None
-        self._of = {}  # room -> its door IDs, ascending
-        for did in sorted(self.doors):
-            a, b = self.doors[did][:2]
-            for r in {a, b}:
-                self._of.setdefault(r, []).append(did)
-        self._bbox = None
-        self._cells = {}  # door -> its cells (door_cells)
-        self._points = {}  # door -> the cell a route crosses it at (door_point)
+    Parameters
+    ----------
+    room_map : RoomMap
+        The rooms and doors (:class:`topomap.core.roommap.RoomMap`).
+    room : int
+        Room ID.
+    doors : list of int, optional
+        The doors to include (default: all of the room's doors).
 
-    # -- rooms ------------------------------------------------------------
-    def room_bbox(self, r):
-        """(r0, r1, c0, c1) half-open pixel box of room ``r``'s cells."""
-        if self.seg is not None:
-            if self._bbox is None:
-                from ..core.roomgraph import _BOXES
+    Attributes
+    ----------
+    win : (int, int, int, int)
+        The window ``(r0, r1, c0, c1)`` (half-open pixel box of the map).
+    mask : (r1 - r0, c1 - c0) ndarray of bool
+        The traversable cells in the window.
+    door_px : dict
+        ``door id -> (row, col)`` in the window: the cell a route crosses the
+        door at (:meth:`RoomMap.door_point <topomap.core.roommap.RoomMap.door_point>`),
+        for the doors that have one.
+    """
 
-                # the boxes room_graph found for these labels (rooms 1..N: the same as the labels' own)
-                ref, boxes = _BOXES.get(self.G, (lambda: None, None))
-                if ref() is self.seg.labels:
-                    self._bbox = boxes
-                else:
-                    from scipy import ndimage as ndi
-
-                    self._bbox = ndi.find_objects(self.seg.labels)
-            sl = self._bbox[r - 1] if 0 < r <= len(self._bbox) else None
-            if sl is None:
-                return None
-            return sl[0].start, sl[0].stop, sl[1].start, sl[1].stop
-        poly = self.G.nodes[r].get("polygon")
-        if poly is None or poly.is_empty:
-            return None
-        x0, y0, x1, y1 = poly.bounds
-        rows, cols = self.grid.world_to_pixel(np.array([x0, x0, x1, x1]), np.array([y0, y1, y0, y1]))
-        H, W = self.shape
-        r0 = max(int(np.floor(rows.min())), 0)
-        c0 = max(int(np.floor(cols.min())), 0)
-        r1 = min(int(np.ceil(rows.max())) + 1, H)
-        c1 = min(int(np.ceil(cols.max())) + 1, W)
-        return r0, r1, c0, c1
-
-    def window_labels(self, rooms, win):
-        """Labels of ``rooms`` (others 0) in the window ``(r0, r1, c0, c1)``."""
-        r0, r1, c0, c1 = win
-        if self.seg is not None:
-            L = self.seg.labels[r0:r1, c0:c1]
-            if L.size == 0 or L.min() < 0:
-                return np.where(np.isin(L, list(rooms)), L, 0).astype(np.int32)
-            keep = np.zeros(int(L.max()) + 1, np.int32)  # label -> itself for the rooms kept, else 0
-            idx = np.array([r for r in rooms if 0 <= r < len(keep)], np.intp)
-            keep[idx] = idx
-            return lookup(keep, L)
-        import shapely
-
-        out = np.zeros((r1 - r0, c1 - c0), np.int32)
-        rr, cc = np.mgrid[r0:r1, c0:c1]
-        xs, ys = self.grid.pixel_to_world(rr + _PROBE, cc + _PROBE)
-        for r in rooms:
-            poly = self.G.nodes[r].get("polygon")
-            if poly is None or poly.is_empty:
-                continue
-            inside = shapely.contains_xy(poly, xs, ys)
-            out[inside & (out == 0)] = r
-        return out
-
-    def window_room(self, r, rooms, win):
-        """The cells of room ``r`` in the window ``(r0, r1, c0, c1)`` (a new bool array) and a test
-        ``(rows, cols) -> bool array``: window cells on one of ``rooms``."""
-        if self.seg is None:
-            L = self.window_labels(rooms, win)
-            return L == r, lambda rr, cc: L[rr, cc] > 0
-        r0, r1, c0, c1 = win
-        L = self.seg.labels[r0:r1, c0:c1]  # a view: one pass for the room's cells, none for the others
-        ids = np.array(sorted(rooms), np.intp)
-        if ids.size and ids[0] >= 1:  # a table over the labels (np.isin costs more on a door's few cells)
-            on = np.zeros(int(ids[-1]) + 2, bool)
-            on[ids] = True
-            top = len(on) - 1  # labels 0, below 0 (clipped to 0) and above the rooms (clipped to top): False
-            return L == r, lambda rr, cc: on[np.clip(L[rr, cc], 0, top)]
-        return L == r, lambda rr, cc: np.isin(L[rr, cc], ids)
-
-    def label_at_pixel(self, row, col):
-        H, W = self.shape
-        if not (0 <= row < H and 0 <= col < W):
-            return 0
-        if self.seg is not None:
-            return int(self.seg.labels[row, col])
-        import shapely
-
-        x, y = self.grid.pixel_to_world(row + _PROBE, col + _PROBE)
-        for r, d in self.G.nodes(data=True):
-            poly = d.get("polygon")
-            if poly is not None and not poly.is_empty and shapely.contains_xy(poly, float(x), float(y)):
-                return int(r)
-        return 0
-
-    def in_room(self, row, col, r) -> bool:
-        """Whether cell ``(row, col)`` is a cell of room ``r`` (for a graph: a test against that
-        room's polygon only, not every room's)."""
-        H, W = self.shape
-        if not (0 <= row < H and 0 <= col < W):
-            return False
-        if self.seg is not None:
-            return int(self.seg.labels[row, col]) == r
-        import shapely
-
-        poly = self.G.nodes[r].get("polygon") if r in self.G else None
-        if poly is None or poly.is_empty:
-            return False
-        x, y = self.grid.pixel_to_world(row + _PROBE, col + _PROBE)
-        return bool(shapely.contains_xy(poly, float(x), float(y)))
-
-    def doors_of(self, r):
-        return list(self._of.get(r, ()))
-
-    def door_cells(self, did):
-        """The cells of door ``did``'s segment (:func:`topomap.core.geometry.line_pixels`; drawn once)."""
-        cells = self._cells.get(did)
-        if cells is None:
-            _, _, p1, p2, _, _ = self.doors[did]
-            cells = self._cells[did] = line_pixels(p1, p2, self.shape)
-        return cells
-
-    def door_point(self, did):
-        """The cell ``(row, col)`` of door ``did``'s segment a route crosses it at, or None (no cell of it
-        on its rooms): of its cells on its two rooms, those beside both rooms (a cell of one room with
-        a cell of the other among its 8 neighbours), the one closest to the door's midpoint (the first
-        along the segment of equals). Only when no cell is beside both, the one closest of all.
-
-        A segment may run on past the place where its rooms meet, through a wall into a part of one
-        of them that the other does not reach: its cell closest to the midpoint can lie there, and
-        a route to it from the other room does not exist."""
-        if did in self._points:
-            return self._points[did]
-        a, b, p1, p2 = self.doors[did][:4]
-        rr, cc = self.door_cells(did)
-        pt = None
-        if len(rr):
-            H, W = self.shape
-            r0, c0 = max(int(rr.min()) - 1, 0), max(int(cc.min()) - 1, 0)
-            r1, c1 = min(int(rr.max()) + 2, H), min(int(cc.max()) + 2, W)
-            L = np.pad(self.window_labels({a, b}, (r0, r1, c0, c1)), 1)
-            lr, lc = rr - r0 + 1, cc - c0 + 1
-            on = L[lr, lc] > 0
-            if on.any():
-                near_a = np.zeros(len(rr), bool)
-                near_b = np.zeros(len(rr), bool)
-                for dr in (-1, 0, 1):
-                    for dc in (-1, 0, 1):
-                        v = L[lr + dr, lc + dc]
-                        near_a |= v == a
-                        near_b |= v == b
-                both = on & near_a & near_b
-                cand = both if both.any() else on
-                mr, mc = (p1[0] + p2[0]) / 2, (p1[1] + p2[1]) / 2
-                d2 = np.where(cand, (rr - mr) ** 2 + (cc - mc) ** 2, np.inf)
-                i = int(np.argmin(d2))
-                pt = (int(rr[i]), int(cc[i]))
-        self._points[did] = pt
-        return pt
-
-
-def _pixel(ctx, x, y):
-    r, c = ctx.grid.world_to_pixel(x, y)
-    return int(np.rint(r)), int(np.rint(c))
-
-
-class _RoomSpace:
-    """Traversable cells of one room (its cells plus its doors' cells) and its door cells."""
-
-    def __init__(self, ctx: _Ctx, r: int, doors=None):
-        self.ctx, self.r = ctx, r
-        doors = ctx.doors_of(r) if doors is None else doors
-        H, W = ctx.shape
-        box = ctx.room_bbox(r)
-        lines = [ctx.door_cells(d) for d in doors]
+    def __init__(self, room_map: RoomMap, room: int, doors=None):
+        self.room_map, self.room = room_map, room
+        doors = room_map.doors_of(room) if doors is None else doors
+        H, W = room_map.shape
+        box = room_map.room_bbox(room)
+        lines = [room_map.door_cells(d) for d in doors]
         if not box and not lines:
             self.win, self.mask, self.door_px = (0, 0, 0, 0), np.zeros((0, 0), bool), {}
             return
         # all the doors' cells at once (one test against the rooms instead of one per door)
-        RR = np.concatenate([rr for rr, _ in lines]) if lines else np.zeros(0, np.intp)
-        CC = np.concatenate([cc for _, cc in lines]) if lines else np.zeros(0, np.intp)
-        rows = ([box[0], box[1] - 1] if box else []) + ([int(RR.min()), int(RR.max())] if RR.size else [])
-        cols = ([box[2], box[3] - 1] if box else []) + ([int(CC.min()), int(CC.max())] if CC.size else [])
+        door_rows = np.concatenate([rr for rr, _ in lines]) if lines else np.zeros(0, np.intp)
+        door_cols = np.concatenate([cc for _, cc in lines]) if lines else np.zeros(0, np.intp)
+        rows = ([box[0], box[1] - 1] if box else []) + ([int(door_rows.min()), int(door_rows.max())]
+                                                         if door_rows.size else [])
+        cols = ([box[2], box[3] - 1] if box else []) + ([int(door_cols.min()), int(door_cols.max())]
+                                                         if door_cols.size else [])
         r0, r1 = max(min(rows) - 1, 0), min(max(rows) + 2, H)
         c0, c1 = max(min(cols) - 1, 0), min(max(cols) + 2, W)
         self.win = (r0, r1, c0, c1)
-        rooms = {r} | {x for d in doors for x in ctx.doors[d][:2]}
-        mask, on_rooms = ctx.window_room(r, rooms, self.win)
-        RR, CC = RR - r0, CC - c0
-        ok = on_rooms(RR, CC)
-        mask[RR[ok], CC[ok]] = True
+        rooms = {room} | {x for d in doors for x in room_map.doors[d][:2]}
+        mask, on_rooms = room_map.window_room(room, rooms, self.win)
+        door_rows, door_cols = door_rows - r0, door_cols - c0
+        ok = on_rooms(door_rows, door_cols)
+        mask[door_rows[ok], door_cols[ok]] = True
         # each door at the cell a route crosses it (its cells on the rooms are on the mask)
         self.door_px = {}
         for d in doors:
-            pt = ctx.door_point(d)
+            pt = room_map.door_point(d)
             if pt is not None:
                 self.door_px[d] = (pt[0] - r0, pt[1] - c0)
         self.mask = mask
 
-    def local(self, row, col):
+    def local(self, row: int, col: int):
+        """Map cell ``(row, col)`` as a cell of the window, or None when it is not traversable."""
         r0, r1, c0, c1 = self.win
         if r0 <= row < r1 and c0 <= col < c1 and self.mask[row - r0, col - c0]:
             return row - r0, col - c0
         return None
 
-    def distances(self, src, targets):
-        """Geodesic distances (m) from local pixel ``src`` to local pixels ``targets`` (inf if unreachable)."""
+    def distances(self, src, targets) -> list:
+        """Geodesic distances (m) from window cell ``src`` to window cells ``targets`` (inf where
+        unreachable), on the map's grid (steps of 1 and √2 cells)."""
         if not targets:
             return []
         cum = _mcp_costs(self.mask, [src], targets)
-        return [float(cum[t]) * self.ctx.res for t in targets]
+        return [float(cum[t]) * self.room_map.resolution for t in targets]
 
     def door_distances(self, *, exact=False):
         """``{(door_i, door_j): metres}`` between this room's doors (``i < j``, reachable pairs only).
@@ -385,26 +194,26 @@ class _RoomSpace:
             for i, di in enumerate(ids[:-1]):
                 rest = [ids[j] for j in range(i + 1, len(ids)) if not seen[i, j]]
                 for j in np.flatnonzero(seen[i, i + 1:]) + i + 1:
-                    out[(di, ids[j])] = float(_octile(*(pts[i] - pts[j]))) * self.ctx.res
+                    out[(di, ids[j])] = float(_octile(*(pts[i] - pts[j]))) * self.room_map.resolution
                 for dj, L in zip(rest, self.distances(self.door_px[di], [self.door_px[d] for d in rest])):
                     if np.isfinite(L):
                         out[(di, dj)] = L
             return out
-        f = _coarse_factor(self.ctx.res)
+        f = _coarse_factor(self.room_map.resolution)
         pts = np.array([self.door_px[d] for d in ids], float)
         seen = _in_sight(self.mask, pts) if f > 1 else np.zeros((len(ids), len(ids)), bool)
         need = ~seen  # the coarse search only for the pairs out of sight (none: no search)
         np.fill_diagonal(need, False)
-        D = _coarse_door_distances(self.mask, pts, f, need)
-        D[seen] = _octile(*(pts[:, None, :] - pts[None, :, :]).transpose(2, 0, 1))[seen]
+        cells = _coarse_door_distances(self.mask, pts, f, need)  # (k, k) distances in cells
+        cells[seen] = _octile(*(pts[:, None, :] - pts[None, :, :]).transpose(2, 0, 1))[seen]
         short = REFINE_CELLS * f if f > 1 else 0
         for i in range(len(ids)):
-            near = [j for j in range(i + 1, len(ids)) if D[i, j] < short and not seen[i, j]]
+            near = [j for j in range(i + 1, len(ids)) if cells[i, j] < short and not seen[i, j]]
             if near:
-                D[i, near] = _windowed_distances(self.mask, pts, i, near, D[i, near], f)
-        res = self.ctx.res
-        return {(ids[i], ids[j]): float(D[i, j]) * res
-                for i in range(len(ids)) for j in range(i + 1, len(ids)) if np.isfinite(D[i, j])}
+                cells[i, near] = _windowed_distances(self.mask, pts, i, near, cells[i, near], f)
+        res = self.room_map.resolution
+        return {(ids[i], ids[j]): float(cells[i, j]) * res
+                for i in range(len(ids)) for j in range(i + 1, len(ids)) if np.isfinite(cells[i, j])}
 
 
 #: Rooms with at least this many doors: open floor merged into larger travel nodes
@@ -456,7 +265,7 @@ def _block_components(mask, f):
     m = np.zeros((H * f, W * f), bool)
     m[:h, :w] = mask
     blocks = m.reshape(H, f, W, f)
-    R, C = np.nonzero(_block_any(m, f))
+    R, C = np.nonzero(block_any(m, f))
     if 3 * R.size > H * W:  # mostly full: all blocks at once, one empty cell apart both ways
         g = np.zeros((H, f + 1, W, f + 1), np.uint8)
         g[:, :f, :, :f] = blocks
@@ -519,7 +328,7 @@ def _merged_nodes(mask, lab, n, cen, f):
     if H < 4 or W < 4:
         return node, cen
     full = np.zeros((H + 2, W + 2), bool)  # blocks wholly on the mask, in a ring of blocks that are not
-    full[1:-1, 1:-1] = ~_block_any(~np.ascontiguousarray(mask[:H * f, :W * f]), f)
+    full[1:-1, 1:-1] = ~block_any(~np.ascontiguousarray(mask[:H * f, :W * f]), f)
     inner = full[1:-1, 1:-1].copy()  # full, with its 8 neighbours full
     for dr in (0, 1, 2):
         for dc in (0, 1, 2):
@@ -537,11 +346,25 @@ def _merged_nodes(mask, lab, n, cen, f):
     return node, cen[used]
 
 
-def _block_any(m, f):
-    """(H, W) bool: the ``f`` x ``f`` blocks of ``m`` ((H f, W f) bool, C-contiguous) holding a True cell.
+def block_any(m: np.ndarray, f: int) -> np.ndarray:
+    """Which ``f`` x ``f`` blocks of a bool image hold a True cell.
 
-    The rows of each block OR-ed together, then each block's ``f`` bytes read as one integer
-    when ``f`` is 1, 2, 4 or 8 (numpy's ``any`` over two axes of a 4-D view is 50 times slower).
+    Parameters
+    ----------
+    m : (H f, W f) ndarray of bool
+        C-contiguous, a whole number of blocks each way.
+    f : int
+        Block side (cells).
+
+    Returns
+    -------
+    (H, W) ndarray of bool
+
+    Notes
+    -----
+    The rows of each block are OR-ed together, then each block's ``f`` bytes
+    read as one integer when ``f`` is 1, 2, 4 or 8 (much faster than numpy's
+    ``any`` over two axes of a 4-D view).
     """
     Hf, Wf = m.shape
     H, W = Hf // f, Wf // f
@@ -741,6 +564,7 @@ def _windowed_distances(mask, pts, i, near, bound, f):
 # --------------------------------------------------------------------------
 
 def _graph(seg_or_G):
+    """The room graph of a segmentation, or the graph itself."""
     return seg_or_G if isinstance(seg_or_G, nx.Graph) else seg_or_G.room_graph
 
 
@@ -761,8 +585,8 @@ def room_at(seg_or_G, x: float, y: float) -> int:
         Room ID (``1..N``) of the cell that holds the point; ``0`` when the
         point is outside the map or not on a room's cell (wall, unknown).
     """
-    ctx = _Ctx(seg_or_G)
-    return ctx.label_at_pixel(*_pixel(ctx, x, y))
+    room_map = RoomMap(seg_or_G)
+    return room_map.label_at_pixel(*room_map.cell_at(x, y))
 
 
 def neighbors(G, room: int) -> list:
@@ -835,16 +659,17 @@ def room_distances(seg_or_G, room: int, *, exact: bool = False) -> dict:
         distance through the room's free cells between the two doors'
         midpoint cells; pairs not connected inside the room are left out.
     """
-    ctx = _Ctx(seg_or_G)
-    if room not in ctx.G:
+    room_map = RoomMap(seg_or_G)
+    if room not in room_map.graph:
         raise NotInRoomError(f"no room {room!r} in the graph")
-    return _room_distances(ctx, room, exact=exact)
+    return _room_distances(room_map, room, exact=exact)
 
 
-def _room_distances(ctx, room, exact=False):
-    if len(ctx.doors_of(room)) < 2:
+def _room_distances(room_map, room, exact=False):
+    """:func:`room_distances` of a room of ``room_map`` (a :class:`RoomMap`)."""
+    if len(room_map.doors_of(room)) < 2:
         return {}
-    return _RoomSpace(ctx, room).door_distances(exact=exact)
+    return RoomSpace(room_map, room).door_distances(exact=exact)
 
 
 def travel_graph(seg_or_G, *, exact: bool = False) -> nx.MultiGraph:
@@ -871,16 +696,29 @@ def travel_graph(seg_or_G, *, exact: bool = False) -> nx.MultiGraph:
         The annotated copy (the input is not modified); the graph attribute
         ``travel_distances`` is ``"geodesic"``.
     """
-    ctx = _Ctx(seg_or_G)
-    G = ctx.G.copy()
+    room_map = RoomMap(seg_or_G)
+    G = room_map.graph.copy()
     for r in G.nodes:
-        dist = _room_distances(ctx, r, exact=exact)
+        dist = _room_distances(room_map, r, exact=exact)
         G.nodes[r]["door_distances"] = tuple((int(i), int(j), float(L)) for (i, j), L in sorted(dist.items()))
     G.graph["travel_distances"] = "geodesic"
     return G
 
 
-def _annotated(seg_or_G):
+def annotated_graph(seg_or_G) -> nx.MultiGraph:
+    """The room graph with in-room door-to-door distances: ``seg_or_G``'s own graph when every room
+    carries ``door_distances`` already (a graph :func:`travel_graph` made or a saved one), else
+    :func:`travel_graph` of it.
+
+    Parameters
+    ----------
+    seg_or_G : Segmentation or networkx.MultiGraph
+
+    Returns
+    -------
+    networkx.MultiGraph
+        Not a copy when the graph was annotated already: do not modify it.
+    """
     G = _graph(seg_or_G)
     if G.number_of_nodes() and all("door_distances" in d for _, d in G.nodes(data=True)):
         return G
@@ -907,19 +745,19 @@ def door_graph(seg_or_G, *, min_width: float = 0.0) -> nx.Graph:
         midpoints) and ``room`` (the room crossed); when two doors share two
         rooms the shorter crossing is kept.
     """
-    G = _annotated(seg_or_G)
-    D = nx.Graph(min_width=float(min_width))
+    G = annotated_graph(seg_or_G)
+    doors = nx.Graph(min_width=float(min_width))
     for a, b, k, d in G.edges(keys=True, data=True):
         if float(d["width"]) < min_width:
             continue
-        D.add_node(int(d.get("door", k)), x=float(d["x"]), y=float(d["y"]), width=float(d["width"]),
-                   rooms=(int(a), int(b)))
+        doors.add_node(int(d.get("door", k)), x=float(d["x"]), y=float(d["y"]), width=float(d["width"]),
+                       rooms=(int(a), int(b)))
     for r, nd in G.nodes(data=True):
         for i, j, L in nd.get("door_distances", ()):
             i, j, L = int(i), int(j), float(L)
-            if i in D and j in D and (not D.has_edge(i, j) or D.edges[i, j]["length"] > L):
-                D.add_edge(i, j, length=L, room=int(r))
-    return D
+            if i in doors and j in doors and (not doors.has_edge(i, j) or doors.edges[i, j]["length"] > L):
+                doors.add_edge(i, j, length=L, room=int(r))
+    return doors
 
 
 # --------------------------------------------------------------------------
@@ -927,68 +765,118 @@ def door_graph(seg_or_G, *, min_width: float = 0.0) -> nx.Graph:
 # --------------------------------------------------------------------------
 
 def _is_room_id(v):
+    """Whether ``v`` is a room ID (an integer, not a bool)."""
     return isinstance(v, numbers.Integral) and not isinstance(v, bool)
 
 
-def _endpoint(ctx, G, v, what):
-    """(room, (x, y), (row, col)) of a start/goal given as a room ID or a point."""
+def _room_endpoint(room_map, G, r, what):
+    """``(room, (x, y), (row, col))`` of room ``r`` as a start or goal: its interior point."""
+    if r not in G:
+        raise NotInRoomError(f"{what} room {r} does not exist (rooms: "
+                             f"{', '.join(str(n) for n in sorted(G.nodes))})")
+    nd = G.nodes[r]
+    # the room's interior point (a cell of the room, roomgraph.interior_points); a graph without
+    # it (written by an older version): the centroid, when it is in the room
+    key = ("interior_x", "interior_y") if "interior_x" in nd and "interior_y" in nd else ("x", "y")
+    x, y = float(nd[key[0]]), float(nd[key[1]])
+    row, col = room_map.cell_at(x, y) if np.isfinite(x) and np.isfinite(y) else (-1, -1)
+    if room_map.in_room(row, col, r):
+        return r, (x, y), (row, col)
+    x, y = float(nd["x"]), float(nd["y"])
+    row, col = room_map.cell_at(x, y)
+    if room_map.in_room(row, col, r):
+        return r, (x, y), (row, col)
+    # centroid outside the room (L shape, ring): nearest cell of the room
+    space = RoomSpace(room_map, r, doors=[])
+    r0, _, c0, _ = space.win
+    rr, cc = np.nonzero(space.mask)
+    if rr.size == 0:
+        raise NotInRoomError(f"{what} room {r} has no cells")
+    i = int(np.argmin((rr + r0 - row) ** 2 + (cc + c0 - col) ** 2))
+    row, col = int(rr[i] + r0), int(cc[i] + c0)
+    x, y = room_map.grid.pixel_to_world(row, col)
+    return r, (float(x), float(y)), (row, col)
+
+
+def locate_endpoint(room_map: RoomMap, G, v, what: str) -> tuple:
+    """The room, point and cell of a route's start or goal.
+
+    Parameters
+    ----------
+    room_map : RoomMap
+        The rooms of ``G`` (:class:`topomap.core.roommap.RoomMap`).
+    G : networkx.MultiGraph
+        The room graph.
+    v : (float, float) or int
+        A map-frame point ``(x, y)`` in metres, or a room ID (its interior
+        point, see :func:`plan_path`).
+    what : str
+        What ``v`` is (``"start"``, ``"goal"``, ...), for the error messages.
+
+    Returns
+    -------
+    tuple
+        ``(room, (x, y), (row, col))``.
+
+    Raises
+    ------
+    NotInRoomError
+        An unknown room ID, a room without cells, or a point off the map or
+        on no room.
+    PlanningError
+        ``v`` is neither a point nor a room ID, or not finite.
+    """
     if _is_room_id(v):
-        r = int(v)
-        if r not in G:
-            raise NotInRoomError(f"{what} room {r} does not exist (rooms: "
-                                 f"{', '.join(str(n) for n in sorted(G.nodes))})")
-        nd = G.nodes[r]
-        # the room's interior point (a cell of the room, roomgraph.interior_points); a graph without
-        # it (written by an older version): the centroid, when it is in the room
-        key = ("interior_x", "interior_y") if "interior_x" in nd and "interior_y" in nd else ("x", "y")
-        x, y = float(nd[key[0]]), float(nd[key[1]])
-        row, col = _pixel(ctx, x, y) if np.isfinite(x) and np.isfinite(y) else (-1, -1)
-        if ctx.in_room(row, col, r):
-            return r, (x, y), (row, col)
-        x, y = float(nd["x"]), float(nd["y"])
-        row, col = _pixel(ctx, x, y)
-        if ctx.in_room(row, col, r):
-            return r, (x, y), (row, col)
-        # centroid outside the room (L shape, ring): nearest cell of the room
-        space = _RoomSpace(ctx, r, doors=[])
-        r0, _, c0, _ = space.win
-        rr, cc = np.nonzero(space.mask)
-        if rr.size == 0:
-            raise NotInRoomError(f"{what} room {r} has no cells")
-        i = int(np.argmin((rr + r0 - row) ** 2 + (cc + c0 - col) ** 2))
-        row, col = int(rr[i] + r0), int(cc[i] + c0)
-        x, y = ctx.grid.pixel_to_world(row, col)
-        return r, (float(x), float(y)), (row, col)
+        return _room_endpoint(room_map, G, int(v), what)
     try:
         x, y = (float(t) for t in v)
     except (TypeError, ValueError):
         raise PlanningError(f"{what} must be (x, y) in metres or a room ID, got {v!r}") from None
     if not (np.isfinite(x) and np.isfinite(y)):
         raise PlanningError(f"{what} must be finite, got ({x}, {y})")
-    row, col = _pixel(ctx, x, y)
-    H, W = ctx.shape
+    row, col = room_map.cell_at(x, y)
+    H, W = room_map.shape
     if not (0 <= row < H and 0 <= col < W):
         raise NotInRoomError(f"{what} ({x:g}, {y:g}) m is outside the map")
-    r = ctx.label_at_pixel(row, col)
+    r = room_map.label_at_pixel(row, col)
     if r == 0:
         raise NotInRoomError(f"{what} ({x:g}, {y:g}) m is not in the free space of any room")
     return r, (x, y), (row, col)
 
 
-def _attach_to_doors(ctx, H, node, room, px):
-    """Join ``node`` (at pixel ``px`` of ``room``) to the room's doors of ``H`` by in-room legs.
+def attach_to_doors(room_map: RoomMap, graph: nx.Graph, node, room: int, cell):
+    """Join ``node`` of a door graph to the doors of its room by in-room legs.
 
-    Returns the room space (to measure more legs in the same room), or None
-    when the pixel is not on the room's traversable cells."""
-    doors = [d for d in ctx.doors_of(room) if d in H]
-    space = _RoomSpace(ctx, room, doors=doors)
-    src = space.local(*px)
+    Parameters
+    ----------
+    room_map : RoomMap
+        The rooms and doors (:class:`topomap.core.roommap.RoomMap`).
+    graph : networkx.Graph
+        A door graph (:func:`door_graph`) holding ``node``; the edges from
+        ``node`` to the doors of ``room`` that are in it are added, with
+        ``length`` (m, the geodesic through the room) and ``room``.
+    node : hashable
+        The node to join.
+    room : int
+        The room the node is in.
+    cell : (int, int)
+        The node's cell ``(row, col)``.
+
+    Returns
+    -------
+    RoomSpace or None
+        The room's traversable cells (to measure more legs in the same
+        room), or None when ``cell`` is not one of them (no edge added).
+    """
+    doors = [d for d in room_map.doors_of(room) if d in graph]
+    space = RoomSpace(room_map, room, doors=doors)
+    src = space.local(*cell)
     if src is None:
         return None
     reach = [d for d in doors if d in space.door_px]
     for d, L in zip(reach, space.distances(src, [space.door_px[d] for d in reach])):
         if np.isfinite(L):
-            H.add_edge(node, d, length=L, room=room)
+            graph.add_edge(node, d, length=L, room=room)
     return space
 
 
@@ -1039,33 +927,32 @@ def plan_path(seg_or_G, start, goal, *, robot_width: float = 0.0) -> dict:
         raise PlanningError(f"robot_width must be a width in metres, got {robot_width!r}") from None
     if not np.isfinite(robot_width) or robot_width < 0:
         raise PlanningError(f"robot_width must be >= 0 m, got {robot_width!r}")
-    ctx = _Ctx(seg_or_G)
-    G = _annotated(seg_or_G)
-    rs, ps, pxs = _endpoint(ctx, G, start, "start")
-    rg, pg, pxg = _endpoint(ctx, G, goal, "goal")
-    H = door_graph(G, min_width=robot_width)
-    S, T = ("start",), ("goal",)
-    H.add_node(S)
-    H.add_node(T)
+    room_map = RoomMap(seg_or_G)
+    G = annotated_graph(seg_or_G)
+    rs, ps, pxs = locate_endpoint(room_map, G, start, "start")
+    rg, pg, pxg = locate_endpoint(room_map, G, goal, "goal")
+    travel = door_graph(G, min_width=robot_width)
+    start_node, goal_node = ("start",), ("goal",)
+    travel.add_node(start_node)
+    travel.add_node(goal_node)
     same = rs == rg
-    for r, p, node in ((rs, pxs, S), (rg, pxg, T)):
-        space = _attach_to_doors(ctx, H, node, r, p)
-        if same and node is S and space is not None:
+    for r, p, node in ((rs, pxs, start_node), (rg, pxg, goal_node)):
+        space = attach_to_doors(room_map, travel, node, r, p)
+        if same and node is start_node and space is not None:
             q = space.local(*pxg)
             if q is not None:
                 (L,) = space.distances(space.local(*p), [q])
                 if np.isfinite(L):
-                    H.add_edge(S, T, length=L, room=r)
+                    travel.add_edge(start_node, goal_node, length=L, room=r)
     try:
-        length, path = nx.single_source_dijkstra(H, S, T, weight="length")
+        length, path = nx.single_source_dijkstra(travel, start_node, goal_node, weight="length")
     except nx.NetworkXNoPath:
         why = f" with doors at least {robot_width:g} m wide" if robot_width > 0 else ""
         raise NoPathError(f"no path from room {rs} ({ps[0]:g}, {ps[1]:g}) to room {rg} "
                           f"({pg[0]:g}, {pg[1]:g}){why}") from None
     doors = [int(n) for n in path[1:-1]]
-    rooms = [int(H.edges[u, v]["room"]) for u, v in zip(path[:-1], path[1:])]
-    legs = [float(H.edges[u, v]["length"]) for u, v in zip(path[:-1], path[1:])]
-    pts = [ps] + [ctx.doors[d][5] for d in doors] + [pg]
+    rooms = [int(travel.edges[u, v]["room"]) for u, v in zip(path[:-1], path[1:])]
+    legs = [float(travel.edges[u, v]["length"]) for u, v in zip(path[:-1], path[1:])]
+    pts = [ps] + [room_map.doors[d][5] for d in doors] + [pg]
     return {"rooms": rooms, "doors": doors, "waypoints": np.asarray(pts, float).reshape(-1, 2),
             "length": float(length), "legs": legs, "start_room": rs, "goal_room": rg}
-from .tour import plan_tour  # noqa: E402,F401  (re-exported: room tours, topomap.planning.tour)

@@ -18,9 +18,8 @@ is a sequence of real routes through free space.
 Solvers
 -------
 Up to ``exact_limit`` rooms (12 by default) the order is the optimum, by the
-Held–Karp dynamic programme over subsets (``O(2^n n^2)``; 12 rooms take a
-few tens of milliseconds). Above that, a heuristic: the nearest-neighbour
-tour improved by 2-opt (reversing a stretch of the tour) and Or-opt (moving
+Held–Karp dynamic programme over subsets (``O(2^n n^2)``). Above that, a
+heuristic: the nearest-neighbour tour improved by 2-opt (reversing a stretch of the tour) and Or-opt (moving
 one, two or three consecutive stops elsewhere) until no move shortens it,
 then rounds of iterated local search, with at most :data:`MOVES_BASE` +
 :data:`MOVES_PER_STOP` moves per room in all and kicks only up to
@@ -40,7 +39,10 @@ import math
 import numpy as np
 import networkx as nx
 
+from ..core.roommap import RoomMap
 from ..errors import NoPathError, NotInRoomError, PlanningError
+from ..options import check_length
+from .paths import annotated_graph, attach_to_doors, door_graph, locate_endpoint
 
 log = logging.getLogger("topomap")
 
@@ -276,16 +278,12 @@ def tour_lower_bound(D: np.ndarray) -> float:
 
 def _stop_graph(seg_or_G, start, rooms, robot_width):
     """The door graph with the start and the rooms to visit joined to their rooms' doors:
-    ``(H, names, stops, points, start_room)``; ``names[0]`` is the start's node, ``names[k]`` stop
+    ``(graph, names, stops, points, start_room)``; ``names[0]`` is the start's node, ``names[k]`` stop
     ``k`` (room ``stops[k - 1]``); ``points`` their map-frame points."""
-    from .paths import _attach_to_doors, _Ctx, _annotated, _endpoint, door_graph
-
-    from ..options import check_length
-
     robot_width = check_length("robot_width", robot_width)
-    ctx = _Ctx(seg_or_G)
-    G = _annotated(seg_or_G)
-    rs, ps, pxs = _endpoint(ctx, G, start, "start")
+    room_map = RoomMap(seg_or_G)
+    G = annotated_graph(seg_or_G)
+    rs, ps, pxs = locate_endpoint(room_map, G, start, "start")
     if rooms is None:
         stops = sorted(int(r) for r in G.nodes)
     else:
@@ -298,17 +296,17 @@ def _stop_graph(seg_or_G, start, rooms, robot_width):
             raise NotInRoomError(f"no room {', '.join(map(str, missing[:20]))}"
                                  f"{' ...' if len(missing) > 20 else ''} in the graph")
     stops = [r for r in stops if r != rs]  # the start room is visited at the start
-    H = door_graph(G, min_width=robot_width)
+    graph = door_graph(G, min_width=robot_width)
     names = [("start",)] + [("room", r) for r in stops]
     points, pixels = [ps], [pxs]
     for r in stops:
-        _, p, px = _endpoint(ctx, G, r, "room")
+        _, p, px = locate_endpoint(room_map, G, r, "room")
         points.append(p)
         pixels.append(px)
     spaces = {}
     for name, room, px in zip(names, [rs] + stops, pixels):
-        H.add_node(name)
-        space = _attach_to_doors(ctx, H, name, room, px)
+        graph.add_node(name)
+        space = attach_to_doors(room_map, graph, name, room, px)
         if room == rs and space is not None:
             spaces[name] = (space, px)
     # the start and the stops in the start room's free space: direct legs
@@ -320,22 +318,22 @@ def _stop_graph(seg_or_G, start, rooms, robot_width):
             if q is not None:
                 (L,) = space.distances(src, [q])
                 if math.isfinite(L):
-                    H.add_edge(("start",), name, length=L, room=rs)
-    return H, names, stops, points, rs
+                    graph.add_edge(("start",), name, length=L, room=rs)
+    return graph, names, stops, points, rs
 
 
-def _sparse(H):
-    """``(nodes, index, A)``: the nodes of ``H``, each node's index, and the symmetric sparse matrix
-    of its edge lengths (an edge of length 0 kept as a tiny length: a sparse matrix has no explicit zero)."""
+def _sparse(graph):
+    """``(nodes, index, lengths)``: the nodes of ``graph``, each node's index, and the symmetric sparse
+    matrix of its edge lengths (an edge of length 0 kept as a tiny length: a sparse matrix has no explicit zero)."""
     from scipy.sparse import coo_matrix
 
-    nodes = list(H.nodes)
+    nodes = list(graph.nodes)
     index = {v: i for i, v in enumerate(nodes)}
-    u = np.array([index[a] for a, b in H.edges], np.int64)
-    v = np.array([index[b] for a, b in H.edges], np.int64)
-    w = np.array([max(float(d["length"]), 1e-12) for _, _, d in H.edges(data=True)], float)
-    A = coo_matrix((np.r_[w, w], (np.r_[u, v], np.r_[v, u])), shape=(len(nodes), len(nodes))).tocsr()
-    return nodes, index, A
+    u = np.array([index[a] for a, b in graph.edges], np.int64)
+    v = np.array([index[b] for a, b in graph.edges], np.int64)
+    w = np.array([max(float(d["length"]), 1e-12) for _, _, d in graph.edges(data=True)], float)
+    lengths = coo_matrix((np.r_[w, w], (np.r_[u, v], np.r_[v, u])), shape=(len(nodes), len(nodes))).tocsr()
+    return nodes, index, lengths
 
 
 def _route(nodes, pred, i, j):
@@ -371,13 +369,13 @@ def stop_distances(seg_or_G, start, rooms=None, *, robot_width: float = 0.0):
     """
     from scipy.sparse.csgraph import dijkstra
 
-    H, names, stops, points, rs = _stop_graph(seg_or_G, start, rooms, robot_width)
-    nodes, index, A = _sparse(H)
+    graph, names, stops, points, rs = _stop_graph(seg_or_G, start, rooms, robot_width)
+    nodes, index, lengths = _sparse(graph)
     src = np.array([index[v] for v in names], np.int64)
-    dist, pred = dijkstra(A, directed=False, indices=src, return_predecessors=True)
+    dist, pred = dijkstra(lengths, directed=False, indices=src, return_predecessors=True)
     D = dist[:, src]
     return {"D": D, "stops": stops, "points": points, "paths": _Paths(nodes, src, pred, D),
-            "start_room": rs, "graph": H}
+            "start_room": rs, "graph": graph}
 
 
 class _Paths(dict):
@@ -409,24 +407,24 @@ def _tree_walk(seg_or_G, start, rooms, robot_width, closed):
 
     Every tree edge is walked at most twice (once more back to the start when ``closed``), so the
     tour is at most twice the weight of the tree. Time ``O(N log N)`` in the graph's doors and
-    rooms. Returns ``(H, names, stops, points, start_room, visits, legs, routes, unreachable)``."""
+    rooms. Returns ``(graph, names, stops, points, start_room, visits, legs, routes, unreachable)``."""
     from scipy.sparse.csgraph import breadth_first_order, depth_first_order, dijkstra, minimum_spanning_tree
 
-    H, names, stops, points, rs = _stop_graph(seg_or_G, start, rooms, robot_width)
-    nodes, index, A = _sparse(H)
-    T = minimum_spanning_tree(A)
-    T = (T + T.T).tocsr()
+    graph, names, stops, points, rs = _stop_graph(seg_or_G, start, rooms, robot_width)
+    nodes, index, lengths = _sparse(graph)
+    tree = minimum_spanning_tree(lengths)
+    tree = (tree + tree.T).tocsr()
     s0 = index[names[0]]
-    order, pred = depth_first_order(T, s0, directed=False, return_predecessors=True)
+    order, pred = depth_first_order(tree, s0, directed=False, return_predecessors=True)
     stop_of = {index[v]: k for k, v in enumerate(names)}
     reach = {k for k in (stop_of.get(int(i)) for i in order) if k is not None}
     unreachable = [stops[k - 1] for k in range(1, len(names)) if k not in reach]
     # depth and distance from the start along the tree, in breadth-first order (parents first)
-    bfs = breadth_first_order(T, s0, directed=False, return_predecessors=False)
+    bfs = breadth_first_order(tree, s0, directed=False, return_predecessors=False)
     depth = np.zeros(len(nodes), np.int64)
     for v, p in zip(bfs[1:].tolist(), pred[bfs[1:]].tolist()):
         depth[v] = depth[p] + 1
-    along = dijkstra(T, directed=False, indices=s0)
+    along = dijkstra(tree, directed=False, indices=s0)
     visits = [0] + [stop_of[int(i)] for i in order if int(i) in stop_of and stop_of[int(i)] != 0]
     if closed:
         visits.append(0)
@@ -442,7 +440,7 @@ def _tree_walk(seg_or_G, start, rooms, robot_width, closed):
         top = up[-1]
         legs.append(float(along[i] + along[j] - 2 * along[top]))
         routes.append([nodes[k] for k in up + down[-2::-1]])
-    return H, names, stops, points, rs, visits, legs, routes, unreachable
+    return graph, names, stops, points, rs, visits, legs, routes, unreachable
 
 
 def _unreachable(rooms, start_room, robot_width) -> NoPathError:
@@ -511,13 +509,13 @@ def plan_tour(seg_or_G, start, *, rooms=None, return_to_start: bool = False, rob
     n_stops = (len(rooms) if rooms is not None and hasattr(rooms, "__len__")
                else _graph_size(seg_or_G) if rooms is None else None)
     if n_stops is not None and n_stops > max(TREE_LIMIT, exact_limit):
-        H, names, stops, points, rs, visits, legs, routes, unreachable = _tree_walk(
+        graph, names, stops, points, rs, visits, legs, routes, unreachable = _tree_walk(
             seg_or_G, start, rooms, robot_width, return_to_start)
         seq = visits[1:-1] if return_to_start else visits[1:]
         method = "spanning-tree-walk"
     else:
         sd = stop_distances(seg_or_G, start, rooms, robot_width=robot_width)
-        D, stops, rs, H, points = sd["D"], sd["stops"], sd["start_room"], sd["graph"], sd["points"]
+        D, stops, rs, graph, points = sd["D"], sd["stops"], sd["start_room"], sd["graph"], sd["points"]
         reach = [k for k in range(1, len(stops) + 1) if np.isfinite(D[0, k])]
         unreachable = [stops[k - 1] for k in range(1, len(stops) + 1) if not np.isfinite(D[0, k])]
         idx = [0] + reach
@@ -534,12 +532,12 @@ def plan_tour(seg_or_G, start, *, rooms=None, return_to_start: bool = False, rob
     doors, passed, pts = [], [rs], [points[0]]
     for b, route in zip(visits[1:], routes):
         for u, v in zip(route[:-1], route[1:]):
-            room = int(H.edges[u, v]["room"])
+            room = int(graph.edges[u, v]["room"])
             if room != passed[-1]:
                 passed.append(room)
             if isinstance(v, int):
                 doors.append(int(v))
-                pts.append((H.nodes[v]["x"], H.nodes[v]["y"]))
+                pts.append((graph.nodes[v]["x"], graph.nodes[v]["y"]))
         end_room = rs if b == 0 else stops[b - 1]
         if end_room != passed[-1]:
             passed.append(end_room)
