@@ -453,7 +453,7 @@ def tour_cmd(graph, start, start_room, rooms, return_to_start, robot_width, as_j
 
     from .errors import ParameterError
     from .io.export import load_graph
-    from .planning.paths import plan_tour
+    from .planning.tour import plan_tour
 
     start = _place(start, start_room, "from")
     try:
@@ -573,7 +573,8 @@ def export_cmd(source, target, nav2, clearance):
             _format(target)
         G = load_graph(source)
         if nav2 is not None:
-            from .planning.nav2 import DEFAULT_CLEARANCE, labels_beside, route_graph
+            from .io.nav2 import labels_beside
+            from .planning.nav2 import DEFAULT_CLEARANCE, route_graph
 
             route = route_graph(G, labels_beside(source), clearance=DEFAULT_CLEARANCE if clearance is None
                                 else clearance)
@@ -584,7 +585,7 @@ def export_cmd(source, target, nav2, clearance):
         if target is not None:
             save_graph(G, target)
         if route is not None:
-            from .planning.nav2 import write_route_graph
+            from .io.nav2 import write_route_graph
 
             write_route_graph(route, nav2)
     except Exception as exc:  # noqa: BLE001

@@ -65,6 +65,7 @@ from ..errors import ParameterError
 from ..options import TopomapOptions, _check_fraction
 from .edit import keep_merges
 from .geometry import line_pixels, point_segment_distances
+from .roommap import RoomMap
 from .result import MAX_ROOM_ID, ROOM_ATTRIBUTES, RoomChanges, Segmentation, TrackedSegmentation, check_room_ids
 
 log = logging.getLogger("topomap")
@@ -195,9 +196,7 @@ def _rasterised(G, ids, within=None, name="previous room graph"):
     frame when None) and the ``(row, col)`` of the image's first cell in the frame, from the room
     polygons (which follow cell edges, so this is the label image it was built from; see
     :mod:`topomap.planning`). Time and memory are bounded by ``within``'s size, not the frame's."""
-    from ..planning.paths import _Ctx
-
-    ctx = _Ctx(G)
+    ctx = RoomMap(G)
     w0, w1, v0, v1 = _window(ctx, within, name)
     labels = np.zeros((w1 - w0, v1 - v0), np.int32)
     for r in ids:
