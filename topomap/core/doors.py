@@ -19,7 +19,7 @@ from operator import itemgetter
 
 import numpy as np
 
-from .._fast import ranges as _ranges
+from .._fast import ranges
 from .geometry import disk, point_segment_distances
 from .walls import wall_faces
 
@@ -347,13 +347,13 @@ def passage_minima(G, *, window_px: float, rise_px: float, reach_px: float, min_
     # the minimum filter of every used branch with its end values repeated ("nearest"):
     # the branches end to end, each padded with w copies of its end values
     w = max(int(round(window_px)), 1)
-    cells = _ranges(start[use], start[use] + n[use])
+    cells = ranges(start[use], start[use] + n[use])
     at = np.cumsum(n[use] + 2 * w) - n[use] - w  # each branch's first cell in the padded array
     P = np.empty(cells.size + 2 * w * use.size)
-    body = _ranges(at, at + n[use])
+    body = ranges(at, at + n[use])
     P[body] = R[cells]
-    P[_ranges(at - w, at)] = np.repeat(R[start[use]], w)
-    P[_ranges(at + n[use], at + n[use] + w)] = np.repeat(R[start[use] + n[use] - 1], w)
+    P[ranges(at - w, at)] = np.repeat(R[start[use]], w)
+    P[ranges(at + n[use], at + n[use] + w)] = np.repeat(R[start[use] + n[use] - 1], w)
     is_min = np.zeros(R.size, bool)
     is_min[cells] = R[cells] <= minimum_filter1d(P, 2 * w + 1, mode="nearest")[body] + 1e-6
     idx = np.flatnonzero(is_min)
@@ -501,7 +501,7 @@ class _Branches:
             return out
         nodes, edges = np.asarray(nodes)[q], np.asarray(edges)[q]
         lo, hi = self._inc_at[nodes], self._inc_at[nodes + 1]
-        j = _ranges(lo, hi)
+        j = ranges(lo, hi)
         qq = np.repeat(q, hi - lo)
         b = self._inc_b[j]
         keep = (b != np.repeat(edges, hi - lo)) | self._inc_loop[j]
@@ -551,7 +551,7 @@ def _accumulate_runs(ufunc, x, n):
     for s in np.unique(size[n > 0]):
         g = np.flatnonzero((size == s) & (n > 0))
         L = int(n[g].max())
-        cols = _ranges(np.zeros(g.size, np.intp), n[g])
+        cols = ranges(np.zeros(g.size, np.intp), n[g])
         rows = np.repeat(np.arange(g.size), n[g])
         src = cols + np.repeat(start[g], n[g])
         M = np.zeros((g.size, L), x.dtype)
@@ -672,7 +672,7 @@ def _mouths(B, k, r_lo, r_hi, reach_px, rise_px, tol_px: float = 1.0, min_run_px
     if len(k) == 0:
         return none, none
     s, n = B.start[k], B.n[k]
-    X = _ranges(s, s + n)  # every cell of each run's branch
+    X = ranges(s, s + n)  # every cell of each run's branch
     Q = np.repeat(np.arange(len(k)), n)
     at = np.cumsum(n) - n  # each run's first entry in X
     RX, AX = R[X], A[X]
@@ -742,12 +742,12 @@ def _window_cells(mask: np.ndarray, top: int, width: int, ra, rb, ca, cb):
     """
     lin = np.flatnonzero(mask) + top * width
     win = np.repeat(np.arange(len(ra)), rb - ra)
-    row = _ranges(ra, rb)
+    row = ranges(ra, rb)
     lo = np.searchsorted(lin, row * width + ca[win])
     hi = np.searchsorted(lin, row * width + cb[win])
     n = hi - lo
     rows = np.repeat(row, n)
-    return rows, lin[_ranges(lo, hi)] - rows * width, np.repeat(win, n)
+    return rows, lin[ranges(lo, hi)] - rows * width, np.repeat(win, n)
 
 
 def _window_faces(obstacle: np.ndarray, ra, rb, ca, cb, faces=None):
@@ -817,7 +817,7 @@ def _strip_cells(u0, u1, r0, c0, ra, rb, ca, cb):
     # along the rows: t = -y u0, x u1 in (t - m, t]; along the columns the same, transposed
     lo, hi = np.where(by_row, ra - r0, ca - c0), np.where(by_row, rb - r0, cb - c0)
     seg = np.repeat(np.arange(len(ra)), hi - lo)
-    y = _ranges(lo, hi)
+    y = ranges(lo, hi)
     a, b = np.where(by_row, u0, u1)[seg], np.where(by_row, u1, u0)[seg]
     t = -y * a
     x = np.where(b > 0, t // np.where(b == 0, 1, b), -((-t) // np.where(b == 0, 1, b)))
@@ -910,27 +910,17 @@ def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, dept
     in the map's rows spanned by the windows, plus the windows' cells.
     """
     H, W = obstacle.shape
-    cands = list(candidates)
-    cen = np.array([c.centroid for c in cands], float).reshape(len(cands), 2)
-    whole = np.all((cen == np.round(cen)) & (cen >= 0) & (cen < (H, W)), axis=1)
-    whole[whole] = ~obstacle[cen[whole, 0].astype(int), cen[whole, 1].astype(int)]
-    batch = [c for c, w in zip(cands, whole) if w]
-    for c, w in zip(cands, whole):
-        c.ip1 = c.ip2 = None
-        if not w:
-            _nearest_wall_points_one(c, obstacle, max_px, depth_px)
+    batch, cen = _free_centred(candidates, obstacle, max_px, depth_px)
     K = len(batch)
     if K == 0:
         return candidates
-    cen = cen[whole]
     R = np.array([int(np.ceil(min(c.radius * 1.5 + 3 + depth_px, max_px + depth_px))) for c in batch])
     r0, c0 = cen[:, 0].astype(int), cen[:, 1].astype(int)
-    ra, rb = np.maximum(r0 - R, 0), np.minimum(r0 + R + 1, H)
-    ca, cb = np.maximum(c0 - R, 0), np.minimum(c0 + R + 1, W)
+    box = (np.maximum(r0 - R, 0), np.minimum(r0 + R + 1, H), np.maximum(c0 - R, 0), np.minimum(c0 + R + 1, W))
     # Only surface cells (an obstacle cell with a free 4-neighbour inside its
     # window) can be nearest to a free centre: the neighbour towards the
     # centre is nearer.
-    rr, cc, seg = _window_faces(obstacle, ra, rb, ca, cb, faces)
+    rr, cc, seg = _window_faces(obstacle, *box, faces)
     if rr.size == 0:
         return candidates
     counts = np.bincount(seg, minlength=K)
@@ -942,29 +932,8 @@ def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, dept
     u0, u1 = v0[i].astype(int), v1[i].astype(int)
     dot = v0 * np.repeat(v0[i], counts) + v1 * np.repeat(v1[i], counts)
     opp = dot <= 0
-    # The nearest cell on the other side (v . u <= 0) is on the surface too,
-    # or its neighbour towards the centre lies on the near side: then it is
-    # on the half-plane's edge, -max(|u|) < v . u <= 0, one cell a row or a
-    # column; the first of the nearest in row-major order, as in one window.
     has = (counts > 0) & (di <= max_px)
-    sr, sc, ss = _strip_cells(u0[has], u1[has], r0[has], c0[has], ra[has], rb[has], ca[has], cb[has])
-    ss = np.flatnonzero(has)[ss]
-    o = obstacle[sr, sc]
-    sr, sc, ss = sr[o], sc[o], ss[o]
-    jr, jc, js = np.r_[rr[opp], sr], np.r_[cc[opp], sc], np.r_[seg[opp], ss]
-    order = np.argsort(js, kind="stable")
-    jr, jc, js = jr[order], jc[order], js[order]
-    jd = np.hypot(jr - cen[js, 0], jc - cen[js, 1])
-    jn = np.bincount(js, minlength=K)
-    dj, _ = _first_minima(jd, jn)
-    at = np.flatnonzero(jd == np.repeat(dj, jn))
-    lin = jr[at] * W + jc[at]
-    firsts = np.full(K, -1)
-    if at.size:
-        # the smallest linear index of the nearest cells, per candidate
-        o = np.lexsort((lin, js[at]))
-        at = at[o][np.r_[True, js[at][o][1:] != js[at][o][:-1]]]
-        firsts[js[at]] = at
+    jr, jc, dj, firsts = _nearest_opposite(obstacle, cen, (rr[opp], cc[opp], seg[opp]), has, (u0, u1), (r0, c0), box)
     for k, c in enumerate(batch):
         if i[k] < 0 or di[k] > max_px:
             continue
@@ -978,20 +947,95 @@ def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, dept
                                              d <= np.repeat(di, counts) + depth_px)
     keep = np.flatnonzero(sel)
     side = opp[keep]
-    a, b = keep[~side], keep[side]
-    # A pair is at least as long as its cells' distances to the line between
-    # the sides (h); the pair of the nearest cell with its closest partner
-    # bounds the closest pair (ub): cells that cannot be in a pair within
-    # 0.75 px of the closest are left out (0.05 px to spare for rounding).
+    # each cell's distance to the line between the sides
     h = np.abs(dot) / np.repeat(np.hypot(u0, u1), counts)
+    a, b = _pair_sides(keep[~side], keep[side], h, seg, q0[i], q1[i], q0, q1)
+    _average_closest_pairs(batch, q0, q1, a, b, seg)
+    return candidates
+
+
+def _free_centred(candidates, obstacle: np.ndarray, max_px: float, depth_px: float):
+    """``(batch, cen)``: the candidates centred on a free cell of ``obstacle`` and their centres
+    ((K, 2) float), for :func:`nearest_wall_points` to handle at once; the posts of every candidate
+    cleared, those of the others set one window each (:func:`_nearest_wall_points_one`)."""
+    H, W = obstacle.shape
+    cands = list(candidates)
+    cen = np.array([c.centroid for c in cands], float).reshape(len(cands), 2)
+    whole = np.all((cen == np.round(cen)) & (cen >= 0) & (cen < (H, W)), axis=1)
+    whole[whole] = ~obstacle[cen[whole, 0].astype(int), cen[whole, 1].astype(int)]
+    batch = [c for c, w in zip(cands, whole) if w]
+    for c, w in zip(cands, whole):
+        c.ip1 = c.ip2 = None
+        if not w:
+            _nearest_wall_points_one(c, obstacle, max_px, depth_px)
+    return batch, cen[whole]
+
+
+def _nearest_opposite(obstacle: np.ndarray, cen: np.ndarray, opposite, has: np.ndarray, u, centre, box):
+    """``(jr, jc, dj, firsts)``: the nearest obstacle cell on the side opposite the nearest one, per
+    candidate of :func:`nearest_wall_points`.
+
+    ``opposite``: the windows' surface cells on that side ``(rows, cols, window)``; ``has``: the
+    candidates with a nearest cell in reach; ``u``: the vectors ``(u0, u1)`` from each centre
+    ``centre`` (``(r0, c0)``) to its nearest cell; ``box``: the windows ``(ra, rb, ca, cb)``.
+    Returns the cells searched (``jr``, ``jc``), each candidate's smallest distance ``dj`` (inf:
+    none) and the index in ``jr``/``jc`` of its nearest cell (-1: none).
+
+    The nearest cell on the other side (v . u <= 0) is on the surface too,
+    or its neighbour towards the centre lies on the near side: then it is
+    on the half-plane's edge, -max(|u|) < v . u <= 0, one cell a row or a
+    column; the first of the nearest in row-major order, as in one window.
+    """
+    K, W = len(cen), obstacle.shape[1]
+    (u0, u1), (r0, c0), (ra, rb, ca, cb) = u, centre, box
+    sr, sc, ss = _strip_cells(u0[has], u1[has], r0[has], c0[has], ra[has], rb[has], ca[has], cb[has])
+    ss = np.flatnonzero(has)[ss]
+    o = obstacle[sr, sc]
+    sr, sc, ss = sr[o], sc[o], ss[o]
+    jr, jc, js = np.r_[opposite[0], sr], np.r_[opposite[1], sc], np.r_[opposite[2], ss]
+    order = np.argsort(js, kind="stable")
+    jr, jc, js = jr[order], jc[order], js[order]
+    jd = np.hypot(jr - cen[js, 0], jc - cen[js, 1])
+    jn = np.bincount(js, minlength=K)
+    dj, _ = _first_minima(jd, jn)
+    at = np.flatnonzero(jd == np.repeat(dj, jn))
+    lin = jr[at] * W + jc[at]
+    firsts = np.full(K, -1)
+    if at.size:
+        # the smallest linear index of the nearest cells, per candidate
+        o = np.lexsort((lin, js[at]))
+        at = at[o][np.r_[True, js[at][o][1:] != js[at][o][:-1]]]
+        firsts[js[at]] = at
+    return jr, jc, dj, firsts
+
+
+def _pair_sides(a: np.ndarray, b: np.ndarray, h: np.ndarray, seg: np.ndarray, near0: np.ndarray,
+                near1: np.ndarray, q0: np.ndarray, q1: np.ndarray):
+    """``(a, b)``: the cells of the near side ``a`` and the opposite side ``b`` (indices into the
+    windows' cells ``q0``, ``q1``, of window ``seg``) that can be in a pair within 0.75 px of the
+    closest pair of their window.
+
+    A pair is at least as long as its cells' distances ``h`` to the line between
+    the sides; the pair of the nearest cell (``near0``, ``near1``: per window) with its closest
+    partner bounds the closest pair: cells that cannot be in a pair within
+    0.75 px of the closest are left out (0.05 px to spare for rounding).
+    """
+    K = near0.size
     ub2 = np.full(K, np.inf)
-    np.minimum.at(ub2, seg[b], (q0[b] - q0[i][seg[b]]) ** 2 + (q1[b] - q1[i][seg[b]]) ** 2)
+    np.minimum.at(ub2, seg[b], (q0[b] - near0[seg[b]]) ** 2 + (q1[b] - near1[seg[b]]) ** 2)
     ha, hb = np.full(K, np.inf), np.full(K, np.inf)
     np.minimum.at(ha, seg[a], h[a])
     np.minimum.at(hb, seg[b], h[b])
     lim = np.sqrt(ub2) + 0.8
-    a = a[h[a] + hb[seg[a]] <= lim[seg[a]]]
-    b = b[h[b] + ha[seg[b]] <= lim[seg[b]]]
+    return a[h[a] + hb[seg[a]] <= lim[seg[a]]], b[h[b] + ha[seg[b]] <= lim[seg[b]]]
+
+
+def _average_closest_pairs(batch: list, q0: np.ndarray, q1: np.ndarray, a: np.ndarray, b: np.ndarray,
+                           seg: np.ndarray) -> None:
+    """Set the posts ``ip1``, ``ip2`` of each candidate of ``batch`` with cells on both sides
+    (``a``, ``b``: :func:`_pair_sides`) to the means of the ends of its pairs of cells as close as
+    its closest pair (within 0.75 px)."""
+    K = len(batch)
     sa, sb = seg[a], seg[b]
     ks = np.arange(K)
     a_lo, na = np.searchsorted(sa, ks), np.bincount(sa, minlength=K)
@@ -1007,9 +1051,9 @@ def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, dept
         stop = max(int(np.searchsorted(cum, cum[start] - npair[start] + _PAIR_BLOCK, "right")), start + 1)
         kk, nk = ks[start:stop], npair[start:stop]
         start = stop
-        ai = _ranges(a_lo[kk], a_lo[kk] + na[kk])
+        ai = ranges(a_lo[kk], a_lo[kk] + na[kk])
         rep = nb[sa[ai]]
-        pb = _ranges(b_lo[sa[ai]], b_lo[sa[ai]] + rep)
+        pb = ranges(b_lo[sa[ai]], b_lo[sa[ai]] + rep)
         # squared distances are exact integers: the closest pairs are found
         # on them, and only pairs that can be within 0.75 px of the closest
         # measured as the windowed search did (np.hypot)
@@ -1031,7 +1075,6 @@ def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, dept
         for k in kk:
             batch[k].ip1 = np.array([sums[0][k], sums[1][k]]) / n[k]
             batch[k].ip2 = np.array([sums[2][k], sums[3][k]]) / n[k]
-    return candidates
 
 
 # --------------------------------------------------------------------------
