@@ -13,6 +13,7 @@ grid's resolution.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from itertools import chain
 from operator import itemgetter
@@ -21,7 +22,7 @@ import numpy as np
 
 from .._fast import ranges
 from .geometry import disk, point_segment_distances
-from .walls import wall_faces
+from .walls import across_walls_many, wall_faces
 
 __all__ = ["Candidate", "Door", "passage_candidates", "intersection_points",
            "wall_threshold", "select_doors", "segment_crosses", "passage_minima",
@@ -337,11 +338,11 @@ def passage_minima(G, *, window_px: float, rise_px: float, reach_px: float, min_
     from scipy.ndimage import minimum_filter1d
 
     out = []
-    B = _Branches(G)
-    if not B.keys:
+    branches = _Branches(G)
+    if not branches.keys:
         return out
-    R, n, start = B.rad, B.n, B.start
-    use = np.flatnonzero((n >= min_branch_px) & (B.low <= max_radius_px))
+    R, n, start = branches.rad, branches.n, branches.start
+    use = np.flatnonzero((n >= min_branch_px) & (branches.low <= max_radius_px))
     if use.size == 0:
         return out
     # the minimum filter of every used branch with its end values repeated ("nearest"):
@@ -359,7 +360,7 @@ def passage_minima(G, *, window_px: float, rise_px: float, reach_px: float, min_
     idx = np.flatnonzero(is_min)
     if idx.size == 0:
         return out
-    br = B.branch
+    br = branches.branch
     brk = np.flatnonzero((np.diff(idx) > 1) | (np.diff(br[idx]) != 0)) + 1
     r_lo = idx[np.concatenate([[0], brk])]  # each run of minima: its first and last cell
     r_hi = idx[np.concatenate([brk - 1, [idx.size - 1]])]
@@ -369,37 +370,38 @@ def passage_minima(G, *, window_px: float, rise_px: float, reach_px: float, min_
     if mid.size == 0:
         return out
     e = br[mid]
-    am, end = B.arc[mid], B.arc[start[e] + n[e] - 1]
+    am, end = branches.arc[mid], branches.arc[start[e] + n[e] - 1]
     r = R[mid]
     # both sides' continuations past the end nodes in one call
-    far = B.beyond(np.r_[B.u[e], B.v[e]], np.r_[e, e], np.r_[reach_px - am, reach_px - (end - am)])
-    left = np.maximum(B.range_max(B.cell_at(e, am - reach_px, "left"), mid), far[:e.size])
-    right = np.maximum(B.range_max(mid + 1, B.cell_at(e, am + reach_px, "right")), far[e.size:])
+    far = branches.beyond(np.r_[branches.u[e], branches.v[e]], np.r_[e, e],
+                          np.r_[reach_px - am, reach_px - (end - am)])
+    left = np.maximum(branches.range_max(branches.cell_at(e, am - reach_px, "left"), mid), far[:e.size])
+    right = np.maximum(branches.range_max(mid + 1, branches.cell_at(e, am + reach_px, "right")), far[e.size:])
     door = (left >= r + rise_px) & (right >= r + rise_px)
     # every candidate's cell, in order: the bottleneck, or a corridor's mouths at its far
     # end then at its near end (all the runs' mouths at once, :func:`_mouths`, not one
-    # call a run: 3.9 -> 0.6 ms a map on the ipa maps)
+    # call a run)
     cell = np.where(door, mid, -1)
     hi = lo = np.full(mid.size, -1)
     if mouths:
         m = np.flatnonzero(~door)
         hi, lo = hi.copy(), lo.copy()
-        hi[m], lo[m] = _mouths(B, e[m], r_lo[m], r_hi[m], reach_px, rise_px, min_run_px=min_run_px)
+        hi[m], lo[m] = _mouths(branches, e[m], r_lo[m], r_hi[m], reach_px, rise_px, min_run_px=min_run_px)
     cells = np.stack([cell, hi, lo], 1).ravel()
     status = np.tile(np.array([CANDIDATE, MOUTH, MOUTH], object), mid.size)
     on = cells >= 0
-    return _candidates(B, cells[on], status[on])
+    return _candidates(branches, cells[on], status[on])
 
 
-def _candidates(B, cells, status):
-    """The :class:`Candidate` at each cell of ``B`` (:class:`_Branches`), with
+def _candidates(branches, cells, status):
+    """The :class:`Candidate` at each cell of ``branches`` (:class:`_Branches`), with
     its status: centred on the cell's pixel, directed along its branch (the
     unit vector from the pixel 3 before it to the one 3 after, within the
     branch; ``(1, 0)`` where they coincide), all directions at once."""
-    k = B.branch[cells]
-    s, n = B.start[k], B.n[k]
+    k = branches.branch[cells]
+    s, n = branches.start[k], branches.n[k]
     i = cells - s
-    P = B.path
+    P = branches.path
     # path differences are integers: the norms are exact, as np.linalg.norm's of each
     d = P[s + np.minimum(i + 3, n - 1)] - P[s + np.maximum(i - 3, 0)]
     norm = np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1])
@@ -408,8 +410,8 @@ def _candidates(B, cells, status):
     norm[zero] = 1.0
     direction = d / norm[:, None]
     centroid = P[cells]
-    radius = B.rad[cells].tolist()
-    keys = B.keys
+    radius = branches.rad[cells].tolist()
+    keys = branches.keys
     return [Candidate(edge=keys[kk], centroid=c, direction=dv, radius=r, status=st)
             for kk, c, dv, r, st in zip(k.tolist(), centroid, direction, radius, status)]
 
@@ -491,8 +493,8 @@ class _Branches:
         none): ``(m,)`` floats.
 
         All at once: every (query, incident branch) pair, one search of the
-        arc lengths (one Python look-up per pair before: 3.7 -> 0.3 ms a map
-        on the ipa maps); maxima are exact in any order.
+        arc lengths (not one Python look-up per pair); maxima are exact in any
+        order.
         """
         rem = np.asarray(rem, float)
         out = np.zeros(rem.size)
@@ -523,8 +525,7 @@ def _running_max(x, run, back):
     On ranks, whole array at once: every rank of a run offset past those of
     the runs before, so a maximum never carries over into the next run. A
     maximum is one of its values: the same as one ``np.maximum.accumulate``
-    a run (0.6 -> 0.2 ms a map for both, on the ipa maps, than runs padded
-    into rows).
+    a run, and quicker than runs padded into rows.
     """
     order = np.argsort(x, kind="stable")
     rank = np.empty(x.size, np.intp)
@@ -540,8 +541,7 @@ def _accumulate_runs(ufunc, x, n):
     The runs are grouped by length (up to twice the shortest in a group) into
     rows padded at their ends, accumulated along the rows: the same values,
     in the same order of operations, as one ``accumulate`` per run. When
-    padding every run to the longest costs little, they make one group (0.48
-    -> 0.24 ms a map for the arc lengths, on the ipa maps).
+    padding every run to the longest costs little, they make one group.
     """
     out = np.empty_like(x)
     start = np.cumsum(n) - n
@@ -569,8 +569,6 @@ def protrusion_at(free: np.ndarray, points, radius_px: float, look_px: int) -> n
     Kernels are cut to the area they can reach (the map or the window, which
     lies outside only zeros), so memory stays within the map's size however
     large ``radius_px`` and ``look_px`` are (a long thin corridor)."""
-    import math
-
     import cv2
 
     H, W = free.shape
@@ -649,9 +647,9 @@ def protrusion_at(free: np.ndarray, points, radius_px: float, look_px: int) -> n
     return out
 
 
-def _mouths(B, k, r_lo, r_hi, reach_px, rise_px, tol_px: float = 1.0, min_run_px: float = 0.0):
+def _mouths(branches, k, r_lo, r_hi, reach_px, rise_px, tol_px: float = 1.0, min_run_px: float = 0.0):
     """One-sided bottlenecks at the ends of runs of minima (cells ``r_lo..r_hi``
-    of ``B``, :class:`_Branches`, on branches ``k``): where a passage of even
+    of ``branches``, :class:`_Branches`, on branches ``k``): where a passage of even
     width (a corridor, at least ``min_run_px`` long within ``tol_px``) opens
     into a wider space. The clearance rises by ``2 * rise_px`` on one side
     within ``reach_px`` and does not fall below the run's value minus
@@ -667,24 +665,25 @@ def _mouths(B, k, r_lo, r_hi, reach_px, rise_px, tol_px: float = 1.0, min_run_px
         Per run, the cell of its mouth at the far end of its plateau and at
         the near end (the direction of the branch), or -1 where there is none.
     """
-    R, A = B.rad, B.arc
+    R, A = branches.rad, branches.arc
     none = np.full(len(k), -1)
     if len(k) == 0:
         return none, none
-    s, n = B.start[k], B.n[k]
+    s, n = branches.start[k], branches.n[k]
     X = ranges(s, s + n)  # every cell of each run's branch
     Q = np.repeat(np.arange(len(k)), n)
     at = np.cumsum(n) - n  # each run's first entry in X
     RX, AX = R[X], A[X]
     # the plateau around the run: neighbours within ``tol_px`` of its minimum
-    base = np.minimum.reduceat(B._rad_end, np.stack([r_lo, r_hi + 1], 1).ravel())[::2]
+    base = np.minimum.reduceat(branches._rad_end, np.stack([r_lo, r_hi + 1], 1).ravel())[::2]
     above = RX > (base + tol_px)[Q]
     lo = np.maximum.reduceat(np.where(above & (X < r_lo[Q]), X, (s - 1)[Q]), at) + 1
     hi = np.minimum.reduceat(np.where(above & (X > r_hi[Q]), X, (s + n)[Q]), at) - 1
     # too short a stretch of even width to be a corridor
     long = ~(A[hi] - A[lo] < min_run_px)
     end = A[s + n - 1]
-    far = B.beyond(np.r_[B.v[k], B.u[k]], np.r_[k, k], np.r_[reach_px - (end - A[hi]), reach_px - A[lo]])
+    far = branches.beyond(np.r_[branches.v[k], branches.u[k]], np.r_[k, k],
+                          np.r_[reach_px - (end - A[hi]), reach_px - A[lo]])
     out = []
     for j, (i, far_q) in enumerate(((hi, far[:len(k)]), (lo, far[len(k):]))):
         r = R[i]
@@ -1081,17 +1080,18 @@ def _average_closest_pairs(batch: list, q0: np.ndarray, q1: np.ndarray, a: np.nd
 # The default method's door stages: bottlenecks, judging, duplicates
 # --------------------------------------------------------------------------
 
-def occupied_skeleton_lines(Go):
+def occupied_skeleton_lines(occupied_graph):
     """The occupied-space skeleton's branches as one shapely MultiLineString
     in ``(col, row)`` order (None when there is none), for
     :func:`select_doors`."""
     from shapely.geometry import MultiLineString
 
-    paths = [d["path"][:, ::-1].astype(float) for _, _, d in Go.edges(data=True) if d["path"].shape[0] >= 2]
+    paths = [d["path"][:, ::-1].astype(float) for _, _, d in occupied_graph.edges(data=True)
+             if d["path"].shape[0] >= 2]
     return MultiLineString([p.tolist() for p in paths]) if paths else None
 
 
-def find_bottlenecks(Gf, obstacle: np.ndarray, opts, resolution: float, threshold_px: float, *,
+def find_bottlenecks(free_graph, obstacle: np.ndarray, opts, resolution: float, threshold_px: float, *,
                      faces=None) -> list:
     """Stage "bottlenecks" of the default method: candidate doors with their posts.
 
@@ -1101,7 +1101,7 @@ def find_bottlenecks(Gf, obstacle: np.ndarray, opts, resolution: float, threshol
 
     Parameters
     ----------
-    Gf : networkx.MultiGraph
+    free_graph : networkx.MultiGraph
         Free-space skeleton graph with ``radius`` along edges.
     obstacle : (M, N) ndarray of bool
         Cells a door post can be on (every non-free cell of the map doors
@@ -1123,8 +1123,8 @@ def find_bottlenecks(Gf, obstacle: np.ndarray, opts, resolution: float, threshol
         Status :data:`CANDIDATE` or :data:`MOUTH`.
     """
     res = resolution
-    cands = passage_minima(Gf, window_px=opts.window / res, rise_px=opts.rise / res, reach_px=opts.reach / res,
-                           mouths=opts.mouths, min_run_px=opts.corridor_length / res,
+    cands = passage_minima(free_graph, window_px=opts.window / res, rise_px=opts.rise / res,
+                           reach_px=opts.reach / res, mouths=opts.mouths, min_run_px=opts.corridor_length / res,
                            max_radius_px=opts.max_door_width / np.sqrt(2) / res)
     nearest_wall_points(cands, obstacle, max_px=opts.max_door_width / res, depth_px=max(threshold_px, 2.0),
                         faces=faces)
@@ -1254,8 +1254,6 @@ def across_corridor(accepted, walls, depth_px: float) -> list:
     walls by less than that — pillars, wall columns, radiators, cupboards —
     is the corridor's own; a door across a corridor sits in a wall across
     it, which stands out farther."""
-    from .walls import across_walls_many
-
     if not accepted:
         return []
     across = across_walls_many(np.array([c.ip1 for _, c in accepted], float),
@@ -1281,7 +1279,7 @@ def seen_posts(accepted, seen: np.ndarray) -> list:
     if not accepted:
         return []
     H, W = seen.shape
-    # every post at once (np.clip on each post alone before: 1.3 -> 0.2 ms a map on the ipa maps)
+    # every post at once (not np.clip on each post alone)
     posts = np.array([(c.ip1, c.ip2) for _, c in accepted], float).reshape(-1, 2)
     rc = np.clip(np.rint(posts).astype(int), 0, [H - 1, W - 1])
     hits = seen[rc[:, 0], rc[:, 1]].reshape(-1, 2).any(axis=1)
@@ -1300,7 +1298,7 @@ def opening_candidates(openings, resolution: float) -> list:
     openings = list(openings)
     if not openings:
         return []
-    # all openings at once, the same element-wise arithmetic (2.1 -> 0.7 ms a map on the ipa maps)
+    # all openings at once, the same element-wise arithmetic
     P = np.array([p for p, _ in openings], float).reshape(-1, 2)
     Q = np.array([q for _, q in openings], float).reshape(-1, 2)
     V = Q - P
@@ -1357,8 +1355,7 @@ def suppress_duplicates(accepted, resolution: float, *, kept=()) -> list:
     near = point_segment_distances(mids[door], A[seg], B[seg]) < reach[door]
     door, seg = door[near], seg[near]  # still in door order
     # a door near a segment given is a duplicate whatever the doors before it; the others
-    # in turn, on Python lists (a numpy look-up a door before): 2.8 -> 2.0 ms a map on the
-    # ipa maps, both calls
+    # in turn, on Python lists (quicker than a numpy look-up a door)
     dup = np.zeros(n, bool)
     dup[door[seg < n0]] = True
     other = (seg >= n0) & ~dup[door]

@@ -8,16 +8,15 @@ cells no room reaches) after the rooms.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+import dataclasses
 
 import numpy as np
 from scipy import ndimage as ndi
 
 from .._fast import label, lookup, ranges
+from ..grid import OccupancyGrid
+from .doors import Door
 from .geometry import line_pixels
-
-if TYPE_CHECKING:  # pragma: no cover
-    from ..io.maps import OccupancyGrid
 
 __all__ = ["fill_unlabeled", "relabel_sequential", "cut_rooms", "doors_between_rooms", "join_touching_rooms",
            "EIGHT", "FOUR", "NEIGHBOUR_ROWS", "NEIGHBOUR_COLS"]
@@ -563,8 +562,6 @@ def doors_between_rooms(grid: OccupancyGrid, labels: np.ndarray, segments) -> li
 
 def _doors_between(grid: OccupancyGrid, labels: np.ndarray, segments, lines) -> list:
     """:func:`doors_between_rooms` given the cells of every segment (``lines``: ``(rows, cols)`` each)."""
-    from .doors import Door
-
     H, W = labels.shape
     doors, seen = [], set()
     if not len(segments):
@@ -681,8 +678,6 @@ def join_touching_rooms(grid: OccupancyGrid, labels: np.ndarray, doors: list, n_
             pairs = _doorless_contacts(labels, n_rooms, doors)
             if pairs is None:
                 return labels, doors, n_rooms
-    from .doors import Door
-
     new = []
     for (a, b), runs in sorted(pairs.items()):
         mids = max(runs, key=_extent)  # the widest place the two rooms touch
@@ -808,8 +803,6 @@ def _merge_rooms(labels: np.ndarray, doors: list, n_rooms: int, pairs):
     """Merge the rooms of each pair in ``pairs`` (joined transitively): ``(labels, doors, n_rooms)``
     with the rooms renumbered in order of first appearance and the fragments after them, the doors
     renamed, those between two merged rooms dropped, ids renumbered."""
-    import dataclasses
-
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
