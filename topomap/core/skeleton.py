@@ -40,7 +40,7 @@ def skeletonize(mask: np.ndarray) -> np.ndarray:
     same thinning from :func:`_thin`, which visits only the pixels whose
     neighbourhood changed.
     """
-    from skimage import morphology
+    import skimage.morphology
 
     mask = np.asarray(mask, bool)
     out = np.zeros(mask.shape, bool)
@@ -54,7 +54,7 @@ def skeletonize(mask: np.ndarray) -> np.ndarray:
     # a large mask with wide areas (free space: many passes, most of the image long finished)
     # is thinned pixel by pixel from the boundary inwards; skimage scans the whole box every pass
     wide = box.size >= _THIN_SPARSE_CELLS and np.count_nonzero(box) >= 0.15 * box.size
-    out[r0:r1, c0:c1] = _thin(box) if wide else morphology.skeletonize(box)
+    out[r0:r1, c0:c1] = _thin(box) if wide else skimage.morphology.skeletonize(box)
     return out
 
 
