@@ -365,10 +365,10 @@ _FAULTS = textwrap.dedent("""
             held.append(np.ones(int(s), np.uint8))
             if len(held) > 4:
                 held.pop(0)
-    def beside():  # half of the work on a second thread, as a map's stages do (topomap._fast.Beside)
-        from topomap._fast import Beside
+    def beside():  # half of the work on a second thread, as a map's stages do (topomap._fast.BackgroundCall)
+        from topomap._fast import BackgroundCall
 
-        Beside(work).result()
+        BackgroundCall(work).result()
         work()
     run = beside if sys.argv[2:] == ["thread"] else work
     run()

@@ -134,35 +134,35 @@ def test_segmentation_clearance_is_the_distance_transform_of_its_free_space():
     assert free.sum() >= 0.9 * grid.free.sum()
 
 
-def test_beside_returns_the_value_and_raises_the_error_of_its_call():
+def test_background_call_returns_the_value_and_raises_the_error_of_its_call():
     import threading
 
-    from topomap._fast import Beside
+    from topomap._fast import BackgroundCall
 
     seen = []
-    job = Beside(lambda a, b=0: (seen.append(threading.current_thread().name), a + b)[1], 2, b=3)
+    job = BackgroundCall(lambda a, b=0: (seen.append(threading.current_thread().name), a + b)[1], 2, b=3)
     assert job.result() == 5 and job.result() == 5
     assert seen == ["topomap-beside"]
-    bad = Beside(lambda: 1 / 0)
+    bad = BackgroundCall(lambda: 1 / 0)
     with pytest.raises(ZeroDivisionError):
         bad.result()
 
 
-def test_beside_runs_inline_in_a_batch_worker(monkeypatch):
+def test_background_call_runs_inline_in_a_batch_worker(monkeypatch):
     # segment_many's worker processes (one per core) call one_thread(): no second thread per map
     import threading
 
     from topomap import _fast
-    from topomap._fast import Beside, one_thread
+    from topomap._fast import BackgroundCall, one_thread
 
-    monkeypatch.setattr(_fast, "_BESIDE", True)
+    monkeypatch.setattr(_fast, "_BACKGROUND_THREADS", True)
     one_thread()
     seen = []
-    job = Beside(lambda: seen.append(threading.current_thread().name) or 7)
+    job = BackgroundCall(lambda: seen.append(threading.current_thread().name) or 7)
     assert seen == [threading.current_thread().name]  # already done, here
     assert job.result() == 7
     with pytest.raises(ZeroDivisionError):
-        Beside(lambda: 1 / 0).result()
+        BackgroundCall(lambda: 1 / 0).result()
 
 
 def test_batch_workers_run_maps_on_one_thread():
@@ -172,10 +172,10 @@ def test_batch_workers_run_maps_on_one_thread():
     from topomap.run import batch
 
     with ProcessPoolExecutor(1, initializer=batch._pool_init) as ex:
-        assert ex.submit(_beside_flag).result() is False
+        assert ex.submit(_background_threads_flag).result() is False
 
 
-def _beside_flag():
+def _background_threads_flag():
     from topomap import _fast
 
-    return _fast._BESIDE
+    return _fast._BACKGROUND_THREADS

@@ -1,19 +1,21 @@
 """Fast whole-image primitives, chosen by measurement.
 
-On the largest benchmark map (office_g, 2314 x 2050), measured on this
-project's CI machine: OpenCV's exact Euclidean distance transform takes
-0.02 s against 0.42 s for :func:`scipy.ndimage.distance_transform_edt`;
-OpenCV's connected components 0.005 s against 0.014 s for scipy. Both give the
-same (exact) results, so topomap uses OpenCV for them. A table lookup over
-a label image (``table[labels]``) takes 20 ms with numpy there and 3 ms with
-OpenCV's ``LUT`` (16-bit labels).
+OpenCV's exact Euclidean distance transform is much faster than
+:func:`scipy.ndimage.distance_transform_edt`, and its connected components
+faster than scipy's; both give the same (exact) results, so topomap uses
+OpenCV for them. A table lookup over a label image (``table[labels]``) is
+faster with OpenCV's ``LUT`` (16-bit labels) than with numpy.
 """
 
 from __future__ import annotations
 
+import ctypes
+import sys
+import threading
+
 import numpy as np
 
-__all__ = ["Beside", "edt", "label", "label_stats", "lookup", "one_thread", "ranges"]
+__all__ = ["BackgroundCall", "edt", "label", "label_stats", "lookup", "one_thread", "ranges"]
 
 
 def _bytes(mask: np.ndarray) -> np.ndarray:
@@ -28,7 +30,7 @@ def edt(mask: np.ndarray, *, exact: bool = True) -> np.ndarray:
     """Euclidean distance (pixels) of each True cell to the nearest False cell.
 
     ``exact=False`` uses OpenCV's 5x5 chamfer approximation (relative error
-    under 2 %, about twice as fast), for distances that are only compared
+    under 2 %, faster), for distances that are only compared
     with a threshold or averaged.
 
     Parameters
@@ -63,8 +65,8 @@ def label_stats(mask: np.ndarray, connectivity: int = 8):
     """:func:`cv2.connectedComponentsWithStats` of ``mask``: ``(count + 1, labels, stats,
     centroids)``, the labels 16-bit when they fit (the lookups on them are faster), int32 otherwise.
 
-    OpenCV labels in 32 bits, converted after: 1.5 to 3 times faster than its
-    own 16-bit labelling, measured on the ipa maps at 0.36-4.7 M cells.
+    OpenCV labels in 32 bits, converted after: faster than its own 16-bit
+    labelling (measured on the ipa maps).
     """
     import cv2
 
@@ -121,22 +123,22 @@ def ranges(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     return np.arange(int(n.sum())) + np.repeat(lo - (np.cumsum(n) - n), n)
 
 
-#: Whether :class:`Beside` starts a thread; see :func:`one_thread`.
-_BESIDE = True
+#: Whether :class:`BackgroundCall` starts a thread; see :func:`one_thread`.
+_BACKGROUND_THREADS = True
 
 
 def one_thread() -> None:
-    """Make :class:`Beside` run its call at once, on the caller's thread, in this process.
+    """Make :class:`BackgroundCall` run its call at once, on the caller's thread, in this process.
 
     For the worker processes of a batch that already runs one map per core
     (``segment_many(jobs=...)``): a second thread per map would only compete
     with the other workers for the same cores.
     """
-    global _BESIDE
-    _BESIDE = False
+    global _BACKGROUND_THREADS
+    _BACKGROUND_THREADS = False
 
 
-class Beside:
+class BackgroundCall:
     """``fn(*args, **kwargs)`` run on a thread of its own while the caller goes on; :meth:`result` waits.
 
     For work done in compiled code that lets go of Python's lock (OpenCV's
@@ -151,8 +153,6 @@ class Beside:
     __slots__ = ("_thread", "_value", "_error")
 
     def __init__(self, fn, *args, **kwargs):
-        import threading
-
         self._value = self._error = self._thread = None
 
         def run():
@@ -161,7 +161,7 @@ class Beside:
             except BaseException as exc:  # noqa: BLE001 - handed to result()
                 self._error = exc
 
-        if not _BESIDE:  # the cores are busy with other maps: the call runs here and now
+        if not _BACKGROUND_THREADS:  # the cores are busy with other maps: the call runs here and now
             run()
             return
         self._thread = threading.Thread(target=run, name="topomap-beside", daemon=True)
@@ -174,6 +174,9 @@ class Beside:
         if self._error is not None:
             raise self._error
         return self._value
+
+
+Beside = BackgroundCall  # alias until the callers move (topomap.cli, topomap.core.segmentation)
 
 
 #: glibc's ``mallopt`` parameters (``malloc.h``) set by :func:`keep_freed_memory`.
@@ -191,14 +194,13 @@ def keep_freed_memory() -> bool:
     adjusts as it goes afresh), so each map touches new pages again; on a
     virtual machine a fresh page costs far more than a reused one. After
     this call blocks of up to :data:`_HEAP_BLOCK` bytes come from the heap
-    and the heap is never trimmed: on the 28 ipa maps in one ``topomap
-    segment`` the minor page faults fell from 160,000-200,000 to 45,000,
-    system time by a third and the whole command by 3-16 % (4 alternating
-    rounds), the peak memory unchanged. All threads share that one heap
-    (glibc gives each thread an arena of its own by default, and the arrays
-    a map's second thread makes and frees (:class:`Beside`) were not reused
-    by the others: the 25 M-cell synthetic building peaked at 1191 MB
-    instead of 1086 MB). The process keeps its peak memory until it exits.
+    and the heap is never trimmed: on the ipa maps in one ``topomap
+    segment`` the minor page faults fell to a fraction, and system time and
+    the whole command with them, the peak memory unchanged. All threads share
+    that one heap (glibc gives each thread an arena of its own by default,
+    and the arrays a map's second thread makes and frees
+    (:class:`BackgroundCall`) were not reused by the others: a large map
+    peaked higher). The process keeps its peak memory until it exits.
     Not for a library: a user's Python session keeps its own allocator
     settings.
 
@@ -207,9 +209,6 @@ def keep_freed_memory() -> bool:
     bool
         Whether the settings were taken.
     """
-    import ctypes
-    import sys
-
     if not sys.platform.startswith("linux"):
         return False
     try:

@@ -26,11 +26,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from topomap._fast import edt, label
-from topomap.errors import MapError, ParameterError
-from topomap.core.geometry import line_pixels, true_bbox
-from topomap.options import check_length
-from topomap.core.rooms import fill_unlabeled, relabel_sequential
+from .._fast import edt, label
+from ..errors import MapError, ParameterError
+from ..options import check_length
+from .geometry import line_pixels, true_bbox
+from .rooms import fill_unlabeled, relabel_sequential
+from .skeleton import neighbour_count
 
 __all__ = ["watershed", "morphological", "distance", "voronoi"]
 
@@ -114,8 +115,8 @@ def watershed(free, *, resolution=0.05, min_distance=1.75):
     gridmaps", ICRA 2000. Bormann et al., "Room segmentation: survey,
     implementation, and analysis", ICRA 2016 (section on the watershed).
     """
+    import skimage.segmentation
     from skimage.feature import peak_local_max
-    from skimage.segmentation import watershed as _ws
 
     free = _check(free, resolution, min_distance=min_distance)
     if not free.any():
@@ -128,7 +129,7 @@ def watershed(free, *, resolution=0.05, min_distance=1.75):
     peaks = peak_local_max(dist, min_distance=md, labels=comp, exclude_border=False)
     markers = np.zeros(f.shape, np.int32)
     markers[tuple(peaks.T)] = np.arange(1, len(peaks) + 1, dtype=np.int32)
-    lab = _ws(-dist, markers, mask=f).astype(np.int32)
+    lab = skimage.segmentation.watershed(-dist, markers, mask=f).astype(np.int32)
     return fill_unlabeled(_uncrop(lab, box, free.shape), free), []
 
 
@@ -272,7 +273,6 @@ def distance(free, *, resolution=0.05, room_area_min=0.35, room_area_max=163.0):
 
 
 # --------------------------------------------------------------------------- voronoi
-from .skeleton import neighbour_count as _neighbour_count  # noqa: E402
 
 
 def _prune(skel, max_len):
@@ -283,9 +283,9 @@ def _prune(skel, max_len):
     the first junction of every spur.
     """
     skel = skel.copy()
-    nodes = skel & (_neighbour_count(skel) > 2)
+    nodes = skel & (neighbour_count(skel) > 2)
     for _ in range(max_len):
-        ends = skel & (_neighbour_count(skel) <= 1) & ~nodes
+        ends = skel & (neighbour_count(skel) <= 1) & ~nodes
         if not ends.any():
             break
         skel &= ~ends
@@ -569,7 +569,7 @@ def _critical_lines(f, skel, dist, r, max_clearance_px):
     on = np.where(skel, dist, big).astype(np.float32)
     disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
     local_min = cv2.erode(on, disk, borderType=cv2.BORDER_CONSTANT, borderValue=float(big))
-    deg = _neighbour_count(skel)
+    deg = neighbour_count(skel)
     cand = skel & (deg == 2) & (on <= local_min) & (dist <= max_clearance_px)
     clab, nc = label(cand, 8)
     lines = []

@@ -13,15 +13,16 @@ grid's resolution.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from itertools import chain
 from operator import itemgetter
 
 import numpy as np
 
-from .._fast import ranges as _ranges
+from .._fast import ranges
 from .geometry import disk, point_segment_distances
-from .walls import wall_faces
+from .walls import across_walls_many, wall_faces
 
 __all__ = ["Candidate", "Door", "passage_candidates", "intersection_points",
            "wall_threshold", "select_doors", "segment_crosses", "passage_minima",
@@ -337,29 +338,29 @@ def passage_minima(G, *, window_px: float, rise_px: float, reach_px: float, min_
     from scipy.ndimage import minimum_filter1d
 
     out = []
-    B = _Branches(G)
-    if not B.keys:
+    branches = _Branches(G)
+    if not branches.keys:
         return out
-    R, n, start = B.rad, B.n, B.start
-    use = np.flatnonzero((n >= min_branch_px) & (B.low <= max_radius_px))
+    R, n, start = branches.rad, branches.n, branches.start
+    use = np.flatnonzero((n >= min_branch_px) & (branches.low <= max_radius_px))
     if use.size == 0:
         return out
     # the minimum filter of every used branch with its end values repeated ("nearest"):
     # the branches end to end, each padded with w copies of its end values
     w = max(int(round(window_px)), 1)
-    cells = _ranges(start[use], start[use] + n[use])
+    cells = ranges(start[use], start[use] + n[use])
     at = np.cumsum(n[use] + 2 * w) - n[use] - w  # each branch's first cell in the padded array
     P = np.empty(cells.size + 2 * w * use.size)
-    body = _ranges(at, at + n[use])
+    body = ranges(at, at + n[use])
     P[body] = R[cells]
-    P[_ranges(at - w, at)] = np.repeat(R[start[use]], w)
-    P[_ranges(at + n[use], at + n[use] + w)] = np.repeat(R[start[use] + n[use] - 1], w)
+    P[ranges(at - w, at)] = np.repeat(R[start[use]], w)
+    P[ranges(at + n[use], at + n[use] + w)] = np.repeat(R[start[use] + n[use] - 1], w)
     is_min = np.zeros(R.size, bool)
     is_min[cells] = R[cells] <= minimum_filter1d(P, 2 * w + 1, mode="nearest")[body] + 1e-6
     idx = np.flatnonzero(is_min)
     if idx.size == 0:
         return out
-    br = B.branch
+    br = branches.branch
     brk = np.flatnonzero((np.diff(idx) > 1) | (np.diff(br[idx]) != 0)) + 1
     r_lo = idx[np.concatenate([[0], brk])]  # each run of minima: its first and last cell
     r_hi = idx[np.concatenate([brk - 1, [idx.size - 1]])]
@@ -369,37 +370,38 @@ def passage_minima(G, *, window_px: float, rise_px: float, reach_px: float, min_
     if mid.size == 0:
         return out
     e = br[mid]
-    am, end = B.arc[mid], B.arc[start[e] + n[e] - 1]
+    am, end = branches.arc[mid], branches.arc[start[e] + n[e] - 1]
     r = R[mid]
     # both sides' continuations past the end nodes in one call
-    far = B.beyond(np.r_[B.u[e], B.v[e]], np.r_[e, e], np.r_[reach_px - am, reach_px - (end - am)])
-    left = np.maximum(B.range_max(B.cell_at(e, am - reach_px, "left"), mid), far[:e.size])
-    right = np.maximum(B.range_max(mid + 1, B.cell_at(e, am + reach_px, "right")), far[e.size:])
+    far = branches.beyond(np.r_[branches.u[e], branches.v[e]], np.r_[e, e],
+                          np.r_[reach_px - am, reach_px - (end - am)])
+    left = np.maximum(branches.range_max(branches.cell_at(e, am - reach_px, "left"), mid), far[:e.size])
+    right = np.maximum(branches.range_max(mid + 1, branches.cell_at(e, am + reach_px, "right")), far[e.size:])
     door = (left >= r + rise_px) & (right >= r + rise_px)
     # every candidate's cell, in order: the bottleneck, or a corridor's mouths at its far
     # end then at its near end (all the runs' mouths at once, :func:`_mouths`, not one
-    # call a run: 3.9 -> 0.6 ms a map on the ipa maps)
+    # call a run)
     cell = np.where(door, mid, -1)
     hi = lo = np.full(mid.size, -1)
     if mouths:
         m = np.flatnonzero(~door)
         hi, lo = hi.copy(), lo.copy()
-        hi[m], lo[m] = _mouths(B, e[m], r_lo[m], r_hi[m], reach_px, rise_px, min_run_px=min_run_px)
+        hi[m], lo[m] = _mouths(branches, e[m], r_lo[m], r_hi[m], reach_px, rise_px, min_run_px=min_run_px)
     cells = np.stack([cell, hi, lo], 1).ravel()
     status = np.tile(np.array([CANDIDATE, MOUTH, MOUTH], object), mid.size)
     on = cells >= 0
-    return _candidates(B, cells[on], status[on])
+    return _candidates(branches, cells[on], status[on])
 
 
-def _candidates(B, cells, status):
-    """The :class:`Candidate` at each cell of ``B`` (:class:`_Branches`), with
+def _candidates(branches, cells, status):
+    """The :class:`Candidate` at each cell of ``branches`` (:class:`_Branches`), with
     its status: centred on the cell's pixel, directed along its branch (the
     unit vector from the pixel 3 before it to the one 3 after, within the
     branch; ``(1, 0)`` where they coincide), all directions at once."""
-    k = B.branch[cells]
-    s, n = B.start[k], B.n[k]
+    k = branches.branch[cells]
+    s, n = branches.start[k], branches.n[k]
     i = cells - s
-    P = B.path
+    P = branches.path
     # path differences are integers: the norms are exact, as np.linalg.norm's of each
     d = P[s + np.minimum(i + 3, n - 1)] - P[s + np.maximum(i - 3, 0)]
     norm = np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1])
@@ -408,8 +410,8 @@ def _candidates(B, cells, status):
     norm[zero] = 1.0
     direction = d / norm[:, None]
     centroid = P[cells]
-    radius = B.rad[cells].tolist()
-    keys = B.keys
+    radius = branches.rad[cells].tolist()
+    keys = branches.keys
     return [Candidate(edge=keys[kk], centroid=c, direction=dv, radius=r, status=st)
             for kk, c, dv, r, st in zip(k.tolist(), centroid, direction, radius, status)]
 
@@ -491,8 +493,8 @@ class _Branches:
         none): ``(m,)`` floats.
 
         All at once: every (query, incident branch) pair, one search of the
-        arc lengths (one Python look-up per pair before: 3.7 -> 0.3 ms a map
-        on the ipa maps); maxima are exact in any order.
+        arc lengths (not one Python look-up per pair); maxima are exact in any
+        order.
         """
         rem = np.asarray(rem, float)
         out = np.zeros(rem.size)
@@ -501,7 +503,7 @@ class _Branches:
             return out
         nodes, edges = np.asarray(nodes)[q], np.asarray(edges)[q]
         lo, hi = self._inc_at[nodes], self._inc_at[nodes + 1]
-        j = _ranges(lo, hi)
+        j = ranges(lo, hi)
         qq = np.repeat(q, hi - lo)
         b = self._inc_b[j]
         keep = (b != np.repeat(edges, hi - lo)) | self._inc_loop[j]
@@ -523,8 +525,7 @@ def _running_max(x, run, back):
     On ranks, whole array at once: every rank of a run offset past those of
     the runs before, so a maximum never carries over into the next run. A
     maximum is one of its values: the same as one ``np.maximum.accumulate``
-    a run (0.6 -> 0.2 ms a map for both, on the ipa maps, than runs padded
-    into rows).
+    a run, and quicker than runs padded into rows.
     """
     order = np.argsort(x, kind="stable")
     rank = np.empty(x.size, np.intp)
@@ -540,8 +541,7 @@ def _accumulate_runs(ufunc, x, n):
     The runs are grouped by length (up to twice the shortest in a group) into
     rows padded at their ends, accumulated along the rows: the same values,
     in the same order of operations, as one ``accumulate`` per run. When
-    padding every run to the longest costs little, they make one group (0.48
-    -> 0.24 ms a map for the arc lengths, on the ipa maps).
+    padding every run to the longest costs little, they make one group.
     """
     out = np.empty_like(x)
     start = np.cumsum(n) - n
@@ -551,7 +551,7 @@ def _accumulate_runs(ufunc, x, n):
     for s in np.unique(size[n > 0]):
         g = np.flatnonzero((size == s) & (n > 0))
         L = int(n[g].max())
-        cols = _ranges(np.zeros(g.size, np.intp), n[g])
+        cols = ranges(np.zeros(g.size, np.intp), n[g])
         rows = np.repeat(np.arange(g.size), n[g])
         src = cols + np.repeat(start[g], n[g])
         M = np.zeros((g.size, L), x.dtype)
@@ -569,8 +569,6 @@ def protrusion_at(free: np.ndarray, points, radius_px: float, look_px: int) -> n
     Kernels are cut to the area they can reach (the map or the window, which
     lies outside only zeros), so memory stays within the map's size however
     large ``radius_px`` and ``look_px`` are (a long thin corridor)."""
-    import math
-
     import cv2
 
     H, W = free.shape
@@ -649,9 +647,9 @@ def protrusion_at(free: np.ndarray, points, radius_px: float, look_px: int) -> n
     return out
 
 
-def _mouths(B, k, r_lo, r_hi, reach_px, rise_px, tol_px: float = 1.0, min_run_px: float = 0.0):
+def _mouths(branches, k, r_lo, r_hi, reach_px, rise_px, tol_px: float = 1.0, min_run_px: float = 0.0):
     """One-sided bottlenecks at the ends of runs of minima (cells ``r_lo..r_hi``
-    of ``B``, :class:`_Branches`, on branches ``k``): where a passage of even
+    of ``branches``, :class:`_Branches`, on branches ``k``): where a passage of even
     width (a corridor, at least ``min_run_px`` long within ``tol_px``) opens
     into a wider space. The clearance rises by ``2 * rise_px`` on one side
     within ``reach_px`` and does not fall below the run's value minus
@@ -667,24 +665,25 @@ def _mouths(B, k, r_lo, r_hi, reach_px, rise_px, tol_px: float = 1.0, min_run_px
         Per run, the cell of its mouth at the far end of its plateau and at
         the near end (the direction of the branch), or -1 where there is none.
     """
-    R, A = B.rad, B.arc
+    R, A = branches.rad, branches.arc
     none = np.full(len(k), -1)
     if len(k) == 0:
         return none, none
-    s, n = B.start[k], B.n[k]
-    X = _ranges(s, s + n)  # every cell of each run's branch
+    s, n = branches.start[k], branches.n[k]
+    X = ranges(s, s + n)  # every cell of each run's branch
     Q = np.repeat(np.arange(len(k)), n)
     at = np.cumsum(n) - n  # each run's first entry in X
     RX, AX = R[X], A[X]
     # the plateau around the run: neighbours within ``tol_px`` of its minimum
-    base = np.minimum.reduceat(B._rad_end, np.stack([r_lo, r_hi + 1], 1).ravel())[::2]
+    base = np.minimum.reduceat(branches._rad_end, np.stack([r_lo, r_hi + 1], 1).ravel())[::2]
     above = RX > (base + tol_px)[Q]
     lo = np.maximum.reduceat(np.where(above & (X < r_lo[Q]), X, (s - 1)[Q]), at) + 1
     hi = np.minimum.reduceat(np.where(above & (X > r_hi[Q]), X, (s + n)[Q]), at) - 1
     # too short a stretch of even width to be a corridor
     long = ~(A[hi] - A[lo] < min_run_px)
     end = A[s + n - 1]
-    far = B.beyond(np.r_[B.v[k], B.u[k]], np.r_[k, k], np.r_[reach_px - (end - A[hi]), reach_px - A[lo]])
+    far = branches.beyond(np.r_[branches.v[k], branches.u[k]], np.r_[k, k],
+                          np.r_[reach_px - (end - A[hi]), reach_px - A[lo]])
     out = []
     for j, (i, far_q) in enumerate(((hi, far[:len(k)]), (lo, far[len(k):]))):
         r = R[i]
@@ -742,12 +741,12 @@ def _window_cells(mask: np.ndarray, top: int, width: int, ra, rb, ca, cb):
     """
     lin = np.flatnonzero(mask) + top * width
     win = np.repeat(np.arange(len(ra)), rb - ra)
-    row = _ranges(ra, rb)
+    row = ranges(ra, rb)
     lo = np.searchsorted(lin, row * width + ca[win])
     hi = np.searchsorted(lin, row * width + cb[win])
     n = hi - lo
     rows = np.repeat(row, n)
-    return rows, lin[_ranges(lo, hi)] - rows * width, np.repeat(win, n)
+    return rows, lin[ranges(lo, hi)] - rows * width, np.repeat(win, n)
 
 
 def _window_faces(obstacle: np.ndarray, ra, rb, ca, cb, faces=None):
@@ -817,7 +816,7 @@ def _strip_cells(u0, u1, r0, c0, ra, rb, ca, cb):
     # along the rows: t = -y u0, x u1 in (t - m, t]; along the columns the same, transposed
     lo, hi = np.where(by_row, ra - r0, ca - c0), np.where(by_row, rb - r0, cb - c0)
     seg = np.repeat(np.arange(len(ra)), hi - lo)
-    y = _ranges(lo, hi)
+    y = ranges(lo, hi)
     a, b = np.where(by_row, u0, u1)[seg], np.where(by_row, u1, u0)[seg]
     t = -y * a
     x = np.where(b > 0, t // np.where(b == 0, 1, b), -((-t) // np.where(b == 0, 1, b)))
@@ -910,27 +909,17 @@ def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, dept
     in the map's rows spanned by the windows, plus the windows' cells.
     """
     H, W = obstacle.shape
-    cands = list(candidates)
-    cen = np.array([c.centroid for c in cands], float).reshape(len(cands), 2)
-    whole = np.all((cen == np.round(cen)) & (cen >= 0) & (cen < (H, W)), axis=1)
-    whole[whole] = ~obstacle[cen[whole, 0].astype(int), cen[whole, 1].astype(int)]
-    batch = [c for c, w in zip(cands, whole) if w]
-    for c, w in zip(cands, whole):
-        c.ip1 = c.ip2 = None
-        if not w:
-            _nearest_wall_points_one(c, obstacle, max_px, depth_px)
+    batch, cen = _free_centred(candidates, obstacle, max_px, depth_px)
     K = len(batch)
     if K == 0:
         return candidates
-    cen = cen[whole]
     R = np.array([int(np.ceil(min(c.radius * 1.5 + 3 + depth_px, max_px + depth_px))) for c in batch])
     r0, c0 = cen[:, 0].astype(int), cen[:, 1].astype(int)
-    ra, rb = np.maximum(r0 - R, 0), np.minimum(r0 + R + 1, H)
-    ca, cb = np.maximum(c0 - R, 0), np.minimum(c0 + R + 1, W)
+    box = (np.maximum(r0 - R, 0), np.minimum(r0 + R + 1, H), np.maximum(c0 - R, 0), np.minimum(c0 + R + 1, W))
     # Only surface cells (an obstacle cell with a free 4-neighbour inside its
     # window) can be nearest to a free centre: the neighbour towards the
     # centre is nearer.
-    rr, cc, seg = _window_faces(obstacle, ra, rb, ca, cb, faces)
+    rr, cc, seg = _window_faces(obstacle, *box, faces)
     if rr.size == 0:
         return candidates
     counts = np.bincount(seg, minlength=K)
@@ -942,29 +931,8 @@ def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, dept
     u0, u1 = v0[i].astype(int), v1[i].astype(int)
     dot = v0 * np.repeat(v0[i], counts) + v1 * np.repeat(v1[i], counts)
     opp = dot <= 0
-    # The nearest cell on the other side (v . u <= 0) is on the surface too,
-    # or its neighbour towards the centre lies on the near side: then it is
-    # on the half-plane's edge, -max(|u|) < v . u <= 0, one cell a row or a
-    # column; the first of the nearest in row-major order, as in one window.
     has = (counts > 0) & (di <= max_px)
-    sr, sc, ss = _strip_cells(u0[has], u1[has], r0[has], c0[has], ra[has], rb[has], ca[has], cb[has])
-    ss = np.flatnonzero(has)[ss]
-    o = obstacle[sr, sc]
-    sr, sc, ss = sr[o], sc[o], ss[o]
-    jr, jc, js = np.r_[rr[opp], sr], np.r_[cc[opp], sc], np.r_[seg[opp], ss]
-    order = np.argsort(js, kind="stable")
-    jr, jc, js = jr[order], jc[order], js[order]
-    jd = np.hypot(jr - cen[js, 0], jc - cen[js, 1])
-    jn = np.bincount(js, minlength=K)
-    dj, _ = _first_minima(jd, jn)
-    at = np.flatnonzero(jd == np.repeat(dj, jn))
-    lin = jr[at] * W + jc[at]
-    firsts = np.full(K, -1)
-    if at.size:
-        # the smallest linear index of the nearest cells, per candidate
-        o = np.lexsort((lin, js[at]))
-        at = at[o][np.r_[True, js[at][o][1:] != js[at][o][:-1]]]
-        firsts[js[at]] = at
+    jr, jc, dj, firsts = _nearest_opposite(obstacle, cen, (rr[opp], cc[opp], seg[opp]), has, (u0, u1), (r0, c0), box)
     for k, c in enumerate(batch):
         if i[k] < 0 or di[k] > max_px:
             continue
@@ -978,20 +946,95 @@ def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, dept
                                              d <= np.repeat(di, counts) + depth_px)
     keep = np.flatnonzero(sel)
     side = opp[keep]
-    a, b = keep[~side], keep[side]
-    # A pair is at least as long as its cells' distances to the line between
-    # the sides (h); the pair of the nearest cell with its closest partner
-    # bounds the closest pair (ub): cells that cannot be in a pair within
-    # 0.75 px of the closest are left out (0.05 px to spare for rounding).
+    # each cell's distance to the line between the sides
     h = np.abs(dot) / np.repeat(np.hypot(u0, u1), counts)
+    a, b = _pair_sides(keep[~side], keep[side], h, seg, q0[i], q1[i], q0, q1)
+    _average_closest_pairs(batch, q0, q1, a, b, seg)
+    return candidates
+
+
+def _free_centred(candidates, obstacle: np.ndarray, max_px: float, depth_px: float):
+    """``(batch, cen)``: the candidates centred on a free cell of ``obstacle`` and their centres
+    ((K, 2) float), for :func:`nearest_wall_points` to handle at once; the posts of every candidate
+    cleared, those of the others set one window each (:func:`_nearest_wall_points_one`)."""
+    H, W = obstacle.shape
+    cands = list(candidates)
+    cen = np.array([c.centroid for c in cands], float).reshape(len(cands), 2)
+    whole = np.all((cen == np.round(cen)) & (cen >= 0) & (cen < (H, W)), axis=1)
+    whole[whole] = ~obstacle[cen[whole, 0].astype(int), cen[whole, 1].astype(int)]
+    batch = [c for c, w in zip(cands, whole) if w]
+    for c, w in zip(cands, whole):
+        c.ip1 = c.ip2 = None
+        if not w:
+            _nearest_wall_points_one(c, obstacle, max_px, depth_px)
+    return batch, cen[whole]
+
+
+def _nearest_opposite(obstacle: np.ndarray, cen: np.ndarray, opposite, has: np.ndarray, u, centre, box):
+    """``(jr, jc, dj, firsts)``: the nearest obstacle cell on the side opposite the nearest one, per
+    candidate of :func:`nearest_wall_points`.
+
+    ``opposite``: the windows' surface cells on that side ``(rows, cols, window)``; ``has``: the
+    candidates with a nearest cell in reach; ``u``: the vectors ``(u0, u1)`` from each centre
+    ``centre`` (``(r0, c0)``) to its nearest cell; ``box``: the windows ``(ra, rb, ca, cb)``.
+    Returns the cells searched (``jr``, ``jc``), each candidate's smallest distance ``dj`` (inf:
+    none) and the index in ``jr``/``jc`` of its nearest cell (-1: none).
+
+    The nearest cell on the other side (v . u <= 0) is on the surface too,
+    or its neighbour towards the centre lies on the near side: then it is
+    on the half-plane's edge, -max(|u|) < v . u <= 0, one cell a row or a
+    column; the first of the nearest in row-major order, as in one window.
+    """
+    K, W = len(cen), obstacle.shape[1]
+    (u0, u1), (r0, c0), (ra, rb, ca, cb) = u, centre, box
+    sr, sc, ss = _strip_cells(u0[has], u1[has], r0[has], c0[has], ra[has], rb[has], ca[has], cb[has])
+    ss = np.flatnonzero(has)[ss]
+    o = obstacle[sr, sc]
+    sr, sc, ss = sr[o], sc[o], ss[o]
+    jr, jc, js = np.r_[opposite[0], sr], np.r_[opposite[1], sc], np.r_[opposite[2], ss]
+    order = np.argsort(js, kind="stable")
+    jr, jc, js = jr[order], jc[order], js[order]
+    jd = np.hypot(jr - cen[js, 0], jc - cen[js, 1])
+    jn = np.bincount(js, minlength=K)
+    dj, _ = _first_minima(jd, jn)
+    at = np.flatnonzero(jd == np.repeat(dj, jn))
+    lin = jr[at] * W + jc[at]
+    firsts = np.full(K, -1)
+    if at.size:
+        # the smallest linear index of the nearest cells, per candidate
+        o = np.lexsort((lin, js[at]))
+        at = at[o][np.r_[True, js[at][o][1:] != js[at][o][:-1]]]
+        firsts[js[at]] = at
+    return jr, jc, dj, firsts
+
+
+def _pair_sides(a: np.ndarray, b: np.ndarray, h: np.ndarray, seg: np.ndarray, near0: np.ndarray,
+                near1: np.ndarray, q0: np.ndarray, q1: np.ndarray):
+    """``(a, b)``: the cells of the near side ``a`` and the opposite side ``b`` (indices into the
+    windows' cells ``q0``, ``q1``, of window ``seg``) that can be in a pair within 0.75 px of the
+    closest pair of their window.
+
+    A pair is at least as long as its cells' distances ``h`` to the line between
+    the sides; the pair of the nearest cell (``near0``, ``near1``: per window) with its closest
+    partner bounds the closest pair: cells that cannot be in a pair within
+    0.75 px of the closest are left out (0.05 px to spare for rounding).
+    """
+    K = near0.size
     ub2 = np.full(K, np.inf)
-    np.minimum.at(ub2, seg[b], (q0[b] - q0[i][seg[b]]) ** 2 + (q1[b] - q1[i][seg[b]]) ** 2)
+    np.minimum.at(ub2, seg[b], (q0[b] - near0[seg[b]]) ** 2 + (q1[b] - near1[seg[b]]) ** 2)
     ha, hb = np.full(K, np.inf), np.full(K, np.inf)
     np.minimum.at(ha, seg[a], h[a])
     np.minimum.at(hb, seg[b], h[b])
     lim = np.sqrt(ub2) + 0.8
-    a = a[h[a] + hb[seg[a]] <= lim[seg[a]]]
-    b = b[h[b] + ha[seg[b]] <= lim[seg[b]]]
+    return a[h[a] + hb[seg[a]] <= lim[seg[a]]], b[h[b] + ha[seg[b]] <= lim[seg[b]]]
+
+
+def _average_closest_pairs(batch: list, q0: np.ndarray, q1: np.ndarray, a: np.ndarray, b: np.ndarray,
+                           seg: np.ndarray) -> None:
+    """Set the posts ``ip1``, ``ip2`` of each candidate of ``batch`` with cells on both sides
+    (``a``, ``b``: :func:`_pair_sides`) to the means of the ends of its pairs of cells as close as
+    its closest pair (within 0.75 px)."""
+    K = len(batch)
     sa, sb = seg[a], seg[b]
     ks = np.arange(K)
     a_lo, na = np.searchsorted(sa, ks), np.bincount(sa, minlength=K)
@@ -1007,9 +1050,9 @@ def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, dept
         stop = max(int(np.searchsorted(cum, cum[start] - npair[start] + _PAIR_BLOCK, "right")), start + 1)
         kk, nk = ks[start:stop], npair[start:stop]
         start = stop
-        ai = _ranges(a_lo[kk], a_lo[kk] + na[kk])
+        ai = ranges(a_lo[kk], a_lo[kk] + na[kk])
         rep = nb[sa[ai]]
-        pb = _ranges(b_lo[sa[ai]], b_lo[sa[ai]] + rep)
+        pb = ranges(b_lo[sa[ai]], b_lo[sa[ai]] + rep)
         # squared distances are exact integers: the closest pairs are found
         # on them, and only pairs that can be within 0.75 px of the closest
         # measured as the windowed search did (np.hypot)
@@ -1031,24 +1074,24 @@ def nearest_wall_points(candidates, obstacle: np.ndarray, *, max_px: float, dept
         for k in kk:
             batch[k].ip1 = np.array([sums[0][k], sums[1][k]]) / n[k]
             batch[k].ip2 = np.array([sums[2][k], sums[3][k]]) / n[k]
-    return candidates
 
 
 # --------------------------------------------------------------------------
 # The default method's door stages: bottlenecks, judging, duplicates
 # --------------------------------------------------------------------------
 
-def occupied_skeleton_lines(Go):
+def occupied_skeleton_lines(occupied_graph):
     """The occupied-space skeleton's branches as one shapely MultiLineString
     in ``(col, row)`` order (None when there is none), for
     :func:`select_doors`."""
     from shapely.geometry import MultiLineString
 
-    paths = [d["path"][:, ::-1].astype(float) for _, _, d in Go.edges(data=True) if d["path"].shape[0] >= 2]
+    paths = [d["path"][:, ::-1].astype(float) for _, _, d in occupied_graph.edges(data=True)
+             if d["path"].shape[0] >= 2]
     return MultiLineString([p.tolist() for p in paths]) if paths else None
 
 
-def find_bottlenecks(Gf, obstacle: np.ndarray, opts, resolution: float, threshold_px: float, *,
+def find_bottlenecks(free_graph, obstacle: np.ndarray, opts, resolution: float, threshold_px: float, *,
                      faces=None) -> list:
     """Stage "bottlenecks" of the default method: candidate doors with their posts.
 
@@ -1058,7 +1101,7 @@ def find_bottlenecks(Gf, obstacle: np.ndarray, opts, resolution: float, threshol
 
     Parameters
     ----------
-    Gf : networkx.MultiGraph
+    free_graph : networkx.MultiGraph
         Free-space skeleton graph with ``radius`` along edges.
     obstacle : (M, N) ndarray of bool
         Cells a door post can be on (every non-free cell of the map doors
@@ -1080,8 +1123,8 @@ def find_bottlenecks(Gf, obstacle: np.ndarray, opts, resolution: float, threshol
         Status :data:`CANDIDATE` or :data:`MOUTH`.
     """
     res = resolution
-    cands = passage_minima(Gf, window_px=opts.window / res, rise_px=opts.rise / res, reach_px=opts.reach / res,
-                           mouths=opts.mouths, min_run_px=opts.corridor_length / res,
+    cands = passage_minima(free_graph, window_px=opts.window / res, rise_px=opts.rise / res,
+                           reach_px=opts.reach / res, mouths=opts.mouths, min_run_px=opts.corridor_length / res,
                            max_radius_px=opts.max_door_width / np.sqrt(2) / res)
     nearest_wall_points(cands, obstacle, max_px=opts.max_door_width / res, depth_px=max(threshold_px, 2.0),
                         faces=faces)
@@ -1211,8 +1254,6 @@ def across_corridor(accepted, walls, depth_px: float) -> list:
     walls by less than that — pillars, wall columns, radiators, cupboards —
     is the corridor's own; a door across a corridor sits in a wall across
     it, which stands out farther."""
-    from .walls import across_walls_many
-
     if not accepted:
         return []
     across = across_walls_many(np.array([c.ip1 for _, c in accepted], float),
@@ -1238,7 +1279,7 @@ def seen_posts(accepted, seen: np.ndarray) -> list:
     if not accepted:
         return []
     H, W = seen.shape
-    # every post at once (np.clip on each post alone before: 1.3 -> 0.2 ms a map on the ipa maps)
+    # every post at once (not np.clip on each post alone)
     posts = np.array([(c.ip1, c.ip2) for _, c in accepted], float).reshape(-1, 2)
     rc = np.clip(np.rint(posts).astype(int), 0, [H - 1, W - 1])
     hits = seen[rc[:, 0], rc[:, 1]].reshape(-1, 2).any(axis=1)
@@ -1257,7 +1298,7 @@ def opening_candidates(openings, resolution: float) -> list:
     openings = list(openings)
     if not openings:
         return []
-    # all openings at once, the same element-wise arithmetic (2.1 -> 0.7 ms a map on the ipa maps)
+    # all openings at once, the same element-wise arithmetic
     P = np.array([p for p, _ in openings], float).reshape(-1, 2)
     Q = np.array([q for _, q in openings], float).reshape(-1, 2)
     V = Q - P
@@ -1314,8 +1355,7 @@ def suppress_duplicates(accepted, resolution: float, *, kept=()) -> list:
     near = point_segment_distances(mids[door], A[seg], B[seg]) < reach[door]
     door, seg = door[near], seg[near]  # still in door order
     # a door near a segment given is a duplicate whatever the doors before it; the others
-    # in turn, on Python lists (a numpy look-up a door before): 2.8 -> 2.0 ms a map on the
-    # ipa maps, both calls
+    # in turn, on Python lists (quicker than a numpy look-up a door)
     dup = np.zeros(n, bool)
     dup[door[seg < n0]] = True
     other = (seg >= n0) & ~dup[door]

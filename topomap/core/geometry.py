@@ -166,19 +166,7 @@ def label_rings(labels: np.ndarray) -> LabelRings:
     -------
     LabelRings
     """
-    from scipy import sparse
-    from scipy.sparse import csgraph
-
-    L = np.asarray(labels)
-    top = int(L.max(initial=0))
-    dt = np.uint8 if top < 2 ** 8 else np.uint16 if top < 2 ** 16 else np.int64
-    # padded by one cell above and left, two below and right: vertex (i, j), the top-left corner of
-    # cell (i, j), has the cell's flat index, and every ring closes inside
-    W = L.shape[1] + 3
-    P = np.zeros((L.shape[0] + 3, W), dt)
-    P[1:-2, 1:-2] = L
-    it = np.int32 if 4 * P.size < 2 ** 31 else np.int64
-    f = P.ravel()
+    f, W, it = _padded_labels(labels)
     h = np.flatnonzero(f[:-1] != f[1:]).astype(it)  # cell h and the one right of it differ
     v = np.flatnonzero(f[:-W] != f[W:]).astype(it)  # cell v and the one below it differ
     # runs of equal non-zero labels along the rows (none crosses a row's end: the padding is 0)
@@ -188,15 +176,62 @@ def label_rings(labels: np.ndarray) -> LabelRings:
     z = np.zeros(0, np.int64)
     if run0.size == 0:
         return LabelRings(np.zeros((0, 2)), z, z, np.zeros(0, bool), z, z, (z, z, z, z))
+    run_piece, piece_label = _run_pieces(f, W, run0, run_label)
+    start, d, blocks = _ring_edges(f, W, h, v)
+    del h, v
+    own_cell, nxt = _next_edges(f, W, start, d, blocks, run0, run_piece, it)
+    corner, cyc, first = _ring_corners(nxt, d, it)
+    rcyc = cyc[corner]
+    ring_edges = np.bincount(cyc)
+    del cyc
+    r, c = np.divmod(start[corner], W)
+    del corner
+    bounds, ring_cyc, hole = _ring_orientations(r, c, rcyc, it)
+    del rcyc
+    piece = run_piece[_run_of(run0, own_cell[first[ring_cyc]])]
+    del own_cell, start
+    piece_edges = np.bincount(piece, weights=ring_edges[ring_cyc], minlength=piece_label.size).astype(np.int64)
+    xy, ring, rank = _rings_by_piece(r, c, bounds, first[ring_cyc], hole, piece)
+    rows, cols = np.divmod(run0.astype(np.int64), W)
+    runs = (rows - 1, cols - 1, (run1 - run0).astype(np.int64), run_label)
+    return LabelRings(xy, ring, piece[rank], hole[rank], piece_label, piece_edges, runs)
 
-    def run_of(k):  # the run holding each (non-zero) cell k
-        return np.searchsorted(run0, k, side="right") - 1
 
-    # pieces: runs of one label in adjacent rows that overlap, joined (each overlap starts at a run's start)
+def _padded_labels(labels: np.ndarray):
+    """``(f, W, it)``: the labels padded and flattened, the padded rows' length and the index dtype.
+
+    Padded by one cell above and left, two below and right: vertex ``(i, j)``, the top-left corner
+    of cell ``(i, j)``, has the cell's flat index, and every ring closes inside. ``f`` is of the
+    smallest unsigned dtype that holds the labels; ``it`` (int32 or int64) holds every edge index.
+    """
+    L = np.asarray(labels)
+    top = int(L.max(initial=0))
+    dt = np.uint8 if top < 2 ** 8 else np.uint16 if top < 2 ** 16 else np.int64
+    W = L.shape[1] + 3
+    P = np.zeros((L.shape[0] + 3, W), dt)
+    P[1:-2, 1:-2] = L
+    it = np.int32 if 4 * P.size < 2 ** 31 else np.int64
+    return P.ravel(), W, it
+
+
+def _run_of(run0: np.ndarray, k):
+    """The run (index into the runs' first cells ``run0``) holding each non-zero cell ``k``."""
+    return np.searchsorted(run0, k, side="right") - 1
+
+
+def _run_pieces(f: np.ndarray, W: int, run0: np.ndarray, run_label: np.ndarray):
+    """``(run_piece, piece_label)``: the piece of each row run and the label of each piece.
+
+    Pieces are runs of one label in adjacent rows that overlap, joined (each overlap starts at a
+    run's start); they are numbered by label, then by their first cell (row-major).
+    """
+    from scipy import sparse
+    from scipy.sparse import csgraph
+
     up = run0[f[run0 - W] == f[run0]]
     down = run0[f[run0 + W] == f[run0]]
-    a = np.concatenate([run_of(up - W), run_of(down)])
-    b = np.concatenate([run_of(up), run_of(down + W)])
+    a = np.concatenate([_run_of(run0, up - W), _run_of(run0, down)])
+    b = np.concatenate([_run_of(run0, up), _run_of(run0, down + W)])
     nr = run0.size
     _, comp = csgraph.connected_components(sparse.csr_matrix((np.ones(a.size, np.int8), (a, b)), shape=(nr, nr)),
                                            directed=False)
@@ -204,46 +239,69 @@ def label_rings(labels: np.ndarray) -> LabelRings:
     order = np.lexsort((first_run, run_label[first_run]))  # pieces by label, then by their first cell
     rank = np.empty(order.size, np.int64)
     rank[order] = np.arange(order.size)
-    run_piece = rank[comp]
-    piece_label = run_label[first_run[order]]
-    del comp, first_run, order, rank
-    # directed edges with the label's cell on their right (rows down), by start vertex
-    E = v[f[v + W] != 0] + W              # east, below cell (i, j)
-    S = h[f[h] != 0] + 1                  # south, left of cell (i, j)
-    Wd = v[f[v] != 0] + (W + 1)           # west, cell (i - 1, j) above
-    N = h[f[h + 1] != 0] + (W + 1)        # north, cell (i, j) right
-    del h, v
-    blocks = np.cumsum([0, E.size, S.size, Wd.size, N.size])  # edges by direction, each by start vertex
-    start = np.concatenate([E, S, Wd, N])
-    del E, S, Wd, N
+    return rank[comp], run_label[first_run[order]]
+
+
+def _ring_edges(f: np.ndarray, W: int, h: np.ndarray, v: np.ndarray):
+    """``(start, d, blocks)``: the directed cell edges with a label's cell on their right (rows down).
+
+    ``start``: each edge's start vertex; ``d``: its direction (0 east, 1 south, 2 west, 3 north);
+    the edges are by direction, ``blocks[k]:blocks[k + 1]`` those of direction ``k``, each block
+    by start vertex. ``h``, ``v``: the cells that differ from the one right of / below them.
+    """
+    east = v[f[v + W] != 0] + W                 # below cell (i, j)
+    south = h[f[h] != 0] + 1                    # left of cell (i, j)
+    west = v[f[v] != 0] + (W + 1)               # cell (i - 1, j) above
+    north = h[f[h + 1] != 0] + (W + 1)          # cell (i, j) right
+    blocks = np.cumsum([0, east.size, south.size, west.size, north.size])
+    start = np.concatenate([east, south, west, north])
     d = np.repeat(np.arange(4, dtype=np.int8), np.diff(blocks))
+    return start, d, blocks
+
+
+def _next_edges(f: np.ndarray, W: int, start: np.ndarray, d: np.ndarray, blocks: np.ndarray, run0: np.ndarray,
+                run_piece: np.ndarray, it):
+    """``(own_cell, nxt)``: each edge's cell (on its right) and the edge that follows it on its ring.
+
+    The next edge at the end vertex: a right turn if the cell straight ahead (right of the straight
+    edge) is not the label's, else straight on if the cell ahead-left is not, else a left turn. Two
+    cells that touch at the corner only (the cell ahead-left and this edge's own): a right turn
+    keeps them apart, unless they are the same piece: then the left turn, so that no ring passes a
+    corner twice (the piece's shell and a hole, or two holes, touch there instead).
+    """
     n = start.size
     step = np.array([1, W, -1, -W], it)            # vertex steps east, south, west, north
     right = np.array([0, -1, -W - 1, -W], it)      # the cell on an edge's right, from its start
     own_cell = start + right[d]
     own = f[own_cell]                              # every edge's label
     end = start + step[d]
-    # the next edge at the end vertex: a right turn if the cell straight ahead (right of the straight
-    # edge) is not the label's, else straight on if the cell ahead-left is not, else a left turn. Two
-    # cells that touch at the corner only (the cell ahead-left and this edge's own): a right turn
-    # keeps them apart, unless they are the same piece: then the left turn, so that no ring passes
-    # a corner twice (the piece's shell and a hole, or two holes, touch there instead)
     dl = (d + 3) % 4
     ahead = f[end + right[d]] == own
     left_cell = end + right[dl]
     left = f[left_cell] == own
     apart = ~ahead & left                          # corner contacts: the same piece?
     sel = np.flatnonzero(apart)
-    apart[sel] = run_piece[run_of(left_cell[sel])] != run_piece[run_of(own_cell[sel])]
+    apart[sel] = run_piece[_run_of(run0, left_cell[sel])] != run_piece[_run_of(run0, own_cell[sel])]
     nd = np.where(~ahead & (~left | apart), (d + 1) % 4, np.where(~left, d, dl))
     del ahead, left, apart, left_cell, dl, own, sel
     nxt = np.empty(n, it)  # the next edge: the one of direction nd from the end vertex
     for k in range(4):
         sel = np.flatnonzero(nd == k)
         nxt[sel] = np.searchsorted(start[blocks[k]:blocks[k + 1]], end[sel]) + blocks[k]
-    del end, nd, sel
-    # the edges form disjoint cycles, the rings: cut each before its lowest edge, chain the rings
-    # (the last edge of one to the first of the next) and read them all in one walk along the chain
+    return own_cell, nxt
+
+
+def _ring_corners(nxt: np.ndarray, d: np.ndarray, it):
+    """``(corner, cyc, first)``: the edges that start with a turn, ring by ring in walk order; the
+    cycle (ring) of each edge; the lowest edge of each cycle.
+
+    The edges form disjoint cycles, the rings: each is cut before its lowest edge, the rings are
+    chained (the last edge of one to the first of the next) and all read in one walk along the chain.
+    """
+    from scipy import sparse
+    from scipy.sparse import csgraph
+
+    n = nxt.size
     idx = np.arange(n, dtype=it)
     _, cyc = csgraph.connected_components(sparse.csr_matrix((np.ones(n, np.int8), nxt, np.arange(n + 1)),
                                                             shape=(n, n)), directed=True, connection="strong")
@@ -258,27 +316,29 @@ def label_rings(labels: np.ndarray) -> LabelRings:
     del chain, last
     prev = np.empty(n, it)
     prev[nxt] = idx
-    corner = walk[d[walk] != d[prev[walk]]]  # edges that start with a turn, ring by ring
-    del walk, prev, nxt, idx
-    rcyc = cyc[corner]
-    ring_edges = np.bincount(cyc)
-    del cyc
-    r, c = np.divmod(start[corner], W)
-    del corner
-    # each ring's orientation (shoelace, x = col, y = row: shells positive) and piece
+    return walk[d[walk] != d[prev[walk]]], cyc, first
+
+
+def _ring_orientations(r: np.ndarray, c: np.ndarray, rcyc: np.ndarray, it):
+    """``(bounds, ring_cyc, hole)``: each ring's first corner (into ``r``, ``c``), its cycle and
+    whether it is a hole, for the corners ``r``, ``c`` of the rings in walk order (``rcyc``: the
+    cycle of each). The orientation is the shoelace's sign (x = col, y = row: shells positive)."""
     bounds = np.flatnonzero(np.r_[True, rcyc[1:] != rcyc[:-1]])
     ring_cyc = rcyc[bounds]  # the cycle of each ring in walk order
-    del rcyc
     after = np.arange(1, r.size + 1, dtype=it)
     after[np.r_[bounds[1:], r.size] - 1] = bounds
     twice_area = np.add.reduceat(c.astype(np.int64) * r[after] - c[after].astype(np.int64) * r, bounds)
-    del after
-    hole = twice_area < 0
-    piece = run_piece[run_of(own_cell[first[ring_cyc]])]
-    del own_cell, start
-    piece_edges = np.bincount(piece, weights=ring_edges[ring_cyc], minlength=piece_label.size).astype(np.int64)
-    # rings by piece, its shell first, then by their lowest edge: each ring's corners moved as a block
-    rank = np.lexsort((first[ring_cyc], hole, piece))
+    return bounds, ring_cyc, twice_area < 0
+
+
+def _rings_by_piece(r: np.ndarray, c: np.ndarray, bounds: np.ndarray, lowest: np.ndarray, hole: np.ndarray,
+                    piece: np.ndarray):
+    """``(xy, ring, rank)``: the corners and their rings with the rings ordered by piece, its shell
+    first, then by their lowest edge (``lowest``); ``rank``: the rings in that order.
+
+    Each ring's corners (``r``, ``c`` in the padded image, from ``bounds`` on) are moved as a block.
+    """
+    rank = np.lexsort((lowest, hole, piece))
     size = np.diff(np.r_[bounds, r.size])
     new_start = np.empty(rank.size, np.int64)
     new_start[rank] = np.r_[0, np.cumsum(size[rank])[:-1]]
@@ -292,6 +352,4 @@ def label_rings(labels: np.ndarray) -> LabelRings:
     pos = np.empty(rank.size, np.int64)
     pos[rank] = np.arange(rank.size)
     ring[dest] = pos[walk_ring]
-    rows, cols = np.divmod(run0.astype(np.int64), W)
-    runs = (rows - 1, cols - 1, (run1 - run0).astype(np.int64), run_label)
-    return LabelRings(xy, ring, piece[rank], hole[rank], piece_label, piece_edges, runs)
+    return xy, ring, rank

@@ -40,7 +40,7 @@ def skeletonize(mask: np.ndarray) -> np.ndarray:
     same thinning from :func:`_thin`, which visits only the pixels whose
     neighbourhood changed.
     """
-    from skimage.morphology import skeletonize as _sk
+    import skimage.morphology
 
     mask = np.asarray(mask, bool)
     out = np.zeros(mask.shape, bool)
@@ -54,7 +54,7 @@ def skeletonize(mask: np.ndarray) -> np.ndarray:
     # a large mask with wide areas (free space: many passes, most of the image long finished)
     # is thinned pixel by pixel from the boundary inwards; skimage scans the whole box every pass
     wide = box.size >= _THIN_SPARSE_CELLS and np.count_nonzero(box) >= 0.15 * box.size
-    out[r0:r1, c0:c1] = _thin(box) if wide else _sk(box)
+    out[r0:r1, c0:c1] = _thin(box) if wide else skimage.morphology.skeletonize(box)
     return out
 
 
@@ -148,8 +148,8 @@ class _PixelGraph:
         pid[at] = np.arange(npx, dtype=np.int32)
         self.nb = pid[at[:, None] + (_OFFSETS[:, 0] * (W + 2) + _OFFSETS[:, 1])]
         self.has = self.nb >= 0
-        # the (pixel, neighbour) pairs from one scan of ``has`` (0.05 ms instead of 0.25 on the ipa
-        # mid-size maps' skeletons), the degrees counted from them
+        # the (pixel, neighbour) pairs from one scan of ``has`` (quicker than one scan per
+        # direction), the degrees counted from them
         pair = np.flatnonzero(self.has)
         self.src = pair >> 3
         self.dst = self.nb.ravel()[pair]
@@ -181,9 +181,8 @@ class _PixelGraph:
         each), without an image: every pixel takes the least index over its pairs in the set
         (and that index's own) until nothing changes, which is each component's first pixel.
 
-        On the ipa mid-size maps' skeletons 0.10 ms a graph instead of OpenCV's 0.22 (0.47
-        instead of 0.92 with cold caches); a set that has not settled after
-        :data:`_CLUSTER_ROUNDS` rounds is labelled by :meth:`components`.
+        Quicker than OpenCV's labelling on the skeletons of real maps; a set that has not
+        settled after :data:`_CLUSTER_ROUNDS` rounds is labelled by :meth:`components`.
         """
         lab = np.zeros(self.npx, np.int64)
         idx = np.flatnonzero(mask_px)
@@ -251,8 +250,7 @@ class _Branches:
     The labels are those of :meth:`_PixelGraph.components` of the branch pixels, found with
     the lists instead of an image: pointer jumping along the lists (each step's least pixel
     up to its list's end taken on) gives every branch pixel its branch's first pixel. The
-    lists and the labels at once: 0.86 ms a graph instead of 1.24 ms for the labelling and
-    the lists apart, on the ipa mid-size maps' skeletons.
+    lists and the labels at once: quicker than the labelling and the lists apart.
     """
 
     @classmethod
@@ -359,8 +357,7 @@ def _branch_edges(rc, porder, bounds, en_p, en_n, rep, mr, mc, n_nodes):
     nodes joins the two lowest. An end that touches no node becomes an endpoint of its own,
     numbered on from ``n_nodes`` branch by branch, its first end before its last. The path
     is the branch's pixels with the end nodes' pixels added; the paths are consecutive slices
-    of one array. All branches at once: on the ipa mid-size maps' skeletons (121 branches a
-    graph) 0.33 ms a graph instead of 0.82 ms branch by branch.
+    of one array. All branches at once: quicker than branch by branch.
     """
     nbr = rc.shape[0]
     size = np.diff(bounds)
@@ -602,7 +599,7 @@ def prune_spurs(G: nx.MultiGraph, min_length: float, *, copy: bool = True) -> nx
 
 def _copy(G: nx.MultiGraph) -> nx.MultiGraph:
     """``G.copy()``: the same graph attributes, nodes, edges and keys, each attribute dict
-    copied, every node's branches listed in the same order; 30-40 % faster.
+    copied, every node's branches listed in the same order; faster.
 
     networkx's copy adds every edge from both of its ends (the second time changes nothing)
     and every node with its attributes through an exception; here the nodes come first,
@@ -668,9 +665,8 @@ def graph_pixels(G: nx.MultiGraph) -> np.ndarray:
 def _unique_pixels(P: np.ndarray) -> np.ndarray:
     """``np.unique(P, axis=0)`` of a (K, 2) array of pixels: the same rows in the same (row, col) order.
 
-    Signed integer pixels are sorted as one int64 key per pixel: on the ipa mid-size maps'
-    occupied graphs (2,000-6,000 path pixels) 0.5-1 ms instead of 3-8 ms (``np.unique`` with
-    an axis sorts structured rows, and on plain keys it is itself ten times slower than a sort).
+    Signed integer pixels are sorted as one int64 key per pixel, much quicker (``np.unique``
+    with an axis sorts structured rows, and on plain keys it is itself slower than a sort).
     """
     if P.ndim != 2 or P.shape[1] != 2 or P.dtype.kind != "i" or P.shape[0] == 0:
         return np.unique(P, axis=0)

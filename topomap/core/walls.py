@@ -21,7 +21,8 @@ import math
 import numpy as np
 
 __all__ = ["wall_faces", "wall_lines", "straight_share", "wall_openings", "wall_directions", "long_walls",
-           "across_walls", "across_walls_many", "WallIndex", "long_wall_gaps", "partition_gaps", "face_runs", "straight_lines", "furniture_rows", "wall_mask", "scale_walls"]
+           "across_walls", "across_walls_many", "WallIndex", "long_wall_gaps", "partition_gaps", "face_runs",
+           "straight_lines", "furniture_rows", "wall_mask", "scale_walls"]
 
 
 #: The 4-neighbours of a cell (not the cell itself), as a morphology kernel.
@@ -118,8 +119,7 @@ def _sample_cells(shape, starts, dirs, n, offsets):
     # rounded in place, the flat index made from the whole floats (exact) with
     # the samples outside set to 0 instead of clipped, and 32-bit indices when
     # they fit (a faster cast); the callers gather with np.take (faster than
-    # indexing): _free_runs 3.1 -> 2.1 ms a map, _gaps 3.6 -> 2.7,
-    # wall_openings 9.1 -> 7.0 (min of 11, the 14 ipa mid maps)
+    # indexing)
     np.rint(r, out=r)
     np.rint(c, out=c)
     inside = (r >= 0) & (r < H) & (c >= 0) & (c < W)
@@ -212,7 +212,7 @@ def _spans_passage(obstacle, p, q, depth_px, slack: float = 1.25):
         # a run (both ways) of a narrow passage is shorter than floor(most): each run
         # is sampled only that far (one sample more tells a longer one), the run on
         # first, the run back (from a step back) only from the points whose run on
-        # leaves room for it (a quarter of them): 2.6 -> 1.8 ms a map on the ipa maps
+        # leaves room for it (a quarter of them)
         on = _free_runs(obstacle, cs, dk, int(np.floor(most.max())) + 1)
         j = np.flatnonzero(on + 1 <= most)
         narrow = np.zeros(kk.size, bool)
@@ -704,8 +704,8 @@ def _on_structure(obstacle: np.ndarray, seg, min_px: float) -> bool:
     import cv2
 
     H, W = obstacle.shape
-    # on Python floats and ints (the same values; round() rounds half to even as
-    # np.rint does): 0.64 -> 0.49 ms a map
+    # on Python floats and ints, quicker than tiny arrays (the same values; round()
+    # rounds half to even as np.rint does)
     a0, a1, b0, b1 = (float(x) for x in seg)
     m = math.ceil(min_px) + 3
     r0 = max(int(min(a0, b0)) - m, 0)
@@ -893,7 +893,7 @@ def long_wall_gaps(obstacle: np.ndarray, free: np.ndarray, walls: list, *, min_g
     n_free = fr.sum(axis=1)
     ok = (count > 0) & (inside | ~valid).all(axis=1) & ~(n_free / np.maximum(count, 1) < 0.5)
     # the first and last free cell of every gap at once (each has one: n_free >= 1), not gap by
-    # gap: 1.0 -> 0.6 ms a map
+    # gap
     g = np.flatnonzero(ok)
     k0 = np.argmax(fr[g], axis=1)
     k1 = fr.shape[1] - 1 - np.argmax(fr[g, ::-1], axis=1)
