@@ -176,7 +176,6 @@ class BackgroundCall:
         return self._value
 
 
-Beside = BackgroundCall  # alias until the callers move (topomap.cli, topomap.core.segmentation)
 
 
 #: glibc's ``mallopt`` parameters (``malloc.h``) set by :func:`keep_freed_memory`.

@@ -47,7 +47,7 @@ from ..options import TopomapOptions
 from .doors import Door
 from .geometry import line_pixels
 from .result import Segmentation, TrackedSegmentation
-from .rooms import fill_unlabeled
+from .rooms import NEIGHBOUR_COLS, NEIGHBOUR_ROWS, fill_unlabeled
 
 log = logging.getLogger("topomap")
 
@@ -239,11 +239,9 @@ def _extent_text(grid) -> str:
 
 def _neighbour_counts(rooms: np.ndarray, rr: np.ndarray, cc: np.ndarray, labels) -> list:
     """How many times each of ``labels`` is among the cells ``rr, cc`` and their 8-neighbours."""
-    from .rooms import _NC, _NR
-
     H, W = rooms.shape
-    r = np.clip(np.r_[rr, (rr[:, None] + _NR).ravel()], 0, H - 1)
-    c = np.clip(np.r_[cc, (cc[:, None] + _NC).ravel()], 0, W - 1)
+    r = np.clip(np.r_[rr, (rr[:, None] + NEIGHBOUR_ROWS).ravel()], 0, H - 1)
+    c = np.clip(np.r_[cc, (cc[:, None] + NEIGHBOUR_COLS).ravel()], 0, W - 1)
     v = rooms[r, c]
     return [int(np.count_nonzero(v == x)) for x in labels]
 

@@ -544,8 +544,6 @@ def _rooms_first(labels: np.ndarray, min_cells: int, wide=None):
 NEIGHBOUR_ROWS = np.array([-1, -1, -1, 0, 0, 1, 1, 1])
 #: Column steps to the 8 neighbours of a cell (see :data:`NEIGHBOUR_ROWS`).
 NEIGHBOUR_COLS = np.array([-1, 0, 1, -1, 1, -1, 0, 1])
-_NR = NEIGHBOUR_ROWS  # alias until the callers move (topomap.core.edit)
-_NC = NEIGHBOUR_COLS  # alias until the callers move (topomap.core.edit)
 
 
 def doors_between_rooms(grid: OccupancyGrid, labels: np.ndarray, segments) -> list:

@@ -29,7 +29,7 @@ from typing import Optional
 
 import numpy as np
 
-from .._fast import Beside, edt
+from .._fast import BackgroundCall, edt
 from ..errors import ParameterError
 from ..grid import OccupancyGrid
 from ..options import PaperOptions, TopomapOptions, check_keywords, options_from_kwargs
@@ -107,7 +107,7 @@ def coarse_skeletons(free_mask: np.ndarray, occupied_mask: np.ndarray, factor: i
     """
 
     # the two thinnings run in compiled code without Python's lock: free space's on a second core
-    free_skeleton = Beside(lambda: skeletonize(downsample(free_mask, factor, keep="all")))
+    free_skeleton = BackgroundCall(lambda: skeletonize(downsample(free_mask, factor, keep="all")))
     occupied_skeleton = skeletonize(downsample(occupied_mask, factor, keep="any"))
     return free_skeleton.result(), occupied_skeleton
 
@@ -596,7 +596,7 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
         space = free if seen.clutter is None else free & ~seen.clutter
         # the clearance (an exact distance transform, in OpenCV without Python's lock) on a second
         # core while the masks and the skeletons are made: the same array, needed from the graphs on
-        clearance = Beside(edt, free)
+        clearance = BackgroundCall(edt, free)
         free_mask, _, occupied_mask = preprocess_masks(seen.search, opts, clearance=False)
     factor = skeleton_factor(opts.skeleton_cell, res)
     with timer("skeletons"):

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._fast import Beside
+from .._fast import BackgroundCall
 # modules, not their functions: a function replaced in its module (a test's stand-in) is the one called
 from ..core import segmentation
 from ..io import export, plot
@@ -78,7 +78,7 @@ def write_segmentation(seg, outdir, *, overlay: bool = True, skeletons: bool = F
     seg.room_graph  # made here, before the thread below reads it
     # the pictures (OpenCV's drawing, zlib: mostly without Python's lock) on a second core while the
     # travel distances are measured; ``overlay`` is the time the job then still waits for them
-    pictures = Beside(_pictures, seg, overlay, skeletons)
+    pictures = BackgroundCall(_pictures, seg, overlay, skeletons)
     t0 = time.perf_counter()
     graph = travel_graph(seg)
     t["travel"] = time.perf_counter() - t0
