@@ -23,14 +23,15 @@ from pathlib import Path
 import numpy as np
 
 from .._fast import label as _label
-from ..errors import MapError, MapFileError, MapTooLargeError, ParameterError, PlanFormatError
 from ..core.geometry import point_segment_distances
-from ..errors import named as _msg
+from ..errors import MapError, MapFileError, MapTooLargeError, ParameterError, PlanFormatError, named
 from ..grid import FREE, OCCUPIED, UNKNOWN, OccupancyGrid, cell_limit
-from ..io.maps import _check_file, check_resolution, save_map
-from ..options import _check_area, check_length
+from ..io.maps import check_resolution, save_map
+from ..io.metadata import check_file
+from ..options import check_area, check_length
 
-__all__ = ["PlanDoor", "FloorPlan", "read_plan", "plan_grid", "ground_truth_problems", "ROOM_KINDS", "STORAGE_KINDS", "FIXTURE_KINDS"]
+__all__ = ["PlanDoor", "FloorPlan", "read_plan", "plan_grid", "ground_truth_problems", "ROOM_KINDS", "STORAGE_KINDS",
+           "FIXTURE_KINDS"]
 
 _log = logging.getLogger(__name__)
 
@@ -205,7 +206,7 @@ def plan_grid(plan: FloorPlan) -> OccupancyGrid:
 def _parse(path: Path, name: str):
     """Walls (n, 4), doors (m, 4) and boxes ``[(category, x1, y1, x2, y2)]`` in plan units."""
     try:
-        _check_file(name, path, what="plan file")
+        check_file(name, path, what="plan file")
     except PlanFormatError:
         raise
     except MapError as exc:  # empty file
@@ -213,9 +214,9 @@ def _parse(path: Path, name: str):
     try:
         text = path.read_bytes().decode("utf-8")
     except UnicodeDecodeError as exc:
-        raise PlanFormatError(_msg(name, f"not a text plan file (not UTF-8 at byte {exc.start})")) from None
+        raise PlanFormatError(named(name, f"not a text plan file (not UTF-8 at byte {exc.start})")) from None
     except OSError as exc:
-        raise MapFileError(_msg(name, f"cannot read plan file: {exc.strerror or exc}")) from None
+        raise MapFileError(named(name, f"cannot read plan file: {exc.strerror or exc}")) from None
     walls, doors, boxes = [], [], []
     n = 0
     for i, line in enumerate(text.splitlines(), 1):
@@ -223,18 +224,18 @@ def _parse(path: Path, name: str):
         if not f:
             continue
         if not 5 <= len(f) <= 7:
-            raise PlanFormatError(_msg(name, f"line {i}: expected 'x1 y1 x2 y2 category [a b]' "
-                                             f"(5 to 7 fields), got {len(f)} fields: {line.strip()!r}"))
+            raise PlanFormatError(named(name, f"line {i}: expected 'x1 y1 x2 y2 category [a b]' "
+                                              f"(5 to 7 fields), got {len(f)} fields: {line.strip()!r}"))
         try:
             xy = [float(v) for v in f[:4]]
         except ValueError:
             bad = next(v for v in f[:4] if not _is_number(v))
-            raise PlanFormatError(_msg(name, f"line {i}: coordinate {bad!r} is not a number")) from None
+            raise PlanFormatError(named(name, f"line {i}: coordinate {bad!r} is not a number")) from None
         if not all(math.isfinite(v) for v in xy):
-            raise PlanFormatError(_msg(name, f"line {i}: coordinates must be finite, got {f[:4]}"))
+            raise PlanFormatError(named(name, f"line {i}: coordinates must be finite, got {f[:4]}"))
         cat = f[4]
         if not cat[0].isalpha():
-            raise PlanFormatError(_msg(name, f"line {i}: category {cat!r} is not a name (wall, door, bedroom, ...)"))
+            raise PlanFormatError(named(name, f"line {i}: category {cat!r} is not a name (wall, door, bedroom, ...)"))
         n += 1
         if cat == "wall":
             walls.append(xy)
@@ -243,11 +244,11 @@ def _parse(path: Path, name: str):
         elif cat not in _SKIPPED:
             boxes.append((cat, *xy))
     if n == 0:
-        raise PlanFormatError(_msg(name, "plan file has no elements (blank)"))
+        raise PlanFormatError(named(name, "plan file has no elements (blank)"))
     walls = np.array(walls, float).reshape(-1, 4)
     doors = np.array(doors, float).reshape(-1, 4)
     if not np.any(_lengths(walls) > 0):
-        raise PlanFormatError(_msg(name, "plan has no walls"))
+        raise PlanFormatError(named(name, "plan has no walls"))
     return walls, doors, boxes
 
 
@@ -548,8 +549,8 @@ def read_plan(path, *, resolution: float = 0.05, wall_thickness: float = WALL_TH
         raise ParameterError(f"door_width must be a length > 0 m, got {door_width!r}")
     margin = check_length("margin", margin)
     max_gap = check_length("max_gap", max_gap)
-    nook_area = _check_area("nook_area", nook_area)
-    home_area = _check_area("home_area", home_area)
+    nook_area = check_area("nook_area", nook_area)
+    home_area = check_area("home_area", home_area)
     if home_area <= 0:
         raise ParameterError(f"home_area must be an area > 0 m², got {home_area!r}")
     if scale is not None:
@@ -563,8 +564,8 @@ def read_plan(path, *, resolution: float = 0.05, wall_thickness: float = WALL_TH
         pts = walls_u.reshape(-1, 2)
         box = float(np.prod(pts.max(axis=0) - pts.min(axis=0)))
         if box <= 0:
-            raise PlanFormatError(_msg(name, "plan has no doors and its walls span no area: no scale "
-                                             "(give scale= in metres per plan unit)"))
+            raise PlanFormatError(named(name, "plan has no doors and its walls span no area: no scale "
+                                              "(give scale= in metres per plan unit)"))
         scale = math.sqrt(home_area / box)
         _log.info("%s: no doors: scaled so that its walls' bounding box is %g m² (%.4g m per unit)",
                   name, home_area, scale)
@@ -589,7 +590,7 @@ def _build(name, walls_u, doors_u, boxes_u, *, scale, res, th, margin, max_gap, 
     H = int(math.ceil((ext[1] + 2 * pad) / res))
     limit, why = cell_limit()
     if H * W > limit:
-        raise MapTooLargeError(_msg(name, f"plan would be {W} x {H} cells = {H * W:,} at {res} m, more than {why}"))
+        raise MapTooLargeError(named(name, f"plan would be {W} x {H} cells = {H * W:,} at {res} m, more than {why}"))
 
     def world(seg):
         out = np.empty_like(seg, dtype=float)
