@@ -26,8 +26,8 @@ from .._fast import label as _label
 from ..core.geometry import point_segment_distances
 from ..errors import MapError, MapFileError, MapTooLargeError, ParameterError, PlanFormatError, named
 from ..grid import FREE, OCCUPIED, UNKNOWN, OccupancyGrid, cell_limit
-from ..io.maps import check_resolution, save_map
-from ..io.metadata import check_file
+from ..io.maps import save_map
+from ..io.metadata import check_file, check_resolution
 from ..options import check_area, check_length
 
 __all__ = ["PlanDoor", "FloorPlan", "read_plan", "plan_grid", "ground_truth_problems", "ROOM_KINDS", "STORAGE_KINDS",

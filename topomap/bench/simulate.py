@@ -65,7 +65,8 @@ import numpy as np
 from ..core.geometry import point_segment_distances
 from ..errors import ParameterError
 from ..grid import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
-from ..io.maps import FREE_THRESH, OCCUPIED_THRESH, check_resolution
+from ..io.maps import FREE_THRESH, OCCUPIED_THRESH
+from ..io.metadata import check_resolution
 from ..options import CheckedOptions, check_area, option
 from .floorplan import FloorPlan
 

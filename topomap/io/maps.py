@@ -69,20 +69,6 @@ GRAY_OCCUPIED = 0
 GRAY_UNKNOWN = 205
 
 
-
-
-
-
-
-
-
-
-
-
-
-
-
-
 def classify_gray(gray, *, negate: bool = False, occupied_thresh: float = OCCUPIED_THRESH,
                   free_thresh: float = FREE_THRESH, mode: str = "trinary",
                   transparent=None) -> np.ndarray:
@@ -276,10 +262,6 @@ def _to_gray(name, img):
     if transparent is not None and not transparent.any():
         transparent = None
     return gray, transparent
-
-
-
-
 
 
 _PIL_LIMIT_LOCK = threading.Lock()
