@@ -1373,7 +1373,28 @@ def _open_image(path: Path):
 
 
 def read_gray(path) -> np.ndarray:
-    """Read an image of any Pillow mode as an (M, N) uint8 gray array (``convert("L")``)."""
+    """Read an image of any Pillow mode as 8-bit gray.
+
+    Parameters
+    ----------
+    path : str or Path
+        Any image Pillow reads.
+
+    Returns
+    -------
+    (M, N) ndarray of uint8
+        Pillow's ``convert("L")`` of the image; 16- and 32-bit gray values
+        clipped to 0..255.
+
+    Raises
+    ------
+    MapFileError
+        No such file, a directory, or unreadable.
+    MapError
+        Not an image Pillow reads.
+    MapTooLargeError
+        More than :func:`topomap.io.cell_limit` cells.
+    """
     path = Path(path)
     img = _open_image(path)
     if img.mode in ("I;16", "I;16B", "I;16L", "I"):
