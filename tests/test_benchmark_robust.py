@@ -10,7 +10,7 @@ from PIL import Image
 
 from topomap.bench.benchmark import run_benchmark
 from topomap.cli import main
-from topomap.bench.datasets import read_gray, read_label_image
+from topomap.io.export import read_gray, read_label_image
 from topomap.errors import MapTooLargeError
 
 from test_benchmark_paths import _labelled

@@ -27,8 +27,8 @@ import numpy as np
 
 from .errors import ParameterError
 
-__all__ = ["TopomapOptions", "PaperOptions", "RULES", "options_from_kwargs", "check_length",
-           "check_keywords"]
+__all__ = ["TopomapOptions", "PaperOptions", "CheckedOptions", "RULES", "options_from_kwargs", "option",
+           "check_length", "check_fraction", "check_area", "check_keywords"]
 
 #: Values of :attr:`TopomapOptions.rule`.
 RULES = ("oneflat", "either", "ep", "frac", "one")
@@ -49,7 +49,8 @@ def check_length(name: str, value, *, optional: bool = False) -> Optional[float]
     return m
 
 
-def _check_fraction(name: str, value) -> float:
+def check_fraction(name: str, value) -> float:
+    """``value`` as a float in ``[0, 1]``, else ParameterError naming ``name``."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
         raise ParameterError(f"{name} must be a number in [0, 1], got {value!r}")
     v = float(value)
@@ -72,7 +73,8 @@ def _check_ratio(name: str, value) -> float:
     return _check_nonnegative(name, value, "a number")
 
 
-def _check_area(name: str, value) -> float:
+def check_area(name: str, value) -> float:
+    """``value`` as a float area in m² (finite, >= 0), else ParameterError naming ``name``."""
     return _check_nonnegative(name, value, "an area in m²", " m²")
 
 
@@ -88,19 +90,36 @@ def _check_rule(name: str, value) -> str:
     return value
 
 
-_CHECKS = {"length": check_length, "fraction": _check_fraction, "ratio": _check_ratio, "area": _check_area,
+_check_fraction = check_fraction  # alias until the callers move (topomap.core.identity)
+
+_CHECKS = {"length": check_length, "fraction": check_fraction, "ratio": _check_ratio, "area": check_area,
            "bool": _check_bool, "rule": _check_rule,
            "optional length": lambda n, v: check_length(n, v, optional=True)}
 
 
-def _opt(default, kind: str):
-    """A dataclass field whose value is checked as ``kind`` (see ``_CHECKS``)."""
+def option(default, kind: str):
+    """A dataclass field of a :class:`CheckedOptions` class whose value is checked as ``kind``.
+
+    Parameters
+    ----------
+    default
+        The field's default value.
+    kind : {"length", "optional length", "fraction", "ratio", "area", "bool", "rule"}
+        The check: a length in metres (>= 0; "optional length" also lets None
+        through), a fraction in ``[0, 1]``, a ratio (a number >= 0), an area
+        in m² (>= 0), a bool, one of :data:`RULES`.
+
+    Returns
+    -------
+    dataclasses.Field
+    """
     return field(default=default, metadata={"kind": kind})
 
 
-class _Options:
-    """Validation shared by the option classes: every field is checked by the
-    checker its ``kind`` names and stored converted (float / bool / str)."""
+class CheckedOptions:
+    """Validation shared by the option classes (frozen dataclasses whose fields are made by
+    :func:`option`): every field is checked by the checker its ``kind`` names and stored converted
+    (float / bool / str)."""
 
     def __post_init__(self):
         for f in dataclasses.fields(self):
@@ -113,7 +132,7 @@ class _Options:
 
 
 @dataclass(frozen=True)
-class TopomapOptions(_Options):
+class TopomapOptions(CheckedOptions):
     """Options of topomap's default method (:func:`~topomap.core.segmentation.segment_topomap`).
 
     Attributes
@@ -425,52 +444,52 @@ class TopomapOptions(_Options):
         half a metre is wider than those and narrower than a door.
     """
 
-    erosion_radius: float = _opt(0.05, "length")
-    median_size: float = _opt(0.25, "length")
-    dilation_size: float = _opt(0.15, "length")
-    wall_band: float = _opt(0.5, "length")
-    min_occupied_branch: float = _opt(0.3, "length")
-    min_door_width: float = _opt(0.5, "length")
-    max_door_width: float = _opt(3.0, "length")
-    window: float = _opt(0.5, "length")
-    rise: Optional[float] = _opt(None, "optional length")
-    scan_rise: float = _opt(0.25, "length")
-    straight_walls: float = _opt(0.7, "fraction")
-    wall_cell: float = _opt(0.05, "length")
-    reach: float = _opt(1.5, "length")
-    protrusion_min: float = _opt(0.7, "fraction")
-    flat_min: float = _opt(0.45, "fraction")
-    rule: str = _opt("oneflat", "rule")
-    skeleton_cell: float = _opt(0.1, "length")
-    mouths: bool = _opt(True, "bool")
-    corridor_length: float = _opt(1.0, "length")
-    min_wall_length: float = _opt(1.0, "length")
-    facing: float = _opt(0.9, "ratio")
-    wall_gap: float = _opt(0.5, "length")
-    wide_opening: float = _opt(1.5, "length")
-    min_room_area: float = _opt(1.0, "area")
-    openings: bool = _opt(True, "bool")
-    beside_wall: float = _opt(1.0, "length")
-    alcove_depth: float = _opt(1.2, "length")
-    closet_depth: float = _opt(0.6, "length")
-    closet_behind: float = _opt(0.5, "length")
-    long_wall: float = _opt(4.0, "length")
-    wall_wander: float = _opt(0.2, "length")
-    face_gap: float = _opt(0.25, "length")
-    pillar_depth: float = _opt(0.5, "length")
-    frontier_post: float = _opt(0.1, "length")
-    partition_wall: float = _opt(1.5, "length")
-    partition_hits: float = _opt(0.2, "length")
-    partition_structure: float = _opt(2.0, "length")
-    furniture_size: Optional[float] = _opt(None, "optional length")
-    scan_furniture_size: float = _opt(3.0, "length")
-    plan_furniture_size: float = _opt(2.0, "length")
-    wall_thickness: float = _opt(0.5, "length")
-    prior_post_shift: float = _opt(0.15, "length")
-    prior_changed_area: float = _opt(1.0, "area")
-    outside_enclosure: float = _opt(0.3, "fraction")
-    open_unknown_area: float = _opt(1.0, "area")
-    enclosure_window: float = _opt(0.5, "length")
+    erosion_radius: float = option(0.05, "length")
+    median_size: float = option(0.25, "length")
+    dilation_size: float = option(0.15, "length")
+    wall_band: float = option(0.5, "length")
+    min_occupied_branch: float = option(0.3, "length")
+    min_door_width: float = option(0.5, "length")
+    max_door_width: float = option(3.0, "length")
+    window: float = option(0.5, "length")
+    rise: Optional[float] = option(None, "optional length")
+    scan_rise: float = option(0.25, "length")
+    straight_walls: float = option(0.7, "fraction")
+    wall_cell: float = option(0.05, "length")
+    reach: float = option(1.5, "length")
+    protrusion_min: float = option(0.7, "fraction")
+    flat_min: float = option(0.45, "fraction")
+    rule: str = option("oneflat", "rule")
+    skeleton_cell: float = option(0.1, "length")
+    mouths: bool = option(True, "bool")
+    corridor_length: float = option(1.0, "length")
+    min_wall_length: float = option(1.0, "length")
+    facing: float = option(0.9, "ratio")
+    wall_gap: float = option(0.5, "length")
+    wide_opening: float = option(1.5, "length")
+    min_room_area: float = option(1.0, "area")
+    openings: bool = option(True, "bool")
+    beside_wall: float = option(1.0, "length")
+    alcove_depth: float = option(1.2, "length")
+    closet_depth: float = option(0.6, "length")
+    closet_behind: float = option(0.5, "length")
+    long_wall: float = option(4.0, "length")
+    wall_wander: float = option(0.2, "length")
+    face_gap: float = option(0.25, "length")
+    pillar_depth: float = option(0.5, "length")
+    frontier_post: float = option(0.1, "length")
+    partition_wall: float = option(1.5, "length")
+    partition_hits: float = option(0.2, "length")
+    partition_structure: float = option(2.0, "length")
+    furniture_size: Optional[float] = option(None, "optional length")
+    scan_furniture_size: float = option(3.0, "length")
+    plan_furniture_size: float = option(2.0, "length")
+    wall_thickness: float = option(0.5, "length")
+    prior_post_shift: float = option(0.15, "length")
+    prior_changed_area: float = option(1.0, "area")
+    outside_enclosure: float = option(0.3, "fraction")
+    open_unknown_area: float = option(1.0, "area")
+    enclosure_window: float = option(0.5, "length")
 
     def scanned(self, straight: float) -> bool:
         """Whether a map whose wall faces lie on straight lines at a share of
@@ -494,7 +513,7 @@ class TopomapOptions(_Options):
 
 
 @dataclass(frozen=True)
-class PaperOptions(_Options):
+class PaperOptions(CheckedOptions):
     """Options of the paper's method (:func:`~topomap.core.segmentation.segment_paper`).
 
     Attributes
@@ -527,13 +546,13 @@ class PaperOptions(_Options):
         the widest door.
     """
 
-    erosion_radius: float = _opt(0.10, "length")
-    median_size: float = _opt(0.25, "length")
-    dilation_size: float = _opt(0.15, "length")
-    wall_band: float = _opt(0.5, "length")
-    min_free_branch: float = _opt(0.5, "length")
-    min_occupied_branch: float = _opt(1.0, "length")
-    max_door_search: float = _opt(3.0, "length")
+    erosion_radius: float = option(0.10, "length")
+    median_size: float = option(0.25, "length")
+    dilation_size: float = option(0.15, "length")
+    wall_band: float = option(0.5, "length")
+    min_free_branch: float = option(0.5, "length")
+    min_occupied_branch: float = option(1.0, "length")
+    max_door_search: float = option(3.0, "length")
 
     def resolved(self, resolution: float) -> "PaperOptions":
         """These options (none depends on the map)."""

@@ -41,19 +41,22 @@ evaluation does.
 from __future__ import annotations
 
 import fnmatch
+import hashlib
 import json
 import math
 import os
-import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterable, Optional
 
 import numpy as np
 
-from ..errors import (BenchmarkNotFoundError, MapError, MapFileError, MapTooLargeError, ParameterError,
-                     first_line)
-from ..io.maps import FREE_GRAY  # noqa: F401  (re-exported: the benchmark's white level)
+from ..core.geometry import line_pixels
+from ..errors import BenchmarkNotFoundError, MapError, MapFileError, ParameterError, first_line
+from ..io.export import read_gray, read_label_image  # re-exported: their home was here
+from ..io.maps import FREE_GRAY, load_map  # FREE_GRAY re-exported: the benchmark's white level
+from .evaluation import gt_rooms_from_image
+from .simulate import shown_doors, shown_rooms
 
 __all__ = [
     "BENCHMARK_RESOLUTION",
@@ -167,8 +170,6 @@ class BenchmarkMap:
         if self.gt_rooms is None:
             if self.gt_gray is None:
                 raise ParameterError(f"{self.gt_path}: a benchmark map needs gt_gray or gt_rooms")
-            from .evaluation import gt_rooms_from_image
-
             object.__setattr__(self, "gt_rooms", gt_rooms_from_image(self.gt_gray))
 
     def load(self):
@@ -178,8 +179,6 @@ class BenchmarkMap:
         -------
         topomap.io.OccupancyGrid
         """
-        from ..io.maps import load_map
-
         return load_map(self.load_path, **self.load_kwargs)
 
     @property
@@ -214,77 +213,6 @@ class LabeledMap:
     label_path: Path
     map_gray: np.ndarray = field(repr=False)
     labels: np.ndarray = field(repr=False)
-
-
-def _open(path: Path):
-    from PIL import Image, UnidentifiedImageError
-
-    if not path.exists():
-        raise MapFileError(f"{path}: file does not exist")
-    if path.is_dir():
-        raise MapFileError(f"{path}: is a directory, not an image")
-    try:
-        with warnings.catch_warnings():  # the size is checked against MAX_CELLS below
-            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
-            img = Image.open(path)
-        from ..grid import check_image_size
-
-        check_image_size(str(path), img.size[1], img.size[0])
-        img.load()
-    except Image.DecompressionBombError as exc:
-        raise MapTooLargeError(f"{path}: image too large to decode ({first_line(exc)})") from None
-    except UnidentifiedImageError as exc:
-        raise MapError(f"{path}: not a readable image ({exc})") from None
-    except OSError as exc:
-        raise MapFileError(f"{path}: cannot be read ({exc})") from None
-    return img
-
-
-def read_gray(path) -> np.ndarray:
-    """Read an image of any Pillow mode as an (M, N) uint8 gray array (``convert("L")``)."""
-    path = Path(path)
-    img = _open(path)
-    if img.mode in ("I;16", "I;16B", "I;16L", "I"):
-        arr = np.asarray(img)
-        return np.clip(arr, 0, 255).astype(np.uint8)
-    return np.asarray(img.convert("L"), dtype=np.uint8).copy()
-
-
-def read_label_image(path) -> np.ndarray:
-    """Read an integer room-label image.
-
-    Parameters
-    ----------
-    path : str or Path
-        A PNG (or other Pillow-readable image). Gray images (8-bit ``L``,
-        16-bit ``I;16``, 32-bit ``I``) and palette images (``P``, the palette
-        index is the label) give their values directly; ``LA`` uses the gray
-        channel; colour images (``RGB``/``RGBA``) get one label per distinct
-        colour, numbered 1.. in order of the packed colour value, with black
-        (and fully transparent pixels) as 0.
-
-    Returns
-    -------
-    (M, N) ndarray of int32
-        0 = no room.
-    """
-    path = Path(path)
-    img = _open(path)
-    mode = img.mode
-    if mode in ("L", "P", "I", "I;16", "I;16B", "I;16L", "1"):
-        return np.asarray(img).astype(np.int32)
-    if mode == "LA":
-        return np.asarray(img)[..., 0].astype(np.int32)
-    if mode in ("RGB", "RGBA"):
-        arr = np.asarray(img)
-        rgb = arr[..., :3].astype(np.int64)
-        key = (rgb[..., 0] << 16) | (rgb[..., 1] << 8) | rgb[..., 2]
-        if mode == "RGBA":
-            key = np.where(arr[..., 3] == 0, 0, key)
-        uniq, inv = np.unique(key, return_inverse=True)
-        ids = np.arange(uniq.size, dtype=np.int32) + (0 if uniq[0] == 0 else 1)
-        return ids[inv.reshape(key.shape)]
-    raise MapError(f"{path}: unsupported image mode {mode!r} for a label image")
 
 
 def load_benchmark(directory, *, variant: str = "unfurnished",
@@ -556,8 +484,6 @@ def door_cells(doors, grid) -> list:
         The cells ``(row, col)`` of the digital line from ``p1`` to ``p2``
         (:func:`topomap.core.geometry.line_pixels`), one array per door.
     """
-    from ..core.geometry import line_pixels
-
     out = []
     for d in doors:
         (x1, y1), (x2, y2) = d["p1"], d["p2"]
@@ -592,8 +518,6 @@ def plan_split(name) -> str:
     str
         ``"dev"`` or ``"held-out"`` (:data:`SPLITS`).
     """
-    import hashlib
-
     if not isinstance(name, (str, os.PathLike)):
         raise ParameterError(f"<plan name>: expected a plan name (str), got {name!r}")
     stem = Path(name).name
@@ -672,9 +596,6 @@ def load_simulated(directory, *, variant: str = "scan", names=None) -> list:
                            f"{pgm.name} shape {map_gray.shape}")
         doors = read_doors(case / _CASE_DOORS if derive else doors_file)
         if derive:  # a case written before the scan had its own ground truth
-            from ..io.maps import load_map
-            from .simulate import shown_doors, shown_rooms
-
             grid = load_map(yml)
             labels = shown_rooms(labels, grid.free, resolution=grid.resolution)
             doors = tuple(shown_doors(doors, labels))

@@ -23,14 +23,15 @@ from pathlib import Path
 import numpy as np
 
 from .._fast import label as _label
-from ..errors import MapError, MapFileError, MapTooLargeError, ParameterError, PlanFormatError
 from ..core.geometry import point_segment_distances
-from ..errors import named as _msg
+from ..errors import MapError, MapFileError, MapTooLargeError, ParameterError, PlanFormatError, named
 from ..grid import FREE, OCCUPIED, UNKNOWN, OccupancyGrid, cell_limit
-from ..io.maps import _check_file, check_resolution, save_map
-from ..options import _check_area, check_length
+from ..io.maps import save_map
+from ..io.metadata import check_file, check_resolution
+from ..options import check_area, check_length
 
-__all__ = ["PlanDoor", "FloorPlan", "read_plan", "plan_grid", "ground_truth_problems", "ROOM_KINDS", "STORAGE_KINDS", "FIXTURE_KINDS"]
+__all__ = ["PlanDoor", "FloorPlan", "read_plan", "plan_grid", "ground_truth_problems", "ROOM_KINDS", "STORAGE_KINDS",
+           "FIXTURE_KINDS"]
 
 _log = logging.getLogger(__name__)
 
@@ -205,7 +206,7 @@ def plan_grid(plan: FloorPlan) -> OccupancyGrid:
 def _parse(path: Path, name: str):
     """Walls (n, 4), doors (m, 4) and boxes ``[(category, x1, y1, x2, y2)]`` in plan units."""
     try:
-        _check_file(name, path, what="plan file")
+        check_file(name, path, what="plan file")
     except PlanFormatError:
         raise
     except MapError as exc:  # empty file
@@ -213,9 +214,9 @@ def _parse(path: Path, name: str):
     try:
         text = path.read_bytes().decode("utf-8")
     except UnicodeDecodeError as exc:
-        raise PlanFormatError(_msg(name, f"not a text plan file (not UTF-8 at byte {exc.start})")) from None
+        raise PlanFormatError(named(name, f"not a text plan file (not UTF-8 at byte {exc.start})")) from None
     except OSError as exc:
-        raise MapFileError(_msg(name, f"cannot read plan file: {exc.strerror or exc}")) from None
+        raise MapFileError(named(name, f"cannot read plan file: {exc.strerror or exc}")) from None
     walls, doors, boxes = [], [], []
     n = 0
     for i, line in enumerate(text.splitlines(), 1):
@@ -223,18 +224,18 @@ def _parse(path: Path, name: str):
         if not f:
             continue
         if not 5 <= len(f) <= 7:
-            raise PlanFormatError(_msg(name, f"line {i}: expected 'x1 y1 x2 y2 category [a b]' "
-                                             f"(5 to 7 fields), got {len(f)} fields: {line.strip()!r}"))
+            raise PlanFormatError(named(name, f"line {i}: expected 'x1 y1 x2 y2 category [a b]' "
+                                              f"(5 to 7 fields), got {len(f)} fields: {line.strip()!r}"))
         try:
             xy = [float(v) for v in f[:4]]
         except ValueError:
             bad = next(v for v in f[:4] if not _is_number(v))
-            raise PlanFormatError(_msg(name, f"line {i}: coordinate {bad!r} is not a number")) from None
+            raise PlanFormatError(named(name, f"line {i}: coordinate {bad!r} is not a number")) from None
         if not all(math.isfinite(v) for v in xy):
-            raise PlanFormatError(_msg(name, f"line {i}: coordinates must be finite, got {f[:4]}"))
+            raise PlanFormatError(named(name, f"line {i}: coordinates must be finite, got {f[:4]}"))
         cat = f[4]
         if not cat[0].isalpha():
-            raise PlanFormatError(_msg(name, f"line {i}: category {cat!r} is not a name (wall, door, bedroom, ...)"))
+            raise PlanFormatError(named(name, f"line {i}: category {cat!r} is not a name (wall, door, bedroom, ...)"))
         n += 1
         if cat == "wall":
             walls.append(xy)
@@ -243,11 +244,11 @@ def _parse(path: Path, name: str):
         elif cat not in _SKIPPED:
             boxes.append((cat, *xy))
     if n == 0:
-        raise PlanFormatError(_msg(name, "plan file has no elements (blank)"))
+        raise PlanFormatError(named(name, "plan file has no elements (blank)"))
     walls = np.array(walls, float).reshape(-1, 4)
     doors = np.array(doors, float).reshape(-1, 4)
     if not np.any(_lengths(walls) > 0):
-        raise PlanFormatError(_msg(name, "plan has no walls"))
+        raise PlanFormatError(named(name, "plan has no walls"))
     return walls, doors, boxes
 
 
@@ -548,8 +549,8 @@ def read_plan(path, *, resolution: float = 0.05, wall_thickness: float = WALL_TH
         raise ParameterError(f"door_width must be a length > 0 m, got {door_width!r}")
     margin = check_length("margin", margin)
     max_gap = check_length("max_gap", max_gap)
-    nook_area = _check_area("nook_area", nook_area)
-    home_area = _check_area("home_area", home_area)
+    nook_area = check_area("nook_area", nook_area)
+    home_area = check_area("home_area", home_area)
     if home_area <= 0:
         raise ParameterError(f"home_area must be an area > 0 m², got {home_area!r}")
     if scale is not None:
@@ -563,8 +564,8 @@ def read_plan(path, *, resolution: float = 0.05, wall_thickness: float = WALL_TH
         pts = walls_u.reshape(-1, 2)
         box = float(np.prod(pts.max(axis=0) - pts.min(axis=0)))
         if box <= 0:
-            raise PlanFormatError(_msg(name, "plan has no doors and its walls span no area: no scale "
-                                             "(give scale= in metres per plan unit)"))
+            raise PlanFormatError(named(name, "plan has no doors and its walls span no area: no scale "
+                                              "(give scale= in metres per plan unit)"))
         scale = math.sqrt(home_area / box)
         _log.info("%s: no doors: scaled so that its walls' bounding box is %g m² (%.4g m per unit)",
                   name, home_area, scale)
@@ -579,8 +580,72 @@ def read_plan(path, *, resolution: float = 0.05, wall_thickness: float = WALL_TH
                   max_gap=max_gap, nook_area=nook_area, quirks=quirks)
 
 
+@dataclass(frozen=True)
+class _Frame:
+    """Where a plan lies on its grid: plan units -> world metres (x right, y up; the plan's y runs
+    down the image) -> fractional grid cells ``(row, col)``."""
+
+    umin: float   # the plan's smallest x (plan units)
+    vmax: float   # the plan's largest y (plan units)
+    scale: float  # metres per plan unit
+    pad: float    # metres between the plan's extent and the border of the grid
+    res: float    # metres per cell
+    shape: tuple  # (rows, cols) of the grid
+
+    def world(self, seg: np.ndarray) -> np.ndarray:
+        """Plan segments (k, 4) ``x1 y1 x2 y2`` in world metres."""
+        out = np.empty_like(seg, dtype=float)
+        out[:, 0::2] = (seg[:, 0::2] - self.umin) * self.scale + self.pad
+        out[:, 1::2] = (self.vmax - seg[:, 1::2]) * self.scale + self.pad
+        return out
+
+    def px(self, xy) -> np.ndarray:
+        """World ``(x, y)`` as fractional ``(row, col)``."""
+        return np.array([self.shape[0] - xy[1] / self.res - 0.5, xy[0] / self.res - 0.5])
+
+    def world_box(self, xy) -> tuple:
+        """Plan box ``(x1, y1, x2, y2)`` in world metres, ``x1 <= x2``, ``y1 <= y2``."""
+        x1, x2 = sorted(((xy[0] - self.umin) * self.scale + self.pad, (xy[2] - self.umin) * self.scale + self.pad))
+        y1, y2 = sorted(((self.vmax - xy[1]) * self.scale + self.pad, (self.vmax - xy[3]) * self.scale + self.pad))
+        return x1, y1, x2, y2
+
+
 def _build(name, walls_u, doors_u, boxes_u, *, scale, res, th, margin, max_gap, nook_area, quirks):
-    # ---- world metres: x right, y up (the plan's y runs down the image)
+    """The :class:`FloorPlan` of a parsed plan (walls, doors and boxes in plan units, ``scale`` metres
+    per unit); ``quirks`` gets the counts of what was mended (see :func:`read_plan`)."""
+    frame = _plan_frame(name, walls_u, doors_u, scale=scale, res=res, th=th, margin=margin)
+    walls, doors = _mend(frame, walls_u, doors_u, th, max_gap, quirks)
+    half = th / 2 / res
+    closed = _closed_walls(frame, walls, doors, half)
+    opened, walls_open = _open_doors(frame, walls, doors, closed, th, half)
+    outside, raw, is_out = _outside(closed)
+    inside, room_kept, raw = _home(walls_open, outside, raw, is_out, res, quirks)
+    door_sides = _door_sides(frame, opened, doors, raw, outside, closed)
+    box_room = [_box_label(raw, frame, b[1:]) for b in boxes_u]
+    area = np.bincount(raw.ravel(), minlength=len(is_out)) * res * res
+    storage = _storage_rooms(room_kept, area, boxes_u, box_room, nook_area)
+    parent = _storage_parents(storage, area, door_sides, doors)
+    quirks["closets_merged"] = len(parent)
+    merged, final, rooms = _room_numbers(parent, raw, len(is_out) - 1)
+    plan_doors, dropped = _door_truth(opened, door_sides, doors, merged, final, rooms)
+    quirks["doors_dropped"] += dropped
+    _assign_loose_cells(rooms, inside, quirks)
+    kinds, objects = _kinds_and_objects(frame, boxes_u, box_room, merged, final)
+    outer = walls_open & _dilate(outside, _SQUARE)
+    plan = FloorPlan(name=name, resolution=res, origin=(0.0, 0.0, 0.0), walls=walls_open, inside=inside,
+                     rooms=rooms.astype(np.uint16), doors=tuple(plan_doors), kinds=kinds, outer_walls=outer,
+                     objects=tuple(objects), scale=float(scale), quirks=quirks)
+    H, W = frame.shape
+    _log.debug("%s: %d x %d cells, %.1f m², %d rooms, %d doors, %s", name, W, H, plan.area, len(kinds),
+               len(plan_doors), quirks)
+    return plan
+
+
+def _plan_frame(name, walls_u, doors_u, *, scale, res, th, margin) -> _Frame:
+    """The :class:`_Frame` of a plan: its extent with ``margin``, half a wall and a cell around it.
+
+    Raises MapTooLargeError when the grid would have more than :func:`cell_limit` cells.
+    """
     pts = np.concatenate([walls_u.reshape(-1, 2), doors_u.reshape(-1, 2)])
     umin, vmax = pts[:, 0].min(), pts[:, 1].max()
     ext = (pts.max(axis=0) - pts.min(axis=0)) * scale
@@ -589,43 +654,46 @@ def _build(name, walls_u, doors_u, boxes_u, *, scale, res, th, margin, max_gap, 
     H = int(math.ceil((ext[1] + 2 * pad) / res))
     limit, why = cell_limit()
     if H * W > limit:
-        raise MapTooLargeError(_msg(name, f"plan would be {W} x {H} cells = {H * W:,} at {res} m, more than {why}"))
+        raise MapTooLargeError(named(name, f"plan would be {W} x {H} cells = {H * W:,} at {res} m, more than {why}"))
+    return _Frame(umin, vmax, scale, pad, res, (H, W))
 
-    def world(seg):
-        out = np.empty_like(seg, dtype=float)
-        out[:, 0::2] = (seg[:, 0::2] - umin) * scale + pad
-        out[:, 1::2] = (vmax - seg[:, 1::2]) * scale + pad
-        return out
 
-    def px(xy):  # world (x, y) -> fractional (row, col)
-        return np.array([H - xy[1] / res - 0.5, xy[0] / res - 0.5])
-
-    walls, quirks["zero_walls"], quirks["duplicate_walls"] = _dedupe(world(walls_u))
-    doors, quirks["doors_snapped"], quirks["doors_floating"] = _snap_doors(world(doors_u), walls, DOOR_SNAP)
+def _mend(frame: _Frame, walls_u, doors_u, th, max_gap, quirks) -> tuple:
+    """``(walls, doors)`` (k, 4) in world metres, mended: zero-length and duplicate walls out, doors
+    moved onto their walls, gaps between wall ends closed (the bridges added to the walls); the
+    counts in ``quirks``."""
+    walls, quirks["zero_walls"], quirks["duplicate_walls"] = _dedupe(frame.world(walls_u))
+    doors, quirks["doors_snapped"], quirks["doors_floating"] = _snap_doors(frame.world(doors_u), walls, DOOR_SNAP)
     walls, bridges, quirks["gaps_extended"], quirks["gaps_bridged"] = _close_gaps(walls, doors, th, max_gap)
-    walls = np.concatenate([walls, bridges])
+    return np.concatenate([walls, bridges]), doors
 
-    # ---- the walls, doors closed
-    half = th / 2 / res
-    closed = np.zeros((H, W), bool)
+
+def _closed_walls(frame: _Frame, walls, doors, half) -> np.ndarray:
+    """The wall cells (bool) with every door drawn as a wall, ``half`` cells either side of its line."""
+    closed = np.zeros(frame.shape, bool)
     for w in np.concatenate([walls, doors]):
-        _stamp(closed, px(w[:2]), px(w[2:]), half)
+        _stamp(closed, frame.px(w[:2]), frame.px(w[2:]), half)
+    return closed
 
-    # ---- open the doors: the rectangle over each door, less the other walls that meet it
+
+def _open_doors(frame: _Frame, walls, doors, closed, th, half) -> tuple:
+    """``(opened, walls_open)``: per door ``(box, cells, signed side)`` of the cells it opens (the
+    rectangle over it, less the other walls that meet it), and the wall cells with the doors open."""
+    px = frame.px
     a_w, b_w = walls[:, :2], walls[:, 2:]
     uw = (b_w - a_w) / _lengths(walls)[:, None]
     lo = np.minimum(a_w, b_w) - th
     hi = np.maximum(a_w, b_w) + th
-    opened = []   # (box, cells, signed side) per door
-    is_open = np.zeros((H, W), bool)
+    opened = []
+    is_open = np.zeros(frame.shape, bool)
     for d in doors:
         p, q = px(d[:2]), px(d[2:])
         ud = (d[2:] - d[:2]) / math.hypot(*(d[2:] - d[:2]))
         # the walls the door opens: along its line, or doubled beside it closer than a wall thickness
         off = np.maximum(np.abs(_cross(d[:2] - a_w, uw)), np.abs(_cross(d[2:] - a_w, uw)))
         host = (np.abs(_cross(uw, ud)) < 0.02) & (off <= th)
-        cut_half = (max(float(off[host].max()), 0.0) if host.any() else 0.0) / res + half + 0.5
-        box = _box((H, W), p, q, cut_half)
+        cut_half = (max(float(off[host].max()), 0.0) if host.any() else 0.0) / frame.res + half + 0.5
+        box = _box(frame.shape, p, q, cut_half)
         r0, r1, c0, c1 = box
         cells, side = _rect(box, p, q, cut_half)
         dlo, dhi = np.minimum(d[:2], d[2:]) - th, np.maximum(d[:2], d[2:]) + th
@@ -635,18 +703,27 @@ def _build(name, walls_u, doors_u, boxes_u, *, scale, res, th, margin, max_gap, 
         cells &= closed[r0:r1, c0:c1]
         is_open[r0:r1, c0:c1] |= cells
         opened.append((box, cells, side))
-    walls_open = closed & ~is_open
+    return opened, closed & ~is_open
 
-    # ---- outside, rooms with the doors closed
+
+def _outside(closed) -> tuple:
+    """``(outside, raw, is_out)`` with the doors closed: the free cells joined to the border of the
+    grid (bool), the labels of the 4-connected free regions (0 outside), and which labels are outside
+    (bool, one per label and 0)."""
     lab, n = _label(~closed, 4)
     border = np.unique(np.concatenate([lab[0], lab[-1], lab[:, 0], lab[:, -1]]))
     is_out = np.zeros(n + 1, bool)
     is_out[border] = True
     is_out[0] = False
     outside = is_out[lab]
-    raw = np.where(outside, 0, lab)
+    return outside, np.where(outside, 0, lab), is_out
 
-    # ---- the home: the pieces joined by open doors; closed spaces and small separate pieces are not in it
+
+def _home(walls_open, outside, raw, is_out, res, quirks) -> tuple:
+    """``(inside, room_kept, raw)``: the home is the largest piece the open doors join, and every
+    other piece of at least :data:`MIN_PART_AREA`; closed spaces and smaller pieces are not in it.
+    ``inside`` its cells, ``room_kept`` which raw labels are in it, ``raw`` with the others 0; the
+    counts in ``quirks``."""
     parts, n_parts = _label(~walls_open & ~outside, 4)
     part_area = np.bincount(parts.ravel(), minlength=n_parts + 1) * res * res
     part_area[0] = 0
@@ -656,19 +733,24 @@ def _build(name, walls_u, doors_u, boxes_u, *, scale, res, th, margin, max_gap, 
         keep_part |= part_area >= MIN_PART_AREA
         keep_part[0] = False
     inside = keep_part[parts]
-    room_part = np.zeros(n + 1, np.int64)
+    room_part = np.zeros(len(is_out), np.int64)
     room_part[raw.ravel()] = parts.ravel()
     room_kept = keep_part[room_part]
     room_kept[0] = False
     room_kept &= ~is_out
     quirks["closed_spaces"] = int(np.count_nonzero(~keep_part[1:]))
     quirks["parts"] = int(np.count_nonzero(keep_part))
-    raw = np.where(room_kept[raw], raw, 0)
+    return inside, room_kept, np.where(room_kept[raw], raw, 0)
 
-    # ---- each door's rooms: the labels just beyond its cells, either side of its line
+
+def _door_sides(frame: _Frame, opened, doors, raw, outside, closed) -> list:
+    """Per door ``(room on its positive side, room on its negative side, ring)``: the most common raw
+    label just beyond its cells on either side of its line (0 the outside, -1 none), and ``ring``
+    ``(rows, cols, on the positive side, labels)`` of those cells beyond it."""
+    H, W = frame.shape
     door_sides = []
     for (box, cells, side), d in zip(opened, doors):
-        segment = (px(d[:2]), px(d[2:]))
+        segment = (frame.px(d[:2]), frame.px(d[2:]))
         r0, r1, c0, c1 = box
         g0, g1, h0, h1 = max(r0 - 1, 0), min(r1 + 1, H), max(c0 - 1, 0), min(c1 + 1, W)
         grown = np.zeros((g1 - g0, h1 - h0), bool)
@@ -680,12 +762,14 @@ def _build(name, walls_u, doors_u, boxes_u, *, scale, res, th, margin, max_gap, 
         outs = outside[g0:g1, h0:h1][rr, cc]
         vals = np.where(outs, 0, vals)
         door_sides.append((_mode(vals[s >= 0]), _mode(vals[s < 0]), (rr + g0, cc + h0, s >= 0, vals)))
+    return door_sides
 
-    # ---- closets and nooks join the room they open into
-    area = np.bincount(raw.ravel(), minlength=n + 1) * res * res
-    box_room = [_box_label(raw, px, b[1:], scale, umin, vmax, pad, res) for b in boxes_u]
+
+def _storage_rooms(room_kept, area, boxes_u, box_room, nook_area) -> set:
+    """Raw labels of the rooms that join the room they open into: those whose label boxes are all
+    storage (:data:`STORAGE_KINDS`), and unlabelled nooks (smaller than ``nook_area`` m², no fixture)."""
     kinds_raw = {}
-    fixture = np.zeros(n + 1, bool)
+    fixture = np.zeros(len(room_kept), bool)
     for (cat, *_), k in zip(boxes_u, box_room):
         if k <= 0:
             continue
@@ -693,12 +777,17 @@ def _build(name, walls_u, doors_u, boxes_u, *, scale, res, th, margin, max_gap, 
             kinds_raw.setdefault(k, []).append(cat)
         elif cat in FIXTURE_KINDS:
             fixture[k] = True
-    rooms_ids = np.flatnonzero(room_kept)
     storage = set()
-    for k in rooms_ids:
+    for k in np.flatnonzero(room_kept):
         ks = kinds_raw.get(int(k), [])
         if (ks and all(c in STORAGE_KINDS for c in ks)) or (not ks and not fixture[k] and area[k] < nook_area):
             storage.add(int(k))
+    return storage
+
+
+def _storage_parents(storage: set, area, door_sides, doors) -> dict:
+    """Raw label of each storage room -> the room it joins: of the rooms its doors lead into, the one
+    of the widest doors, then the largest (a storage room only into another that joins a room)."""
     widths = {}
     for (pos, neg, _), d in zip(door_sides, doors):
         if pos > 0 and neg > 0 and pos != neg:
@@ -715,8 +804,13 @@ def _build(name, walls_u, doors_u, boxes_u, *, scale, res, th, margin, max_gap, 
             if cand:
                 parent[k] = max(cand)[3]
                 changed = True
-    quirks["closets_merged"] = len(parent)
+    return parent
 
+
+def _room_numbers(parent: dict, raw, n: int) -> tuple:
+    """``(merged, final, rooms)``: raw label (1..n) -> the raw label of the room it joins
+    (``parent`` followed to its end), that label -> room number 1..K in raster order of each room's
+    first cell (0 for none), and the image of the room numbers."""
     def root(k):
         while k in parent:
             k = parent[k]
@@ -726,17 +820,19 @@ def _build(name, walls_u, doors_u, boxes_u, *, scale, res, th, margin, max_gap, 
     for k in parent:
         merged[k] = root(k)
     merged[0] = 0
-    # numbered 1..K in raster order of each room's first cell
     lab2 = merged[raw]
-    flat = lab2.ravel()
-    ids, first = np.unique(flat, return_index=True)
+    ids, first = np.unique(lab2.ravel(), return_index=True)
     order = ids[ids > 0][np.argsort(first[ids > 0])]
     final = np.zeros(n + 1, np.int64)
     final[order] = np.arange(1, order.size + 1)
-    rooms = final[lab2]
-    K = int(order.size)
+    return merged, final, final[lab2]
 
-    # ---- door cells to the rooms either side; the doors' ground truth
+
+def _door_truth(opened, door_sides, doors, merged, final, rooms) -> tuple:
+    """``(plan doors, how many dropped)``: a :class:`PlanDoor` per door with a room on either side
+    (the others are dropped); each door cell of ``rooms`` set to the room of the nearest cell beside
+    the door on its side of the line (on the other side when its own is the outside): a door may run
+    past several rooms."""
     plan_doors = []
     dropped = 0
     for (box, cells, side), (pos, neg, ring), d in zip(opened, door_sides, doors):
@@ -745,8 +841,6 @@ def _build(name, walls_u, doors_u, boxes_u, *, scale, res, th, margin, max_gap, 
         if fp == 0 and fn == 0:
             dropped += 1
             continue
-        # each door cell to the room of the nearest cell beside the door on its side of the line
-        # (on the other side when its own is the outside): a door may run past several rooms
         r0, r1, c0, c1 = box
         ring_r, ring_c, ring_pos, ring_lab = ring
         ring_lab = final[merged[ring_lab]]
@@ -759,41 +853,41 @@ def _build(name, walls_u, doors_u, boxes_u, *, scale, res, th, margin, max_gap, 
         plan_doors.append(PlanDoor(p1=(float(d[0]), float(d[1])), p2=(float(d[2]), float(d[3])),
                                    rooms=tuple(sorted((int(fp), int(fn)))),
                                    width=float(math.hypot(d[2] - d[0], d[3] - d[1]))))
-    quirks["doors_dropped"] += dropped
+    return plan_doors, dropped
+
+
+def _assign_loose_cells(rooms, inside, quirks) -> None:
+    """``rooms`` 0 outside the home, and its door cells beside no room of their own given the nearest
+    room; their count in ``quirks``."""
     rooms[~inside] = 0
     loose = inside & (rooms == 0)
     quirks["cells_unassigned"] = int(np.count_nonzero(loose))
-    if loose.any():  # door cells beside no room of their own: to the nearest room
-        from scipy import ndimage as ndi
+    if loose.any():
+        from scipy import ndimage as ndi  # scipy only for the plans that have such cells
+
         idx = ndi.distance_transform_edt(rooms == 0, return_distances=False, return_indices=True)
         rooms[loose] = rooms[idx[0][loose], idx[1][loose]]
 
-    kinds = {k: [] for k in range(1, K + 1)}
+
+def _kinds_and_objects(frame: _Frame, boxes_u, box_room, merged, final) -> tuple:
+    """``(kinds, objects)``: room number -> the kinds of its label boxes (see :class:`FloorPlan`), and
+    the object boxes ``(kind, x1, y1, x2, y2)`` in world metres."""
+    kinds = {k: [] for k in range(1, int(final.max(initial=0)) + 1)}
     objects = []
     for (cat, *xy), k in zip(boxes_u, box_room):
         if cat in ROOM_KINDS:
             if k > 0 and final[merged[k]] > 0:
                 kinds[int(final[merged[k]])].append(cat)
         else:
-            x1, x2 = sorted(((xy[0] - umin) * scale + pad, (xy[2] - umin) * scale + pad))
-            y1, y2 = sorted(((vmax - xy[1]) * scale + pad, (vmax - xy[3]) * scale + pad))
+            x1, y1, x2, y2 = frame.world_box(xy)
             objects.append((cat, float(x1), float(y1), float(x2), float(y2)))
-    kinds = {k: tuple(v) for k, v in kinds.items()}
-
-    outer = walls_open & _dilate(outside, _SQUARE)
-
-    plan = FloorPlan(name=name, resolution=res, origin=(0.0, 0.0, 0.0), walls=walls_open, inside=inside,
-                     rooms=rooms.astype(np.uint16), doors=tuple(plan_doors), kinds=kinds, outer_walls=outer,
-                     objects=tuple(objects), scale=float(scale), quirks=quirks)
-    _log.debug("%s: %d x %d cells, %.1f m², %d rooms, %d doors, %s", name, W, H, plan.area, K,
-               len(plan_doors), quirks)
-    return plan
+    return {k: tuple(v) for k, v in kinds.items()}, objects
 
 
-def _box_label(raw, px, xy, scale, umin, vmax, pad, res):
+def _box_label(raw, frame: _Frame, xy):
     """Raw room label of a label box: the cell under its centre, else the most common label in it."""
-    x1, x2 = sorted(((xy[0] - umin) * scale + pad, (xy[2] - umin) * scale + pad))
-    y1, y2 = sorted(((vmax - xy[1]) * scale + pad, (vmax - xy[3]) * scale + pad))
+    x1, y1, x2, y2 = frame.world_box(xy)
+    px = frame.px
     H, W = raw.shape
     r, c = px(((x1 + x2) / 2, (y1 + y2) / 2))
     r, c = int(round(r)), int(round(c))

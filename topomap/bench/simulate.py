@@ -55,7 +55,6 @@ but for the people; poses are the centres of cells.
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 import math
 from dataclasses import dataclass
@@ -63,10 +62,13 @@ from typing import Optional
 
 import numpy as np
 
+from ..core.geometry import point_segment_distances
 from ..errors import ParameterError
+from ..grid import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
+from ..io.maps import FREE_THRESH, OCCUPIED_THRESH
+from ..io.metadata import check_resolution
+from ..options import CheckedOptions, check_area, option
 from .floorplan import FloorPlan
-from ..io.maps import FREE, FREE_THRESH, OCCUPIED, OCCUPIED_THRESH, UNKNOWN, OccupancyGrid
-from ..options import _check_area, _Options, _opt
 
 __all__ = ["ScanOptions", "ScanResult", "World", "build_world", "robot_path", "scan_poses",
            "cast_rays", "integrate", "to_grid", "simulate_scan", "SHOWN_AREA", "shown_rooms", "shown_doors"]
@@ -94,7 +96,7 @@ def _logit(p: float) -> float:
 
 
 @dataclass(frozen=True)
-class ScanOptions(_Options):
+class ScanOptions(CheckedOptions):
     """Options of :func:`simulate_scan`: the laser, the path, the occupancy update and the faults.
 
     Every fault is switched off by a zero (``glass_share``, ``drift_xy`` and
@@ -205,32 +207,32 @@ class ScanOptions(_Options):
         (a person walks on after a few seconds).
     """
 
-    range_max: float = _opt(10.0, "length")
-    angle_step: float = _opt(0.5, "ratio")
-    field_of_view: float = _opt(270.0, "ratio")
-    range_sigma: float = _opt(0.02, "length")
-    no_return_share: float = _opt(0.02, "fraction")
-    explore: float = _opt(1.0, "fraction")
-    pose_spacing: float = _opt(0.3, "length")
-    clearance: float = _opt(0.2, "length")
-    room_coverage: float = _opt(2.5, "length")
-    hit_probability: float = _opt(0.7, "fraction")
-    miss_probability: float = _opt(0.4, "fraction")
-    clamp_min: float = _opt(0.12, "fraction")
-    clamp_max: float = _opt(0.97, "fraction")
-    occupied_thresh: float = _opt(OCCUPIED_THRESH, "fraction")
-    free_thresh: float = _opt(FREE_THRESH, "fraction")
-    glass_share: float = _opt(0.15, "fraction")
-    window_width: float = _opt(1.2, "length")
-    drift_xy: float = _opt(0.03, "length")
-    drift_yaw: float = _opt(0.5, "ratio")
-    drift_length: float = _opt(5.0, "length")
-    plan_furniture: bool = _opt(True, "bool")
-    furniture_density: float = _opt(0.05, "ratio")
-    closed_doors: float = _opt(0.1, "fraction")
-    people_per_metre: float = _opt(0.02, "ratio")
-    person_width: float = _opt(0.3, "length")
-    person_seen_for: float = _opt(2.0, "length")
+    range_max: float = option(10.0, "length")
+    angle_step: float = option(0.5, "ratio")
+    field_of_view: float = option(270.0, "ratio")
+    range_sigma: float = option(0.02, "length")
+    no_return_share: float = option(0.02, "fraction")
+    explore: float = option(1.0, "fraction")
+    pose_spacing: float = option(0.3, "length")
+    clearance: float = option(0.2, "length")
+    room_coverage: float = option(2.5, "length")
+    hit_probability: float = option(0.7, "fraction")
+    miss_probability: float = option(0.4, "fraction")
+    clamp_min: float = option(0.12, "fraction")
+    clamp_max: float = option(0.97, "fraction")
+    occupied_thresh: float = option(OCCUPIED_THRESH, "fraction")
+    free_thresh: float = option(FREE_THRESH, "fraction")
+    glass_share: float = option(0.15, "fraction")
+    window_width: float = option(1.2, "length")
+    drift_xy: float = option(0.03, "length")
+    drift_yaw: float = option(0.5, "ratio")
+    drift_length: float = option(5.0, "length")
+    plan_furniture: bool = option(True, "bool")
+    furniture_density: float = option(0.05, "ratio")
+    closed_doors: float = option(0.1, "fraction")
+    people_per_metre: float = option(0.02, "ratio")
+    person_width: float = option(0.3, "length")
+    person_seen_for: float = option(2.0, "length")
 
     def __post_init__(self):
         super().__post_init__()
@@ -430,7 +432,6 @@ def _glass(plan: FloorPlan, options: ScanOptions, rng) -> np.ndarray:
 
 def _segment_cells(plan: FloorPlan, p1, p2, half_width: float) -> tuple:
     """Cells (rows, cols) within ``half_width`` metres of the world segment p1-p2."""
-    from ..core.geometry import point_segment_distances
     a, b = _to_pixel(plan, [p1, p2])
     hw = half_width / plan.resolution
     H, W = plan.shape
@@ -897,7 +898,6 @@ def _wander(noise: np.ndarray, step: np.ndarray, length: float) -> np.ndarray:
         x = a[k] * x + b[k] * noise[k]
         out[k] = x
     return out
-    return true, believed
 
 
 # --------------------------------------------------------------------------
@@ -1055,7 +1055,8 @@ def integrate(shape: tuple, poses: np.ndarray, ranges: np.ndarray, resolution: f
         n_free = np.searchsorted(rho, rk - half, side="left")
         n_end = np.where(np.isfinite(rk), np.searchsorted(rho, rk + half, side="right"), n_free)
         col = np.arange(n_rad, dtype=np.int32)[None, :]
-        st = (col < n_free[:, None]).view(np.uint8) + 2 * ((col >= n_free[:, None]) & (col < n_end[:, None])).view(np.uint8)
+        st = ((col < n_free[:, None]).view(np.uint8)
+              + 2 * ((col >= n_free[:, None]) & (col < n_end[:, None])).view(np.uint8))
         state[rows[ok]] = st
         state[n360:] = state[:n360]
         mapy = ang_base + np.float32(n360 - (th / dth) % n360)  # in [0, 2 * n360)
@@ -1207,14 +1208,12 @@ def shown_rooms(rooms, free, *, resolution: float, min_area: float = SHOWN_AREA)
     (M, N) ndarray
         ``rooms`` (its dtype) with the rooms the map does not show set to 0.
     """
-    from ..io.maps import check_resolution
-
     rooms = np.asarray(rooms)
     free = np.asarray(free, bool)
     if rooms.shape != free.shape:
         raise ParameterError(f"<array>: rooms {rooms.shape} and free cells {free.shape} differ in shape")
     res = check_resolution(resolution, name="resolution")
-    min_cells = _check_area("min_area", min_area) / res ** 2
+    min_cells = check_area("min_area", min_area) / res ** 2
     lab = np.where(rooms > 0, rooms, 0).astype(np.int64)
     seen = np.bincount(lab[free], minlength=int(lab.max(initial=0)) + 1)
     keep = seen >= min_cells - 1e-9

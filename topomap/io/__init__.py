@@ -5,7 +5,8 @@ I/O converts types and never runs an algorithm. The names below are the
 ones ``topomap.io`` has always offered (``topomap.io.load_map``,
 ``topomap.io.MAX_CELLS``, ...); each lives in the module of its concern:
 :mod:`topomap.grid` (the grid and the size limit), :mod:`topomap.io.maps`
-(map files), :mod:`topomap.io.files` (atomic writes).
+(map files), :mod:`topomap.io.metadata` (the map YAML and its values),
+:mod:`topomap.io.files` (atomic writes).
 """
 
 from __future__ import annotations
@@ -39,13 +40,10 @@ from .maps import (
     GRAY_FREE,
     GRAY_OCCUPIED,
     GRAY_UNKNOWN,
-    MAX_YAML_BYTES,
     OCCUPIED_THRESH,
     UNKNOWN_FREE_MIN_CELLS,
     UNKNOWN_FREE_SHARE,
     USUAL_FREE_AREA,
-    YAML_KEYS,
-    check_resolution,
     classify_gray,
     classify_plan,
     from_array,
@@ -56,6 +54,7 @@ from .maps import (
     yaml_beside,
     yaml_text,
 )
+from .metadata import MAX_YAML_BYTES, YAML_KEYS, check_resolution
 
 __all__ = [
     "FREE", "OCCUPIED", "UNKNOWN", "MAX_CELLS", "JOB_BYTES_PER_CELL", "JOB_BASE_BYTES", "FALLBACK_MAX_CELLS",

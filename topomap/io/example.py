@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .files import write_bytes
 from .maps import GRAY_FREE, GRAY_OCCUPIED, GRAY_UNKNOWN, pgm_bytes, yaml_text
 
 __all__ = ["ExampleMap", "make_example_office", "example_map_path", "write_example_files",
@@ -204,12 +205,10 @@ def write_example_files(directory=None) -> Path:
     pathlib.Path
         The YAML file written.
     """
-    from .files import write_bytes as _atomic_write
-
     d = Path(directory) if directory is not None else _data_dir()
     d.mkdir(parents=True, exist_ok=True)
     for fname, data in example_file_bytes().items():
-        _atomic_write(d / fname, data)
+        write_bytes(d / fname, data)
     return d / f"{EXAMPLE_STEM}.yaml"
 
 

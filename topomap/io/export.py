@@ -38,23 +38,34 @@ and never clobbers an earlier output.
 from __future__ import annotations
 
 import contextvars
+import io
 import json
 import math
+import numbers
 import re
+import struct
+import time
+import warnings
+import zlib
+from contextlib import ExitStack
 from pathlib import Path
 
 import numpy as np
 import networkx as nx
+from networkx.readwrite.graphml import GraphMLReader
 
-from ..errors import GraphFormatError, first_line
-from ..errors import one_line as _one_line
-from .files import atomic_write, renamed_error as _renamed
+from ..errors import (GraphFormatError, MapError, MapFileError, MapFileNotFoundError, MapTooLargeError,
+                      ParameterError, TopomapError, first_line, one_line)
+from ..grid import cell_limit, check_image_size
+from .files import atomic_write, renamed_error
+from .maps import FREE_THRESH, OCCUPIED_THRESH, pgm_header, yaml_text
+from .metadata import as_origin, as_resolution
 
-__all__ = ["atomic_write", "save_labels", "label_png_bytes", "file_labels", "MAX_FILE_LABEL", "save_graphml", "save_json", "to_graphml_graph",
-           "node_link", "write_outputs", "save_bytes", "geometry_wkt", "restore_types", "load_graphml", "load_json",
+__all__ = ["atomic_write", "save_labels", "label_png_bytes", "file_labels", "MAX_FILE_LABEL", "save_graphml",
+           "save_json", "to_graphml_graph", "node_link", "write_outputs", "save_bytes", "geometry_wkt", "restore_types", "load_graphml", "load_json",
            "to_geojson", "from_geojson", "save_geojson", "load_geojson", "save_label_map", "load_label_map",
            "save_graph", "load_graph", "label_map_bytes", "graphml_bytes", "GRAPH_TYPES", "NODE_TYPES",
-           "EDGE_TYPES", "FORMATS", "GEOJSON_COORDINATES"]
+           "EDGE_TYPES", "FORMATS", "GEOJSON_COORDINATES", "graph_format", "read_label_image", "read_gray"]
 
 #: What the coordinates of topomap's GeoJSON are, written into every file's
 #: collection ``properties`` as ``"coordinate_system"``.
@@ -88,21 +99,20 @@ MAX_ROOM_ID = MAX_FILE_LABEL - 1
 def check_room_ids(G, name) -> None:
     """GraphFormatError naming ``name`` unless every room ID of ``G`` is an ``int`` in 1..:data:`MAX_ROOM_ID`
     and its ``next_room_id`` (when it has one) an integer in 1..MAX_ROOM_ID + 1."""
-    import numbers
-
     def whole(v, top):
         return isinstance(v, numbers.Integral) and not isinstance(v, bool) and 1 <= int(v) <= top
 
     for r in G.nodes:
         if not whole(r, MAX_ROOM_ID):
-            raise _bad(name, f"room ID {_one_line(repr(r))[:40]} is not a whole number from 1 to {MAX_ROOM_ID} "
+            raise _bad(name, f"room ID {one_line(repr(r))[:40]} is not a whole number from 1 to {MAX_ROOM_ID} "
                              "(room IDs are the labels of the 16-bit label files)")
     nxt = G.graph.get("next_room_id")
     if nxt not in (None, ""):
         if isinstance(nxt, str) and nxt.strip().isdigit():
             nxt = int(nxt)
         if not whole(nxt, MAX_ROOM_ID + 1):
-            raise _bad(name, f"next_room_id {_one_line(repr(nxt))[:40]} is not a whole number from 1 to {MAX_ROOM_ID + 1}")
+            raise _bad(name, f"next_room_id {one_line(repr(nxt))[:40]} is not a whole number from 1 to "
+                             f"{MAX_ROOM_ID + 1}")
 
 
 def file_labels(seg, name: str = "<labels>", kind: str = "PNG") -> np.ndarray:
@@ -131,8 +141,6 @@ def file_labels(seg, name: str = "<labels>", kind: str = "PNG") -> np.ndarray:
         Not a non-empty 2-D array, a negative label, or room IDs beyond
         65534 (65535 for a label array).
     """
-    from ..errors import ParameterError
-
     is_seg = hasattr(seg, "labels") and hasattr(seg, "top_room_id")
     labels = np.asarray(seg.labels if is_seg else seg)
     if labels.ndim != 2 or labels.size == 0:
@@ -161,9 +169,6 @@ def label_png_bytes(labels: np.ndarray) -> bytes:
     memory are linear in the cells, about twice as fast as Pillow's encoder at its fastest level
     (which tries every filter on every row) and as small.
     """
-    import struct
-    import zlib
-
     H, W = labels.shape
     be = np.ascontiguousarray(labels, dtype=">u2").view(np.uint8).reshape(H, 2 * W)  # PNG: big-endian
     z = zlib.compressobj(1)
@@ -310,9 +315,7 @@ def _memo_outlines(geoms) -> None:
     :data:`_CHUNK` coordinates (a larger one: :func:`_coords_json` alone): one shapely call per block
     for its rings and coordinates and one spelling of its distinct floats (:func:`_rings_texts`), the
     same texts as one geometry at a time, and their WKT (:func:`geometry_wkt`) from the same spelling:
-    no text replacements on the WKT (this memo and the rooms' WKT 18.0 -> 11.0 ms on
-    office_e_furnitures, 8.5 -> 5.9 ms on office_b_furnitures). Anything else is left to
-    :func:`_coords_json`.
+    no text replacements on the WKT. Anything else is left to :func:`_coords_json`.
     """
     import shapely
 
@@ -382,8 +385,7 @@ def _cut_rings(spelt, inv, bounds, sep, pair_sep, head, tail) -> list:
     Each point's two spellings, with their separators (a ring's first with ``head``, its last with
     ``tail`` and a NUL, which no number has), are joined into one text and split at the NULs: no
     Python string or list per point, so no garbage-collector passes over thousands of small lists
-    (the JSON texts of the rings 10.2 -> 4.9 ms on office_e_furnitures, 5.0 -> 3.2 ms on
-    office_b_furnitures, than a ``", ".join`` per point).
+    (as a ``", ".join`` per point would make).
     """
     tok = np.empty(2 * len(inv), dtype=object)
     tok[0::2] = np.array([t + sep for t in spelt] or [""], dtype=object)[inv[:, 0]]
@@ -464,7 +466,7 @@ def _is_geom(v) -> bool:
 def _plain(v):
     """Plain JSON value of ``v``: tuples/arrays as lists, numpy scalars as Python, geometry as WKT."""
     t = type(v)
-    if t is float:  # most attributes: Python floats, no numpy call (np.isfinite: 0.9 µs each)
+    if t is float:  # most attributes: Python floats, checked without a numpy call
         return v if math.isfinite(v) else None
     if t is int or t is str or t is bool:
         return v
@@ -782,8 +784,6 @@ def graphml_bytes(G: nx.Graph) -> bytes:
 
 
 def _nx_graphml_bytes(G) -> bytes:
-    import io
-
     buf = io.BytesIO()
     nx.write_graphml_xml(G.copy(), buf)  # a copy: the writer takes "id" out of the graph's attributes
     return buf.getvalue()
@@ -797,8 +797,6 @@ def _bad(path, what, exc=None) -> GraphFormatError:
 
 
 def _check_file(path) -> Path:
-    from ..errors import MapFileNotFoundError
-
     path = Path(path)
     if not path.is_file():
         raise MapFileNotFoundError(f"{path}: no such file" if not path.exists() else f"{path}: not a file")
@@ -819,25 +817,20 @@ def _read_json(path: Path):
 
 def _check_frame(G: nx.MultiGraph, path) -> nx.MultiGraph:
     """``G`` if the map size its ``shape`` claims is within :func:`topomap.io.cell_limit`, else MapTooLargeError."""
-    import numbers
-
-    from . import maps as io
-    from ..errors import MapTooLargeError
-
     check_room_ids(G, path)
     # the map frame, checked here so that its errors name the file (not the '<array>' of a grid built from it)
     if G.graph.get("resolution") is not None:
-        io._as_resolution(f"{path}: graph attribute", G.graph["resolution"])
+        as_resolution(f"{path}: graph attribute", G.graph["resolution"])
     if G.graph.get("origin") is not None:
-        io._as_origin(f"{path}: graph attribute", G.graph["origin"])
+        as_origin(f"{path}: graph attribute", G.graph["origin"])
     shape = G.graph.get("shape")
     if shape is None:
         return G
     if len(shape) != 2 or not all(isinstance(v, numbers.Integral) and v >= 1 for v in shape):
         raise _bad(path, f"graph attribute 'shape' must be [rows, cols], two whole numbers >= 1, "
-                         f"got {_one_line(repr(list(shape)[:4]))[:60]}")
+                         f"got {one_line(repr(list(shape)[:4]))[:60]}")
     rows, cols = (int(v) for v in shape)
-    limit, why = io.cell_limit()
+    limit, why = cell_limit()
     if rows * cols > limit:
         raise MapTooLargeError(f"{path}: the graph claims a map of {cols:,} x {rows:,} cells = {rows * cols:,}, "
                                f"more than {why}")
@@ -849,7 +842,6 @@ def _parse_graphml(data: bytes) -> nx.MultiGraph:
     (a DOCTYPE, entity declaration or external reference anywhere in the document raises one of
     defusedxml's errors) and built by networkx's GraphML reader from that tree."""
     from defusedxml.ElementTree import fromstring
-    from networkx.readwrite.graphml import GraphMLReader
 
     reader = GraphMLReader(node_type=str, edge_key_type=int, force_multigraph=True)
     for attempt in (data, data.replace(b"<graphml>", b'<graphml xmlns="http://graphml.graphdrawing.org/xmlns">')):
@@ -920,7 +912,7 @@ _MARK = "\0topomap WKT\0"
 def _node_link_text(data: dict, G: nx.Graph) -> str:
     """``json.dumps(data, allow_nan=False)`` of the node-link data of ``G``'s scalars, the WKT of its
     rooms' geometry copied in whole: WKT is printable ASCII without quote or backslash, which JSON
-    writes as it is, and json's escaping scan of it was 1.7 of 2.7 ms on office_e_furnitures (0.35 MB).
+    writes as it is, so json's escaping scan of it (most of the encoding time) is skipped.
 
     Each such text is replaced by :data:`_MARK` for the encoder and put back in its place; when the
     text does not hold exactly one mark per WKT (an attribute holds the mark itself), it is written
@@ -1145,12 +1137,23 @@ def load_geojson(path) -> nx.MultiGraph:
 FORMATS = {".graphml": "graphml", ".xml": "graphml", ".json": "json", ".geojson": "geojson"}
 
 
-def _format(path) -> str:
+def graph_format(path) -> str:
+    """The format of room graph file ``path`` by its extension (:data:`FORMATS`): ``"graphml"``,
+    ``"json"`` or ``"geojson"``.
+
+    Raises
+    ------
+    GraphFormatError
+        Another extension, or none.
+    """
     ext = Path(path).suffix.lower()
     if ext not in FORMATS:
         raise GraphFormatError(f"{path}: unknown graph format {ext or '(no extension)'!r}; "
                                f"use one of {', '.join(sorted(FORMATS))}")
     return FORMATS[ext]
+
+
+_format = graph_format  # alias until the callers move (topomap.cli)
 
 
 def load_graph(path) -> nx.MultiGraph:
@@ -1163,8 +1166,6 @@ def load_graph(path) -> nx.MultiGraph:
     MapTooLargeError
         The graph's ``shape`` claims a map of more than :func:`topomap.io.cell_limit` cells.
     """
-    from ..errors import TopomapError
-
     try:
         return _load_graph(path)
     except (TopomapError, RecursionError, MemoryError):
@@ -1174,7 +1175,7 @@ def load_graph(path) -> nx.MultiGraph:
 
 
 def _load_graph(path) -> nx.MultiGraph:
-    fmt = _format(path)
+    fmt = graph_format(path)
     if fmt == "json":
         path = _check_file(path)
         head = _read_json(path)
@@ -1185,7 +1186,7 @@ def _load_graph(path) -> nx.MultiGraph:
 
 def save_graph(G: nx.Graph, path) -> Path:
     """Save a room graph as ``.graphml``, ``.json`` (node-link) or ``.geojson`` by extension."""
-    fmt = _format(path)
+    fmt = graph_format(path)
     return {"graphml": save_graphml, "json": save_json, "geojson": save_geojson}[fmt](G, path)
 
 
@@ -1235,8 +1236,6 @@ def save_label_map(seg, stem, *, resolution=None, origin=None) -> Path:
     pathlib.Path
         The YAML file.
     """
-    from contextlib import ExitStack
-
     stem = Path(stem)
     if stem.suffix.lower() in (".yaml", ".yml", ".pgm"):
         stem = stem.with_suffix("")
@@ -1263,9 +1262,7 @@ def label_map_bytes(seg, image_name: str, *, resolution=None, origin=None, name=
 def _label_map_parts(seg, image_name: str, *, resolution=None, origin=None, name=None) -> tuple:
     """:func:`label_map_bytes` as ``(PGM header, PGM pixels as a C-contiguous array, yaml_bytes)``: the
     pixels written as they are by :func:`write_outputs`, not copied into one bytes object with the
-    header (fresh pages for a megabyte: making and writing labels.pgm 2.2 -> 1.3 ms on the ipa maps)."""
-    from .maps import FREE_THRESH, OCCUPIED_THRESH, pgm_header, yaml_text
-
+    header (which would take fresh pages for a megabyte)."""
     name = image_name if name is None else name
     if hasattr(seg, "labels") and hasattr(seg, "grid"):
         resolution = seg.grid.resolution if resolution is None else resolution
@@ -1349,6 +1346,101 @@ def load_label_map(path):
 
 
 # --------------------------------------------------------------------------
+# Label images of any Pillow mode (ground truths, label images of other tools)
+# --------------------------------------------------------------------------
+
+def _open_image(path: Path):
+    """The Pillow image of ``path``, decoded, its size checked against :func:`topomap.io.cell_limit`."""
+    from PIL import Image, UnidentifiedImageError
+
+    if not path.exists():
+        raise MapFileError(f"{path}: file does not exist")
+    if path.is_dir():
+        raise MapFileError(f"{path}: is a directory, not an image")
+    try:
+        with warnings.catch_warnings():  # the size is checked against MAX_CELLS below
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+            img = Image.open(path)
+        check_image_size(str(path), img.size[1], img.size[0])
+        img.load()
+    except Image.DecompressionBombError as exc:
+        raise MapTooLargeError(f"{path}: image too large to decode ({first_line(exc)})") from None
+    except UnidentifiedImageError as exc:
+        raise MapError(f"{path}: not a readable image ({exc})") from None
+    except OSError as exc:
+        raise MapFileError(f"{path}: cannot be read ({exc})") from None
+    return img
+
+
+def read_gray(path) -> np.ndarray:
+    """Read an image of any Pillow mode as 8-bit gray.
+
+    Parameters
+    ----------
+    path : str or Path
+        Any image Pillow reads.
+
+    Returns
+    -------
+    (M, N) ndarray of uint8
+        Pillow's ``convert("L")`` of the image; 16- and 32-bit gray values
+        clipped to 0..255.
+
+    Raises
+    ------
+    MapFileError
+        No such file, a directory, or unreadable.
+    MapError
+        Not an image Pillow reads.
+    MapTooLargeError
+        More than :func:`topomap.io.cell_limit` cells.
+    """
+    path = Path(path)
+    img = _open_image(path)
+    if img.mode in ("I;16", "I;16B", "I;16L", "I"):
+        arr = np.asarray(img)
+        return np.clip(arr, 0, 255).astype(np.uint8)
+    return np.asarray(img.convert("L"), dtype=np.uint8).copy()
+
+
+def read_label_image(path) -> np.ndarray:
+    """Read an integer room-label image.
+
+    Parameters
+    ----------
+    path : str or Path
+        A PNG (or other Pillow-readable image). Gray images (8-bit ``L``,
+        16-bit ``I;16``, 32-bit ``I``) and palette images (``P``, the palette
+        index is the label) give their values directly; ``LA`` uses the gray
+        channel; colour images (``RGB``/``RGBA``) get one label per distinct
+        colour, numbered 1.. in order of the packed colour value, with black
+        (and fully transparent pixels) as 0.
+
+    Returns
+    -------
+    (M, N) ndarray of int32
+        0 = no room.
+    """
+    path = Path(path)
+    img = _open_image(path)
+    mode = img.mode
+    if mode in ("L", "P", "I", "I;16", "I;16B", "I;16L", "1"):
+        return np.asarray(img).astype(np.int32)
+    if mode == "LA":
+        return np.asarray(img)[..., 0].astype(np.int32)
+    if mode in ("RGB", "RGBA"):
+        arr = np.asarray(img)
+        rgb = arr[..., :3].astype(np.int64)
+        key = (rgb[..., 0] << 16) | (rgb[..., 1] << 8) | rgb[..., 2]
+        if mode == "RGBA":
+            key = np.where(arr[..., 3] == 0, 0, key)
+        uniq, inv = np.unique(key, return_inverse=True)
+        ids = np.arange(uniq.size, dtype=np.int32) + (0 if uniq[0] == 0 else 1)
+        return ids[inv.reshape(key.shape)]
+    raise MapError(f"{path}: unsupported image mode {mode!r} for a label image")
+
+
+# --------------------------------------------------------------------------
 # All outputs of a segmentation
 # --------------------------------------------------------------------------
 
@@ -1397,12 +1489,8 @@ def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None, geojs
         written, so a failure in any writer leaves no partial file and
         keeps every earlier output of ``outdir`` as it was.
     """
-    from contextlib import ExitStack
-
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
-    import time
-
     names = dict(OUTPUT_FILES)
     if not geojson:
         del names["geojson"]
@@ -1443,7 +1531,7 @@ def write_outputs(seg, outdir, graph, *, overlay_png: bytes | None = None, geojs
                     else:
                         writers[k](tmp[k])
                 except OSError as exc:  # named after its own file (not the last temporary of the stack)
-                    raise (_renamed(exc, tmp[k], outdir / names[k]) or exc) from None
+                    raise (renamed_error(exc, tmp[k], outdir / names[k]) or exc) from None
                 if timings is not None:
                     timings[f"write_{k}"] = time.perf_counter() - t
     finally:

@@ -9,29 +9,24 @@ as ROS map_server defines it.
 
 from __future__ import annotations
 
-import difflib
 import logging
-import math
 import os
 import re
 import threading
 import warnings
 from pathlib import Path
-from typing import Optional
+from typing import NamedTuple, Optional
 
 import numpy as np
 
-from ..grid import (FREE, OCCUPIED, UNKNOWN, USUAL_RESOLUTION, OccupancyGrid, cell_limit, check_image_size, check_origin_range, check_resolution_range)
+from .._fast import lookup
+from ..errors import (MapError, MapFileError, MapFileNotFoundError, MapTooLargeError, ParameterError, TopomapError,
+                      named, one_line)
+from ..grid import FREE, OCCUPIED, UNKNOWN, USUAL_RESOLUTION, OccupancyGrid, cell_limit, check_image_size
 from .files import write_bytes
-from ..errors import (
-    named,
-    one_line,
-    MapError,
-    MapFileError,
-    MapFileNotFoundError,
-    MapTooLargeError,
-    ParameterError,
-)
+from .metadata import (MAX_YAML_BYTES, YAML_KEYS, YAML_SUFFIXES, as_bool, as_mode, as_origin, as_resolution,
+                       check_file, check_resolution, check_thresholds, exists, read_yaml)
+from .ros import BAG_SUFFIXES, is_bag, read_map
 
 __all__ = [
     "USUAL_FREE_AREA",
@@ -53,11 +48,6 @@ __all__ = [
     "save_map",
 ]
 
-#: Largest map YAML read, bytes (a map_server YAML is a few hundred bytes).
-MAX_YAML_BYTES = 1 << 20
-#: The keys of a map_server YAML (anything else is a warning, a near-miss of one of these an error).
-YAML_KEYS = ("image", "resolution", "origin", "negate", "occupied_thresh", "free_thresh", "mode")
-
 log = logging.getLogger(__name__)
 
 #: Cell size in metres per pixel used for bare images when none is given.
@@ -68,93 +58,15 @@ FREE_THRESH = 0.196
 
 #: A bare image (no YAML) is read as a floor plan: a pixel is free from this
 #: gray level up (map_saver writes free cells as 254), unknown where it is
-#: map_saver's unknown gray 205, occupied everywhere else (:func:`classify_plan`). The same level defines the free cells of the
-#: ipa_room_segmentation benchmark and the white of its ground-truth drawings.
+#: map_saver's unknown gray 205, occupied everywhere else (:func:`classify_plan`).
+#: The same level defines the free cells of the ipa_room_segmentation benchmark
+#: and the white of its ground-truth drawings.
 FREE_GRAY = 250
 
 #: Gray values map_saver writes (and :func:`save_map` writes) per state.
 GRAY_FREE = 254
 GRAY_OCCUPIED = 0
 GRAY_UNKNOWN = 205
-
-_MODES = ("trinary", "scale", "raw")
-_YAML_SUFFIXES = (".yaml", ".yml")
-
-
-def _check_thresholds(name, occupied_thresh, free_thresh):
-    """Validate map_server thresholds; return them as floats."""
-    vals = []
-    for key, val in (("occupied_thresh", occupied_thresh), ("free_thresh", free_thresh)):
-        v = _as_float(name, key, val)
-        if not 0.0 <= v <= 1.0:
-            raise ParameterError(named(name, f"{key} must be in [0, 1], got {val!r}"))
-        vals.append(v)
-    occ, free = vals
-    if free >= occ:
-        raise ParameterError(named(name, f"free_thresh ({free!r}) must be < occupied_thresh ({occ!r})"))
-    return occ, free
-
-
-def _as_float(name, key, val) -> float:
-    """A finite float from a number or numeric string, else ParameterError."""
-    if isinstance(val, (bool, np.bool_)) or val is None:
-        raise ParameterError(named(name, f"{key} must be a number, got {val!r}"))
-    try:
-        v = float(val)
-    except (TypeError, ValueError, OverflowError):
-        raise ParameterError(named(name, f"{key} must be a number, got {val!r}")) from None
-    if not math.isfinite(v):
-        raise ParameterError(named(name, f"{key} must be finite, got {val!r}"))
-    return v
-
-
-def _as_bool(name, key, val) -> bool:
-    if isinstance(val, (bool, np.bool_)):
-        return bool(val)
-    if isinstance(val, (int, np.integer)) and val in (0, 1):
-        return bool(val)
-    if isinstance(val, str) and val.strip().lower() in ("0", "1", "true", "false"):
-        return val.strip().lower() in ("1", "true")
-    raise ParameterError(named(name, f"{key} must be 0 or 1, got {val!r}"))
-
-
-def _as_mode(name, val) -> str:
-    if not isinstance(val, str) or val.strip().lower() not in _MODES:
-        raise ParameterError(named(name, f"mode must be one of {', '.join(_MODES)}, got {val!r}"))
-    return val.strip().lower()
-
-
-def _as_resolution(name, val, key: str = "resolution") -> float:
-    """A resolution in [MIN_RESOLUTION, MAX_RESOLUTION] m per cell, else ParameterError naming ``key``."""
-    v = _as_float(name, key, val)
-    if v <= 0:
-        raise ParameterError(named(name, f"{key} must be > 0 m/px, got {val!r}"))
-    check_resolution_range(name, v, key)
-    return v
-
-
-def check_resolution(value, *, name: str = "--resolution") -> float:
-    """``value`` as a resolution (m per cell) in the accepted range.
-
-    Raises
-    ------
-    ParameterError
-        Not a number, not > 0, or outside [:data:`MIN_RESOLUTION`,
-        :data:`MAX_RESOLUTION`]; the message begins with ``name``.
-    """
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)) \
-            or not value > 0 or not math.isfinite(value):
-        raise ParameterError(one_line(f"{name} must be > 0 m/px (a number), got {value!r}"))
-    check_resolution_range(None, float(value), name)
-    return float(value)
-
-
-def _as_origin(name, val) -> tuple:
-    if isinstance(val, (str, bytes)) or not hasattr(val, "__len__") or len(val) not in (2, 3):
-        raise ParameterError(named(name, f"origin must be [x, y, yaw] in metres/radians, got {val!r}"))
-    org = tuple(_as_float(name, "origin", v) for v in val) + ((0.0,) if len(val) == 2 else ())
-    check_origin_range(name, org)
-    return org
 
 
 def classify_gray(gray, *, negate: bool = False, occupied_thresh: float = OCCUPIED_THRESH,
@@ -189,8 +101,8 @@ def classify_gray(gray, *, negate: bool = False, occupied_thresh: float = OCCUPI
         ``FREE`` (0), ``OCCUPIED`` (100), ``UNKNOWN`` (-1); in raw mode any
         value in ``0..100``.
     """
-    mode = _as_mode("<array>", mode)
-    occ, free = _check_thresholds("<array>", occupied_thresh, free_thresh)
+    mode = as_mode("<array>", mode)
+    occ, free = check_thresholds("<array>", occupied_thresh, free_thresh)
     v = np.arange(256)
     if negate:
         v = 255 - v
@@ -231,8 +143,6 @@ def classify_plan(gray, *, negate: bool = False, transparent=None) -> np.ndarray
     (M, N) ndarray of int8
         ``FREE`` (0), ``OCCUPIED`` (100) or ``UNKNOWN`` (-1).
     """
-    from .._fast import lookup
-
     v = np.asarray(gray, dtype=np.uint8)
     lut = np.where(np.arange(256) >= FREE_GRAY, FREE, OCCUPIED).astype(np.int8)
     lut[GRAY_UNKNOWN] = UNKNOWN
@@ -291,8 +201,8 @@ def from_array(array, *, resolution: float = DEFAULT_RESOLUTION, origin=(0.0, 0.
         cells = np.where(a, FREE, OCCUPIED).astype(np.int8)
         return OccupancyGrid(cells, resolution, origin, source)
     if a.dtype == np.uint8:
-        occ, free = _check_thresholds(name, occupied_thresh, free_thresh)
-        cells = classify_gray(a, negate=_as_bool(name, "negate", negate),
+        occ, free = check_thresholds(name, occupied_thresh, free_thresh)
+        cells = classify_gray(a, negate=as_bool(name, "negate", negate),
                               occupied_thresh=occ, free_thresh=free)
         return OccupancyGrid(cells, resolution, origin, source, gray=a)
     if np.issubdtype(a.dtype, np.signedinteger):
@@ -354,28 +264,6 @@ def _to_gray(name, img):
     return gray, transparent
 
 
-def _exists(path: Path) -> bool:
-    try:
-        return os.path.exists(path)
-    except (OSError, ValueError):
-        return False
-
-
-def _check_file(name, path: Path, what="map file"):
-    if not _exists(path):
-        raise MapFileNotFoundError(named(name, f"{what} not found"))
-    if path.is_dir():
-        raise MapFileError(named(name, f"{what} is a directory, not a file"))
-    try:
-        size = path.stat().st_size
-    except OSError as exc:
-        raise MapFileError(named(name, f"cannot stat {what}: {exc.strerror or exc}")) from None
-    if size == 0:
-        raise MapError(named(name, f"{what} is empty (0 bytes)"))
-    if not os.access(path, os.R_OK):
-        raise MapFileError(named(name, f"{what} is not readable (permission denied)"))
-
-
 _PIL_LIMIT_LOCK = threading.Lock()
 
 
@@ -411,7 +299,7 @@ def _read_image(path: Path, name: str):
     """
     from PIL import Image, UnidentifiedImageError
 
-    _check_file(name, path, "image file")
+    check_file(name, path, "image file")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", Image.DecompressionBombWarning)
         try:
@@ -444,66 +332,6 @@ def _read_image(path: Path, name: str):
 # Loading
 # --------------------------------------------------------------------------
 
-def _yaml_loader():
-    """A safe YAML loader that refuses aliases (``*name``): nothing expands (no "billion laughs")."""
-    import yaml
-
-    class NoAliasLoader(yaml.SafeLoader):
-        def compose_node(self, parent, index):
-            if self.check_event(yaml.AliasEvent):
-                mark = self.peek_event().start_mark
-                raise yaml.composer.ComposerError(None, None, "aliases (*name) are not allowed in a map YAML",
-                                                  mark)
-            return super().compose_node(parent, index)
-
-    return NoAliasLoader
-
-
-def _check_yaml_keys(name, meta: dict):
-    """ParameterError for a near-miss of a known key (a typo); a warning for any other unknown key."""
-    for key in meta:
-        if key in YAML_KEYS:
-            continue
-        shown = one_line(repr(key))[:60]
-        close = difflib.get_close_matches(str(key), YAML_KEYS, n=1, cutoff=0.75) if isinstance(key, str) else []
-        if close:
-            raise ParameterError(named(name, f"unknown key {shown} (did you mean '{close[0]}'?); a map YAML has "
-                                            f"{', '.join(YAML_KEYS)}"))
-        log.warning("%s", named(name, f"unknown key {shown} ignored (a map YAML has {', '.join(YAML_KEYS)})"))
-
-
-def _read_yaml(path: Path, name: str) -> dict:
-    import yaml
-
-    _check_file(name, path, "map YAML")
-    try:
-        size = path.stat().st_size
-    except OSError as exc:
-        raise MapFileError(named(name, f"cannot read map YAML: {exc.strerror or exc}")) from None
-    if size > MAX_YAML_BYTES:
-        raise MapError(named(name, f"map YAML is {size:,} bytes, more than {MAX_YAML_BYTES:,} (a map_server YAML "
-                                  f"is a few lines; is this the image?)"))
-    try:
-        text = path.read_bytes()
-    except OSError as exc:
-        raise MapFileError(named(name, f"cannot read map YAML: {exc.strerror or exc}")) from None
-    try:
-        meta = yaml.load(text, Loader=_yaml_loader())  # noqa: S506 - a SafeLoader without aliases
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" at line {mark.line + 1}" if mark is not None else ""
-        problem = getattr(exc, "problem", None) or type(exc).__name__
-        raise MapError(named(name, f"not valid YAML{where}: {problem}")) from None
-    except (RecursionError, MemoryError):
-        raise MapError(named(name, "not valid YAML: nested too deeply")) from None
-    except Exception as exc:
-        raise MapError(named(name, f"not valid YAML: {one_line(exc) or type(exc).__name__}")) from None
-    if not isinstance(meta, dict):
-        raise MapError(named(name, f"map YAML must be a mapping (key: value), got {type(meta).__name__}"))
-    _check_yaml_keys(name, meta)
-    return meta
-
-
 def yaml_beside(path) -> tuple:
     """The map_server YAML of the same stem beside image ``path`` (``map.pgm`` -> ``map.yaml``), for
     ``topomap segment map.pgm`` without ``--resolution``.
@@ -516,17 +344,15 @@ def yaml_beside(path) -> tuple:
         image is read alone; ``why`` says so); ``(None, None)`` when there is none (or ``path`` is a
         YAML or a bag).
     """
-    from ..errors import TopomapError
-
     p = Path(os.fspath(path))
-    if p.suffix.lower() in _YAML_SUFFIXES or p.suffix.lower() in (".bag", ".mcap", ".db3") or not p.is_file():
+    if p.suffix.lower() in YAML_SUFFIXES or p.suffix.lower() in BAG_SUFFIXES or not p.is_file():
         return None, None
-    for suffix in _YAML_SUFFIXES:
+    for suffix in YAML_SUFFIXES:
         y = p.with_suffix(suffix)
         if y == p or not y.is_file():
             continue
         try:
-            image = _read_yaml(y, str(y)).get("image")
+            image = read_yaml(y, str(y)).get("image")
         except (TopomapError, OSError) as exc:
             return None, f"{y.name} beside it cannot be read ({one_line(exc)}); the image is read alone"
         if isinstance(image, str) and image.strip() and "\x00" not in image:
@@ -623,6 +449,32 @@ def load_map(path, *, resolution=None, origin=None, negate=None, occupied_thresh
     and origin (with yaw) from the message. See :func:`topomap.io.ros.read_map`
     for its errors (:class:`~topomap.errors.BagError`).
     """
+    p, name = _map_path(path)
+    if is_bag(p):
+        if negate is not None or mode is not None:
+            raise ParameterError(named(name, "negate and mode apply to images; a bag holds ROS cell values"))
+        return read_map(p, topic=topic, time=time, free_thresh=free_thresh, occupied_thresh=occupied_thresh,
+                        resolution=resolution, origin=origin)
+    if topic is not None or time is not None:
+        raise ParameterError(named(name, "topic and time apply to ROS bags (.bag, .mcap, .db3, a bag directory)"))
+    is_yaml = p.suffix.lower() in YAML_SUFFIXES
+    meta, image_path = _map_yaml(p, name, resolution is None, origin is None) if is_yaml else ({}, p)
+    how = _how_to_read(name, meta, resolution=resolution, origin=origin, negate=negate, mode=mode,
+                       occupied_thresh=occupied_thresh, free_thresh=free_thresh)
+    gray, transparent = _read_map_image(p, name, image_path)
+    if is_yaml or any(v is not None for v in (occupied_thresh, free_thresh, mode)):
+        cells = classify_gray(gray, negate=how.negate, occupied_thresh=how.occupied_thresh,
+                              free_thresh=how.free_thresh, mode=how.mode, transparent=transparent)
+        _warn_unknown_read_free(name, gray, cells, how.free_thresh, how.free_thresh_from, how.negate)
+    else:
+        cells = classify_plan(gray, negate=how.negate, transparent=transparent)
+    grid = OccupancyGrid(cells, how.resolution, how.origin, name, gray=gray)
+    _warn_free_area(name, np.count_nonzero(cells == FREE) * how.resolution * how.resolution)
+    return grid
+
+
+def _map_path(path) -> tuple:
+    """``(pathlib.Path, name)`` of the ``path`` argument of :func:`load_map`."""
     try:
         p = Path(os.fspath(path))
     except TypeError:
@@ -630,78 +482,83 @@ def load_map(path, *, resolution=None, origin=None, negate=None, occupied_thresh
     name = str(p)
     if "\x00" in name:
         raise MapFileError(named(repr(name), "map path contains a NUL byte"))
-    from .ros import is_bag
+    return p, name
 
-    if is_bag(p):
-        from .ros import read_map
 
-        if negate is not None or mode is not None:
-            raise ParameterError(named(name, "negate and mode apply to images; a bag holds ROS cell values"))
-        return read_map(p, topic=topic, time=time, free_thresh=free_thresh, occupied_thresh=occupied_thresh,
-                        resolution=resolution, origin=origin)
-    if topic is not None or time is not None:
-        raise ParameterError(named(name, "topic and time apply to ROS bags (.bag, .mcap, .db3, a bag directory)"))
+def _map_yaml(p: Path, name: str, needs_resolution: bool, needs_origin: bool) -> tuple:
+    """``(meta, image path)`` of the map YAML ``p``: its keys, checked for the required ones
+    (``resolution`` and ``origin`` only when no argument gives them), and the image it names
+    (relative to the YAML's folder), which must exist."""
+    meta = read_yaml(p, name)
+    required = ("image",) + (("resolution",) if needs_resolution else ()) + (("origin",) if needs_origin else ())
+    for key in required:
+        if key not in meta or meta[key] is None:
+            raise MapError(named(name, f"map YAML lacks the required key '{key}'"))
+    img = meta["image"]
+    if not isinstance(img, str) or not img.strip() or "\x00" in img:
+        raise MapError(named(name, f"'image' must be a file name, got {img!r}"))
+    image_path = Path(img)
+    if not image_path.is_absolute():
+        image_path = p.parent / image_path
+    if not exists(image_path):
+        raise MapFileNotFoundError(named(name, f"image '{img}' not found (looked for {image_path})"))
+    return meta, image_path
 
-    meta = {}
-    image_path = p
-    image_name = name
-    is_yaml = p.suffix.lower() in _YAML_SUFFIXES
-    if is_yaml:
-        meta = _read_yaml(p, name)
-        for key in ("image",) + (("resolution",) if resolution is None else ()) + \
-                   (("origin",) if origin is None else ()):
-            if key not in meta or meta[key] is None:
-                raise MapError(named(name, f"map YAML lacks the required key '{key}'"))
-        img = meta["image"]
-        if not isinstance(img, str) or not img.strip() or "\x00" in img:
-            raise MapError(named(name, f"'image' must be a file name, got {img!r}"))
-        image_path = Path(img)
-        if not image_path.is_absolute():
-            image_path = p.parent / image_path
-        image_name = str(image_path)
-        if not _exists(image_path):
-            raise MapFileNotFoundError(named(name, f"image '{img}' not found (looked for {image_name})"))
 
-    def pick(key, value, default):
-        if value is not None:
-            return value, "<argument>"
-        if key in meta and meta[key] is not None:
-            return meta[key], name
-        return default, name
+class _HowToRead(NamedTuple):
+    """The checked values :func:`load_map` reads a map image with (from the arguments, else the YAML,
+    else the defaults)."""
 
-    val, where = pick("resolution", resolution, DEFAULT_RESOLUTION)
-    res = _as_resolution(where, val)
+    resolution: float
+    origin: tuple
+    negate: bool
+    mode: str
+    occupied_thresh: float
+    free_thresh: float
+    free_thresh_from: str  # the file, or "<argument>": named when free_thresh makes unknown cells free
+
+
+def _pick(name: str, meta: dict, key: str, value, default) -> tuple:
+    """``(value, where it came from)``: the argument if given, else the YAML's value, else ``default``."""
+    if value is not None:
+        return value, "<argument>"
+    if key in meta and meta[key] is not None:
+        return meta[key], name
+    return default, name
+
+
+def _how_to_read(name: str, meta: dict, *, resolution, origin, negate, mode, occupied_thresh,
+                 free_thresh) -> _HowToRead:
+    """The :class:`_HowToRead` of a map: each value checked, its error naming where it came from; a
+    warning when the resolution is outside what indoor maps use."""
+    val, where = _pick(name, meta, "resolution", resolution, DEFAULT_RESOLUTION)
+    res = as_resolution(where, val)
     if not USUAL_RESOLUTION[0] <= res <= USUAL_RESOLUTION[1]:
         log.warning("%s", named(name, f"resolution {res:g} m per cell is outside what indoor maps use "
                                      f"({USUAL_RESOLUTION[0]:g}-{USUAL_RESOLUTION[1]:g}); rooms and doors "
                                      f"may be meaningless"))
-    val, where = pick("origin", origin, (0.0, 0.0, 0.0))
-    org = _as_origin(where, val)
-    val, where = pick("negate", negate, False)
-    neg = _as_bool(where, "negate", val)
-    val, where = pick("mode", mode, "trinary")
-    mod = _as_mode(where, val)
-    occ_v, where_o = pick("occupied_thresh", occupied_thresh, OCCUPIED_THRESH)
-    free_v, where_f = pick("free_thresh", free_thresh, FREE_THRESH)
+    val, where = _pick(name, meta, "origin", origin, (0.0, 0.0, 0.0))
+    org = as_origin(where, val)
+    val, where = _pick(name, meta, "negate", negate, False)
+    neg = as_bool(where, "negate", val)
+    val, where = _pick(name, meta, "mode", mode, "trinary")
+    mod = as_mode(where, val)
+    occ_v, where_o = _pick(name, meta, "occupied_thresh", occupied_thresh, OCCUPIED_THRESH)
+    free_v, where_f = _pick(name, meta, "free_thresh", free_thresh, FREE_THRESH)
     where = where_o if where_o == where_f else f"{name} (with arguments)"
-    occ, free = _check_thresholds(where, occ_v, free_v)
+    occ, free = check_thresholds(where, occ_v, free_v)
+    return _HowToRead(res, org, neg, mod, occ, free, where_f)
 
+
+def _read_map_image(p: Path, name: str, image_path: Path) -> tuple:
+    """``(gray, transparent)`` of the map's image (:func:`_read_image`); an error about the image a
+    YAML names names the YAML too."""
     try:
-        gray, transparent = _read_image(image_path, image_name)
+        return _read_image(image_path, str(image_path))
     except (MapError, MapFileError) as exc:
         if image_path is p:
             raise
-        # name both files: the YAML and its image
         raise type(exc)(named(name, f"image {exc}")) from None
-    if is_yaml or any(v is not None for v in (occupied_thresh, free_thresh, mode)):
-        cells = classify_gray(gray, negate=neg, occupied_thresh=occ, free_thresh=free,
-                              mode=mod, transparent=transparent)
-        _warn_unknown_read_free(name, gray, cells, free, where_f, neg)
-    else:
-        cells = classify_plan(gray, negate=neg, transparent=transparent)
-    grid = OccupancyGrid(cells, res, org, name, gray=gray)
-    _warn_free_area(name, np.count_nonzero(cells == FREE) * res * res)
-    return grid
 
 
 #: :func:`load_map` warns when at least this share of the free cells (and :data:`UNKNOWN_FREE_MIN_CELLS`
@@ -810,10 +667,10 @@ def save_map(grid_or_cells, path_stem, *, resolution=None, origin=None, mode: st
         place, so no half-written file is ever left.
     """
     stem = Path(os.fspath(path_stem))
-    if stem.suffix.lower() in _YAML_SUFFIXES + (".pgm",):
+    if stem.suffix.lower() in YAML_SUFFIXES + (".pgm",):
         stem = stem.with_suffix("")
     name = str(stem)
-    mode = _as_mode(name, mode)
+    mode = as_mode(name, mode)
     if mode == "scale":
         raise ParameterError(named(name, "save_map supports mode 'trinary' or 'raw', got 'scale'"))
     if isinstance(grid_or_cells, OccupancyGrid):
@@ -831,8 +688,8 @@ def save_map(grid_or_cells, path_stem, *, resolution=None, origin=None, mode: st
             gray, cells = a, None
         else:
             gray, cells = None, from_array(a, source=name).cells
-    res = _as_resolution(name, DEFAULT_RESOLUTION if resolution is None else resolution)
-    org = _as_origin(name, (0.0, 0.0, 0.0) if origin is None else origin)
+    res = as_resolution(name, DEFAULT_RESOLUTION if resolution is None else resolution)
+    org = as_origin(name, (0.0, 0.0, 0.0) if origin is None else origin)
     if gray is None:
         if mode == "raw":
             gray = np.where((cells >= 0) & (cells <= 100), cells, 255).astype(np.uint8)

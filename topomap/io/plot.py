@@ -8,15 +8,17 @@ directly.
 
 :func:`overlay_image` / :func:`overlay_png` draw the same picture straight
 into a raster at the map's own resolution with OpenCV (one pixel per map
-cell; tens of milliseconds even for large maps): the ``overlay.png`` of
-``topomap segment``.
+cell; fast even for large maps): the ``overlay.png`` of ``topomap segment``.
 """
 
 from __future__ import annotations
 
+import io
+
 import numpy as np
 
 from .._fast import lookup
+from ..grid import FREE, OCCUPIED
 
 __all__ = ["plot_map", "plot_rooms", "plot_doors", "plot_skeletons", "plot_room_graph",
            "plot_route", "plot_segmentation", "save_overlay", "room_colors", "overlay_image", "overlay_png"]
@@ -229,8 +231,6 @@ def _overlay_indexed(seg, skeletons=False, graph=False, alpha=0.75):
         idx = lookup(lut, labels)
     else:
         idx = np.take(lut, np.clip(labels, 0, n + nf))
-    from .maps import FREE, OCCUPIED
-
     # cells without a label: walls black, unknown grey, free white (one lookup on the cell values)
     by_cell = np.full(256, _UNKNOWN, np.uint8)
     by_cell[np.uint8(OCCUPIED)], by_cell[np.uint8(FREE)] = _WALL, _FREE
@@ -326,8 +326,6 @@ def overlay_png(seg, *, skeletons: bool = False, graph: bool = False, dpi: int |
     -------
     bytes
     """
-    import io
-
     buf = io.BytesIO()
     if dpi is not None:
         save_overlay(seg, buf, skeletons=skeletons, graph=graph, dpi=dpi)

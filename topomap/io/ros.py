@@ -26,22 +26,27 @@ All messages are in the map frame: the frame of the grid's origin
 
 from __future__ import annotations
 
+import io
 import math
 import os
 import shutil
+import struct
 import tempfile
-from dataclasses import dataclass
 from contextlib import contextmanager
+from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
+from time import time_ns
 from typing import Optional
 
 import numpy as np
 
-from ..errors import BagError, MapError, MapFileError, MapFileNotFoundError, MapTooLargeError, \
-    MissingDependencyError, ParameterError, TopomapError
-from ..errors import one_line as _one_line
-from ..grid import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
+from ..errors import (BagError, MapError, MapFileError, MapFileNotFoundError, MapTooLargeError,
+                      MissingDependencyError, ParameterError, TopomapError, one_line)
+from ..grid import FREE, OCCUPIED, UNKNOWN, OccupancyGrid, cell_limit
+from ..options import check_length
+from .metadata import as_float, check_thresholds, yaml_loader
+from .plot import room_colors
 
 __all__ = [
     "MAP_TYPE",
@@ -230,13 +235,11 @@ def occupancy_cells(data, width: int, height: int, *, free_thresh: float = SAVER
     MapTooLargeError
         More than :func:`topomap.io.cell_limit` cells.
     """
-    from . import maps as io
-
-    occ_t, free_t = io._check_thresholds(name, occupied_thresh, free_thresh)
+    occ_t, free_t = check_thresholds(name, occupied_thresh, free_thresh)
     w, h = int(width), int(height)
     if w <= 0 or h <= 0:
         raise MapError(f"{name}: the map is empty ({w} x {h} cells)")
-    limit, why = io.cell_limit()
+    limit, why = cell_limit()
     if w * h > limit:
         raise MapTooLargeError(f"{name}: map is {w:,} x {h:,} cells = {w * h:,}, more than {why}")
     if isinstance(data, (bytes, bytearray, memoryview)):
@@ -274,12 +277,13 @@ def _yaw(q, name: str) -> float:
     return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
 
 
-def _f32(v) -> float:
+def _float32_decimal(v) -> float:
     """The shortest decimal of a float32 value (0.05 stays 0.05, not 0.0500000007)."""
     return float(str(np.float32(v)))
 
 
-def _ns(stamp) -> int:
+def _stamp_ns(stamp) -> int:
+    """Nanoseconds of a ``builtin_interfaces/Time`` stamp."""
     return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
 
 
@@ -330,15 +334,15 @@ def grid_from_message(msg, *, source: Optional[str] = None, free_thresh: float =
         header = msg.header
         data = msg.data
         o = info.origin
-        res = _f32(info.resolution) if resolution is None else resolution
+        res = _float32_decimal(info.resolution) if resolution is None else resolution
         org = (float(o.position.x), float(o.position.y), _yaw(o.orientation, name)) if origin is None else origin
         frame = str(header.frame_id) or "map"
-        stamp = _ns(header.stamp)
+        stamp = _stamp_ns(header.stamp)
         width, height = int(info.width), int(info.height)
     except TopomapError:
         raise
     except (AttributeError, TypeError, ValueError) as exc:
-        raise MapError(_one_line(f"{name}: not a nav_msgs/OccupancyGrid message ({exc})")) from None
+        raise MapError(one_line(f"{name}: not a nav_msgs/OccupancyGrid message ({exc})")) from None
     cells = occupancy_cells(data, width, height, free_thresh=free_thresh, occupied_thresh=occupied_thresh,
                             name=name)
     return RosMap(cells, res, org, source, frame_id=frame, stamp=stamp, topic=topic, log_time=log_time)
@@ -388,11 +392,6 @@ def _check_expansion(p: Path, name: str):
     """BagError when bag ``p`` decompresses to more than :data:`MAX_EXPANSION` times its bytes: ROS 2
     file compression (each ``.zstd`` file), ROS 2 message compression of a sqlite3 bag (each message),
     and MCAP chunks (each chunk, its size header checked against its data). Streams, bounded memory."""
-    import io as _pyio
-    import struct
-
-    from .maps import _yaml_loader
-
     files, mode, fmt = [p], "", ""
     if p.is_dir():
         import yaml
@@ -401,13 +400,13 @@ def _check_expansion(p: Path, name: str):
         if meta_path.stat().st_size > 1 << 20:
             raise BagError(f"{name}: metadata.yaml is {meta_path.stat().st_size:,} bytes, more than 1 MiB")
         try:
-            meta = yaml.load(meta_path.read_bytes(), Loader=_yaml_loader())["rosbag2_bagfile_information"]
+            meta = yaml.load(meta_path.read_bytes(), Loader=yaml_loader())["rosbag2_bagfile_information"]
             files = [p / Path(str(f)).name for f in meta.get("relative_file_paths") or []]
             mode = str(meta.get("compression_mode") or "").lower()
             fmt = str(meta.get("compression_format") or "").lower()
         except Exception as exc:  # noqa: BLE001 - any odd metadata
-            raise BagError(_one_line(f"{name}: not a readable bag (metadata.yaml: "
-                                     f"{_one_line(exc) or type(exc).__name__})")) from None
+            raise BagError(one_line(f"{name}: not a readable bag (metadata.yaml: "
+                                    f"{one_line(exc) or type(exc).__name__})")) from None
     files = [f for f in files if f.is_file()]
     packed = sum(f.stat().st_size for f in files)
     budget = max(MAX_EXPANSION * packed, MIN_EXPANSION_BYTES)
@@ -426,12 +425,12 @@ def _check_expansion(p: Path, name: str):
                 spend(_expanded(_decompressor("zstd", raw), budget - total), f"{f.name} (file compression)")
             continue
         if mode == "message" and fmt == "zstd" and f.suffix == ".db3":
-            import sqlite3
+            import sqlite3  # only a bag of zstd-compressed messages needs it (a C module some Pythons lack)
 
             con = sqlite3.connect(f"file:{f}?mode=ro", uri=True)
             try:
                 for (data,) in con.execute("SELECT data FROM messages"):
-                    spend(_expanded(_decompressor("zstd", _pyio.BytesIO(data)), budget - total),
+                    spend(_expanded(_decompressor("zstd", io.BytesIO(data)), budget - total),
                           f"a message of {f.name}")
             except sqlite3.Error:
                 pass  # not a bag database: rosbags says so
@@ -458,7 +457,7 @@ def _check_expansion(p: Path, name: str):
                 data = rec[32 + clen + 8:]
                 if claimed > budget - total:
                     spend(claimed, f"an MCAP chunk of {f.name}")
-                stream = _decompressor(kind, _pyio.BytesIO(data))
+                stream = _decompressor(kind, io.BytesIO(data))
                 if stream is not None:  # its size header may lie: count what it really expands to
                     try:
                         real = _expanded(stream, claimed)
@@ -473,8 +472,6 @@ def _check_expansion(p: Path, name: str):
 def _map_size(raw: bytes, ros2: bool):
     """``(width, height)`` an OccupancyGrid message's header claims (``raw``: CDR, or ROS 1
     serialised), read before the message is decoded; None when it cannot be read."""
-    import struct
-
     try:
         if ros2:
             end = "<" if raw[1] & 1 else ">"
@@ -540,17 +537,15 @@ def read_map(path, *, topic: Optional[str] = None, time: Optional[float] = None,
     MissingDependencyError
         ``rosbags`` is not installed (``pip install 'topomap-rooms[ros]'``).
     """
-    from .maps import _as_float, _check_thresholds
-
     p = Path(os.fspath(path))
     name = str(p)
-    if time is not None and _as_float(name, "time", time) < 0:
+    if time is not None and as_float(name, "time", time) < 0:
         raise ParameterError(f"{name}: time must be seconds >= 0 after the start of the bag, got {time!r}")
     if topic is not None and (not isinstance(topic, str) or not topic.strip()):
         raise ParameterError(f"{name}: topic must be a topic name such as '/map', got {topic!r}")
     free_t = SAVER_FREE_THRESH if free_thresh is None else free_thresh
     occ_t = SAVER_OCCUPIED_THRESH if occupied_thresh is None else occupied_thresh
-    _check_thresholds(name, occ_t, free_t)
+    check_thresholds(name, occ_t, free_t)
     if not p.exists():
         raise MapFileNotFoundError(f"{name}: no such bag")
     _rosbags(name)
@@ -569,19 +564,19 @@ def read_map(path, *, topic: Optional[str] = None, time: Optional[float] = None,
             if topic is None:
                 maps = sorted(t for t, ty in topics.items() if ty == MAP_TYPE)
                 if not maps:
-                    raise BagError(_one_line(f"{name}: no {MAP_TYPE} topic in the bag (topics: "
-                                             f"{_topic_list(topics)})"))
+                    raise BagError(one_line(f"{name}: no {MAP_TYPE} topic in the bag (topics: "
+                                            f"{_topic_list(topics)})"))
                 if len(maps) > 1:
-                    raise BagError(_one_line(f"{name}: several map topics ({', '.join(maps)}); "
-                                             f"choose one with topic= (--topic)"))
+                    raise BagError(one_line(f"{name}: several map topics ({', '.join(maps)}); "
+                                            f"choose one with topic= (--topic)"))
                 topic = maps[0]
             elif topic not in topics:
-                raise BagError(_one_line(f"{name}: no topic {topic} in the bag (topics: {_topic_list(topics)})"))
+                raise BagError(one_line(f"{name}: no topic {topic} in the bag (topics: {_topic_list(topics)})"))
             elif topics[topic] != MAP_TYPE:
                 raise BagError(f"{name}: topic {topic} is {topics[topic]}, not {MAP_TYPE}")
             conns = [c for c in reader.connections if c.topic == topic]
             start = reader.start_time
-            limit = None if time is None else start + int(round(_as_float(name, "time", time) * 1e9))
+            limit = None if time is None else start + int(round(as_float(name, "time", time) * 1e9))
             chosen = first = None
             for conn, t, raw in reader.messages(connections=conns):
                 first = t if first is None else first
@@ -596,9 +591,7 @@ def read_map(path, *, topic: Optional[str] = None, time: Optional[float] = None,
             conn, t, raw = chosen
             size = _map_size(raw, reader.is2)
             if size is not None:  # the cell bound from the message's header, before the message is decoded
-                from . import maps as io
-
-                limit, why = io.cell_limit()
+                limit, why = cell_limit()
                 if size[0] * size[1] > limit:
                     raise MapTooLargeError(f"{name}: map is {size[0]:,} x {size[1]:,} cells = "
                                            f"{size[0] * size[1]:,}, more than {why}")
@@ -608,8 +601,8 @@ def read_map(path, *, topic: Optional[str] = None, time: Optional[float] = None,
     except PermissionError as exc:
         raise MapFileError(f"{name}: cannot read bag: {exc.strerror or exc}") from None
     except Exception as exc:  # noqa: BLE001 - rosbags raises ReaderError, struct.error, KeyError, ...
-        detail = _one_line(exc) or type(exc).__name__
-        raise BagError(_one_line(f"{name}: not a readable bag ({detail})")) from None
+        detail = one_line(exc) or type(exc).__name__
+        raise BagError(one_line(f"{name}: not a readable bag ({detail})")) from None
     return grid_from_message(msg, source=name, free_thresh=free_t, occupied_thresh=occ_t,
                              resolution=resolution, origin=origin, topic=topic, log_time=t)
 
@@ -670,7 +663,8 @@ def _frame_and_stamp(grid, frame_id, stamp):
     return frame, int(ns)
 
 
-def _ts(typestore):
+def _store_or_ros2(typestore):
+    """``typestore`` when given, else the ROS 2 one (rosbags required)."""
     if typestore is not None:
         return typestore
     _rosbags("<ros>")
@@ -707,7 +701,7 @@ def map_message(grid, *, frame_id: Optional[str] = None, stamp: Optional[int] = 
     -------
     rosbags message of type ``nav_msgs/msg/OccupancyGrid``
     """
-    ts = _ts(typestore)
+    ts = _store_or_ros2(typestore)
     frame, ns = _frame_and_stamp(grid, frame_id, stamp)
     h, w = grid.shape
     ox, oy, yaw = grid.origin
@@ -759,16 +753,12 @@ def marker_array(seg, *, frame_id: Optional[str] = None, stamp: Optional[int] = 
     -------
     rosbags message of type ``visualization_msgs/msg/MarkerArray``
     """
-    from .plot import room_colors
-
-    ts = _ts(typestore)
+    ts = _store_or_ros2(typestore)
     frame, ns = _frame_and_stamp(seg.grid, frame_id, stamp)
-    from ..options import check_length
-
     for key, v in (("line_width", line_width), ("text_height", text_height)):
         if check_length(key, v) == 0:
             raise ParameterError(f"{key} must be a length > 0 m, got {v!r}")
-    M = ts.types["visualization_msgs/msg/Marker"]
+    Marker = ts.types["visualization_msgs/msg/Marker"]
     G = seg.room_graph
     colors = room_colors(seg.n_rooms)
 
@@ -778,11 +768,11 @@ def marker_array(seg, *, frame_id: Optional[str] = None, stamp: Optional[int] = 
     def color(r, g, b, a=1.0):
         return _new(ts, "std_msgs/msg/ColorRGBA", r=float(r), g=float(g), b=float(b), a=float(a))
 
-    def marker(ns_, id_, type_, pose=None, **kw):
-        return _new(ts, "visualization_msgs/msg/Marker", header=_header(ts, frame, ns), ns=ns_, id=int(id_),
-                    type=type_, action=M.ADD, pose=pose or _pose(ts), **kw)
+    def marker(namespace, marker_id, kind, pose=None, **kw):
+        return _new(ts, "visualization_msgs/msg/Marker", header=_header(ts, frame, ns), ns=namespace,
+                    id=int(marker_id), type=kind, action=Marker.ADD, pose=pose or _pose(ts), **kw)
 
-    markers = [_new(ts, "visualization_msgs/msg/Marker", header=_header(ts, frame, ns), action=M.DELETEALL,
+    markers = [_new(ts, "visualization_msgs/msg/Marker", header=_header(ts, frame, ns), action=Marker.DELETEALL,
                     pose=_pose(ts))]
     rooms = sorted(G.nodes)
     for n in rooms:
@@ -793,15 +783,15 @@ def marker_array(seg, *, frame_id: Optional[str] = None, stamp: Optional[int] = 
                 pts += [point(x1, y1, _LINE_Z), point(x2, y2, _LINE_Z)]
         if pts:
             c = colors[n] if n < len(colors) else (0.5, 0.5, 0.5, 1.0)
-            markers.append(marker("rooms", n, M.LINE_LIST, points=pts, color=color(*c[:3]),
+            markers.append(marker("rooms", n, Marker.LINE_LIST, points=pts, color=color(*c[:3]),
                                   scale=_new(ts, "geometry_msgs/msg/Vector3", x=float(line_width), y=0.0, z=0.0)))
     for n in rooms:
         d = G.nodes[n]
-        markers.append(marker("room_numbers", n, M.TEXT_VIEW_FACING, pose=_pose(ts, d["x"], d["y"], _TEXT_Z),
+        markers.append(marker("room_numbers", n, Marker.TEXT_VIEW_FACING, pose=_pose(ts, d["x"], d["y"], _TEXT_Z),
                               text=str(n), color=color(0.0, 0.0, 0.0),
                               scale=_new(ts, "geometry_msgs/msg/Vector3", x=0.0, y=0.0, z=float(text_height))))
     for a, b, k, d in sorted(G.edges(keys=True, data=True), key=lambda e: e[2]):
-        markers.append(marker("doors", d.get("door", k), M.LINE_LIST,
+        markers.append(marker("doors", d.get("door", k), Marker.LINE_LIST,
                               points=[point(d["x1"], d["y1"], _LINE_Z), point(d["x2"], d["y2"], _LINE_Z)],
                               color=color(1.0, 0.0, 0.0),
                               scale=_new(ts, "geometry_msgs/msg/Vector3", x=2.0 * float(line_width), y=0.0,
@@ -835,7 +825,7 @@ def label_image(seg, *, frame_id: Optional[str] = None, stamp: Optional[int] = N
     ParameterError
         More than 65535 labels.
     """
-    ts = _ts(typestore)
+    ts = _store_or_ros2(typestore)
     frame, ns = _frame_and_stamp(seg.grid, frame_id, stamp)
     labels = np.asarray(seg.labels)
     if labels.size and (labels.min() < 0 or labels.max() > 65535):
@@ -855,7 +845,7 @@ def to_cdr(msg, *, typestore=None) -> bytes:
         from visualization_msgs.msg import MarkerArray
         out = deserialize_message(ros.to_cdr(ros.marker_array(seg)), MarkerArray)
     """
-    ts = _ts(typestore)
+    ts = _store_or_ros2(typestore)
     return bytes(ts.serialize_cdr(msg, msg.__msgtype__))
 
 
@@ -956,8 +946,6 @@ def staged_bag(seg, path, *, frame_id: Optional[str] = None, stamp: Optional[int
     files inside the block. Yields the final path; the errors are those of
     :func:`write_bag` (an error of the block itself passes through unchanged).
     """
-    import time as _time
-
     p = Path(os.fspath(path))
     kind = check_bag_path(p)
     from rosbags.rosbag1 import Writer as Writer1
@@ -965,7 +953,7 @@ def staged_bag(seg, path, *, frame_id: Optional[str] = None, stamp: Optional[int
 
     ts = _store("ros1" if kind == "ros1" else "ros2")
     when = log_time if log_time is not None else getattr(seg.grid, "log_time", None)
-    when = int(_time.time_ns() if when is None else when)
+    when = int(time_ns() if when is None else when)
     msgs = [(MAP_TOPIC, MAP_TYPE, map_message(seg.grid, frame_id=frame_id, stamp=stamp, typestore=ts)),
             (MARKERS_TOPIC, MARKER_ARRAY_TYPE, marker_array(seg, frame_id=frame_id, stamp=stamp, typestore=ts)),
             (LABELS_TOPIC, IMAGE_TYPE, label_image(seg, frame_id=frame_id, stamp=stamp, typestore=ts))]
