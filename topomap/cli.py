@@ -223,7 +223,7 @@ def segment_cmd(maps, outdir, resolution, method, skeletons, no_overlay, no_geoj
     try:
         outdir = _check_outdir(outdir)
         if resolution is not None:
-            from .io.maps import check_resolution
+            from .io.metadata import check_resolution
 
             check_resolution(resolution, name="--resolution")
     except Exception as exc:  # noqa: BLE001
@@ -512,7 +512,7 @@ def simulate_cmd(plans, outdir, seed, explore, glass, closed_doors, no_drift, no
     """
     from .run.batch import FAILED, SKIPPED
     from .bench.corpus import scan_options, simulate_many
-    from .io.maps import check_resolution
+    from .io.metadata import check_resolution
 
     try:
         check_resolution(resolution, name="--resolution")
@@ -555,7 +555,7 @@ def export_cmd(source, target, nav2, clearance):
     data) and .geojson (map-frame metres). With --nav2, writes the route
     graph Nav2's Route Server loads (OUTPUT may then be left out).
     """
-    from .io.export import _format, load_graph, save_graph
+    from .io.export import graph_format, load_graph, save_graph
 
     if clearance is not None and nav2 is None:
         click.echo("error: --clearance needs --nav2", err=True)
@@ -570,7 +570,7 @@ def export_cmd(source, target, nav2, clearance):
 
             clearance = check_length("--clearance", clearance)
         if target is not None:
-            _format(target)
+            graph_format(target)
         G = load_graph(source)
         if nav2 is not None:
             from .io.nav2 import labels_beside

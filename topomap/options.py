@@ -90,7 +90,6 @@ def _check_rule(name: str, value) -> str:
     return value
 
 
-_check_fraction = check_fraction  # alias until the callers move (topomap.core.identity)
 
 _CHECKS = {"length": check_length, "fraction": check_fraction, "ratio": _check_ratio, "area": check_area,
            "bool": _check_bool, "rule": _check_rule,

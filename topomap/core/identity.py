@@ -62,7 +62,7 @@ import numpy as np
 import networkx as nx
 
 from ..errors import ParameterError
-from ..options import TopomapOptions, _check_fraction
+from ..options import TopomapOptions, check_fraction
 from .edit import keep_merges
 from .geometry import line_pixels, point_segment_distances
 from .roommap import RoomMap
@@ -256,7 +256,7 @@ def match_rooms(previous, seg: Segmentation, *, min_overlap: float = DEFAULT_MIN
     from scipy.optimize import linear_sum_assignment
 
     t0 = time.perf_counter()
-    if _check_fraction("min_overlap", min_overlap) == 0:
+    if check_fraction("min_overlap", min_overlap) == 0:
         raise ParameterError(f"min_overlap must be a share in (0, 1], got {min_overlap!r}")
     min_overlap = float(min_overlap)
     if min_room_area is None:

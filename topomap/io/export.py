@@ -1153,7 +1153,6 @@ def graph_format(path) -> str:
     return FORMATS[ext]
 
 
-_format = graph_format  # alias until the callers move (topomap.cli)
 
 
 def load_graph(path) -> nx.MultiGraph:
