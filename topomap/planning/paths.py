@@ -94,7 +94,6 @@ from ..core.roommap import RoomMap
 __all__ = ["PlanningError", "NotInRoomError", "NoPathError", "room_at", "neighbors", "doors_between",
            "room_distances", "travel_graph", "door_graph", "plan_path"]
 
-_Ctx = RoomMap  # alias until core.identity imports topomap.core.roommap.RoomMap
 
 
 class RoomSpace:
