@@ -5,6 +5,8 @@ import json
 import numpy as np
 import networkx as nx
 import pytest
+
+import topomap
 from click.testing import CliRunner
 
 from topomap.io import export as E
@@ -474,3 +476,15 @@ def test_graphml_of_a_non_utf8_source_name_loads(tmp_path):
     G.add_node(1, area=1.0)
     save_graphml(G, tmp_path / "g.graphml")
     assert load_graphml(tmp_path / "g.graphml").graph["source"] == "caf\\xe9\\x01.png"
+
+
+def test_the_typed_room_attributes_are_the_computed_ones():
+    """Every attribute room_graph computes has a type for the file round trip, and nothing else does: a
+    user's own attribute (a name, a no-go mark) is carried as it is, and to the next map."""
+    from topomap.core.result import ROOM_ATTRIBUTES
+    from topomap.io.export import NODE_TYPES
+
+    assert set(NODE_TYPES) == set(ROOM_ATTRIBUTES)
+    seg = topomap.segment(topomap.load_map(topomap.example_map_path()))
+    computed = {k for _, d in seg.room_graph.nodes(data=True) for k in d}
+    assert computed | {"door_distances"} == set(ROOM_ATTRIBUTES)  # travel distances: topomap segment adds them

@@ -17,7 +17,8 @@ from ..grid import OccupancyGrid
 __all__ = ["Segmentation", "TrackedSegmentation", "RoomChanges", "Intermediates", "StageTimer", "paste",
            "ROOM_ATTRIBUTES", "MAX_FILE_LABEL", "MAX_ROOM_ID", "check_room_ids"]
 
-#: The room (node) attributes :func:`topomap.core.roomgraph.room_graph` computes; any other attribute of a
+#: The room (node) attributes topomap computes (:func:`topomap.core.roomgraph.room_graph`, and
+#: ``door_distances``, which ``topomap segment`` adds from the travel graph); any other attribute of a
 #: room is a user's (a name, a no-go mark, merged IDs, ...) and is carried to the next map of the place.
 ROOM_ATTRIBUTES = ("area", "cells", "x", "y", "row", "col", "interior_x", "interior_y", "interior_row",
                    "interior_col", "polygon", "door_distances", "room_kind", "width", "length")

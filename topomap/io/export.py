@@ -56,12 +56,13 @@ from networkx.readwrite.graphml import GraphMLReader
 
 from ..errors import (GraphFormatError, MapError, MapFileError, MapFileNotFoundError, MapTooLargeError,
                       ParameterError, TopomapError, first_line, one_line)
+from ..core.result import MAX_FILE_LABEL, MAX_ROOM_ID, check_room_ids
 from ..grid import cell_limit, check_image_size
 from .files import atomic_write, renamed_error
 from .maps import FREE_THRESH, OCCUPIED_THRESH, pgm_header, yaml_text
 from .metadata import as_origin, as_resolution
 
-__all__ = ["atomic_write", "save_labels", "label_png_bytes", "file_labels", "MAX_FILE_LABEL", "save_graphml",
+__all__ = ["atomic_write", "save_labels", "label_png_bytes", "file_labels", "MAX_FILE_LABEL", "MAX_ROOM_ID", "check_room_ids", "save_graphml",
            "save_json", "to_graphml_graph", "node_link", "write_outputs", "save_bytes", "geometry_wkt", "restore_types", "load_graphml", "load_json",
            "to_geojson", "from_geojson", "save_geojson", "load_geojson", "save_label_map", "load_label_map",
            "save_graph", "load_graph", "label_map_bytes", "graphml_bytes", "GRAPH_TYPES", "NODE_TYPES",
@@ -85,34 +86,6 @@ def save_labels(labels, path) -> Path:
     gets the one label after the largest room ID (:func:`file_labels`).
     """
     return _write(label_png_bytes(file_labels(labels, _name(path, "labels.png"), "PNG")), path)
-
-
-#: Largest label a label file holds (16 bits).
-MAX_FILE_LABEL = 65535
-#: Largest room ID: the label files hold room IDs up to 65534 with the fragments' label after them. A room
-#: graph read from a file (a ``--previous`` or a ``plan`` / ``tour`` graph) must have whole-number room IDs
-#: in 1..MAX_ROOM_ID and a ``next_room_id`` of at most MAX_ROOM_ID + 1, so what is built from its IDs is
-#: bounded by the number of its rooms.
-MAX_ROOM_ID = MAX_FILE_LABEL - 1
-
-
-def check_room_ids(G, name) -> None:
-    """GraphFormatError naming ``name`` unless every room ID of ``G`` is an ``int`` in 1..:data:`MAX_ROOM_ID`
-    and its ``next_room_id`` (when it has one) an integer in 1..MAX_ROOM_ID + 1."""
-    def whole(v, top):
-        return isinstance(v, numbers.Integral) and not isinstance(v, bool) and 1 <= int(v) <= top
-
-    for r in G.nodes:
-        if not whole(r, MAX_ROOM_ID):
-            raise _bad(name, f"room ID {one_line(repr(r))[:40]} is not a whole number from 1 to {MAX_ROOM_ID} "
-                             "(room IDs are the labels of the 16-bit label files)")
-    nxt = G.graph.get("next_room_id")
-    if nxt not in (None, ""):
-        if isinstance(nxt, str) and nxt.strip().isdigit():
-            nxt = int(nxt)
-        if not whole(nxt, MAX_ROOM_ID + 1):
-            raise _bad(name, f"next_room_id {one_line(repr(nxt))[:40]} is not a whole number from 1 to "
-                             f"{MAX_ROOM_ID + 1}")
 
 
 def file_labels(seg, name: str = "<labels>", kind: str = "PNG") -> np.ndarray:
