@@ -485,3 +485,68 @@ def test_a_merge_is_kept_where_the_new_map_agrees(out_dir, base):
     G.nodes[c]["merged"] = [c, office]
     assert match_rooms(G, fresh)[0].n_rooms == 3
     assert match_rooms(G, fresh, min_overlap=0.9)[0].n_rooms == 4
+
+
+# --------------------------------------------------------------------------
+# Nav2 route graphs exported from the folder's room graph
+# --------------------------------------------------------------------------
+
+def _cli(*args):
+    from topomap.cli import main
+
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def _a_door(folder):
+    """Two rooms of the folder's room graph that share a door (the first door)."""
+    a, b, _ = next(iter(load_graph(folder / "rooms.graphml").edges(keys=True)))
+    return sorted((a, b))
+
+
+def test_edit_rewrites_the_nav2_route_graphs_exported_from_the_folder(out_dir, tmp_path):
+    inside, outside = out_dir / "route.geojson", tmp_path / "nav" / "route.geojson"
+    outside.parent.mkdir()
+    assert _cli("export", out_dir / "rooms.graphml", "--nav2", inside).exit_code == 0
+    r = _cli("export", out_dir / "rooms.json", "--nav2", outside, "--clearance", "0.15")
+    assert r.exit_code == 0, r.output
+    notes = json.loads((out_dir / "topomap_run.json").read_text())["nav2"]
+    assert notes == [{"path": "route.geojson", "clearance": None}, {"path": str(outside), "clearance": 0.15}]
+    before = inside.read_bytes(), outside.read_bytes()
+    a, b = _a_door(out_dir)
+    r = _cli("edit", out_dir, "--merge", a, b)
+    assert r.exit_code == 0, r.output
+    assert f"{out_dir}: Nav2 route graph route.geojson rewritten" in r.output
+    assert (inside.read_bytes(), outside.read_bytes()) != before  # the merged rooms' route graphs changed
+    # each is what exporting the edited room graph gives now, with the clearance it was exported with
+    fresh = tmp_path / "fresh.geojson"
+    assert _cli("export", out_dir / "rooms.graphml", "--nav2", fresh).exit_code == 0
+    assert inside.read_bytes() == fresh.read_bytes()
+    assert _cli("export", out_dir / "rooms.graphml", "--nav2", fresh, "--clearance", "0.15").exit_code == 0
+    assert outside.read_bytes() == fresh.read_bytes()
+    rooms = {f["properties"]["metadata"].get("room") for f in json.loads(inside.read_text())["features"]}
+    assert b not in rooms and a in rooms
+
+
+def test_an_edit_whose_nav2_route_graph_cannot_be_made_changes_no_file(out_dir):
+    assert _cli("export", out_dir / "rooms.graphml", "--nav2", out_dir / "route.geojson").exit_code == 0
+    record = json.loads((out_dir / "topomap_run.json").read_text())
+    record["nav2"][0]["clearance"] = 50.0  # no door is 100 m wide: no route graph of any rooms
+    (out_dir / "topomap_run.json").write_text(json.dumps(record))
+    before = _snapshot(out_dir)
+    r = _cli("edit", out_dir, "--merge", *_a_door(out_dir))
+    assert r.exit_code == 1, r.output
+    lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1 and "route.geojson" in lines[0], lines
+    assert _snapshot(out_dir) == before
+
+
+def test_a_room_graph_outside_an_output_folder_notes_no_export(out_dir, tmp_path):
+    import shutil
+
+    elsewhere = tmp_path / "copy"
+    elsewhere.mkdir()
+    for name in ("rooms.graphml", "labels.png"):
+        shutil.copy(out_dir / name, elsewhere / name)
+    assert _cli("export", elsewhere / "rooms.graphml", "--nav2", elsewhere / "route.geojson").exit_code == 0
+    assert not (elsewhere / "topomap_run.json").exists()
+    assert "nav2" not in json.loads((out_dir / "topomap_run.json").read_text())

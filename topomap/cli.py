@@ -586,8 +586,10 @@ def export_cmd(source, target, nav2, clearance):
             save_graph(G, target)
         if route is not None:
             from .io.nav2 import write_route_graph
+            from .run.record import add_nav2_export
 
             write_route_graph(route, nav2)
+            add_nav2_export(source, nav2, clearance)  # so that topomap edit rewrites it
     except Exception as exc:  # noqa: BLE001
         sys.exit(_fail(exc, _naming(target or nav2, exc) and _naming(nav2 or target, exc)))
     if target is not None:
@@ -667,6 +669,10 @@ def edit_cmd(outdir, merges, splits, names, no_gos):
     row = {"rooms": seg.n_rooms, "doors": len(seg.doors), "fragments": seg.n_fragments,
            "fragment_area_m2": seg.fragment_area}
     click.echo(f"{outdir}: {'; '.join(done)} -> {_summary(row)}")
+    from .run.record import nav2_exports, read_record
+
+    for note in nav2_exports(read_record(Path(outdir)) or {}):
+        click.echo(f"{outdir}: Nav2 route graph {note['path']} rewritten")
 
 
 if __name__ == "__main__":

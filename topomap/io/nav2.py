@@ -16,7 +16,7 @@ from ..errors import MapFileNotFoundError
 from .export import load_label_map, read_label_image
 from .files import atomic_write
 
-__all__ = ["write_route_graph", "labels_beside"]
+__all__ = ["write_route_graph", "route_graph_bytes", "labels_beside"]
 
 
 def write_route_graph(graph: dict, path) -> Path:
@@ -28,10 +28,14 @@ def write_route_graph(graph: dict, path) -> Path:
     pathlib.Path
     """
     path = Path(path)
-    text = json.dumps(graph, indent=1, allow_nan=False)
     with atomic_write(path) as f:
-        f.write(text.encode("utf-8"))
+        f.write(route_graph_bytes(graph))
     return path
+
+
+def route_graph_bytes(graph: dict) -> bytes:
+    """The bytes :func:`write_route_graph` writes for ``graph``: indented JSON, no NaN."""
+    return json.dumps(graph, indent=1, allow_nan=False).encode("utf-8")
 
 
 def labels_beside(graph_path) -> np.ndarray:

@@ -3,7 +3,9 @@
 The folder is read back as a segmentation with :func:`load_segmentation`, the
 edits are made in memory by :func:`topomap.core.edit.apply_edits` (a bad one
 raises before any file is touched), and :func:`save_edits` writes every
-output again, all files or none, and adds the edits to the run record
+output again, all files or none — with the Nav2 route graphs exported from
+the folder's room graph (``topomap export OUT_DIR/rooms.graphml --nav2
+FILE``, noted in the run record) — and adds the edits to the run record
 (:mod:`topomap.run.record`); :func:`edit_outputs` does all three.
 """
 
@@ -11,6 +13,7 @@ from __future__ import annotations
 
 import logging
 import time
+from contextlib import ExitStack
 from pathlib import Path
 
 import numpy as np
@@ -22,12 +25,15 @@ from ..core.identity import TrackedSegmentation
 from ..errors import GraphFormatError, MapFileError, MapFileNotFoundError, first_line
 from ..grid import FREE, OCCUPIED, OccupancyGrid
 from ..io.export import NODE_TYPES, load_graph, load_label_map
+from ..io.files import atomic_write
 from ..io.maps import load_map
+from ..io.nav2 import route_graph_bytes
+from ..planning.nav2 import DEFAULT_CLEARANCE, route_graph
 from .job import summary_counts, write_segmentation
-from .record import COMPLETE, INCOMPLETE, RECORD, fingerprint, output_stamps, read_record, restore_record, \
-    write_record
+from .record import COMPLETE, INCOMPLETE, RECORD, fingerprint, nav2_exports, output_stamps, read_record, \
+    restore_record, write_record
 
-__all__ = ["load_segmentation", "save_edits", "edit_outputs"]
+__all__ = ["load_segmentation", "save_edits", "nav2_routes", "edit_outputs"]
 
 log = logging.getLogger("topomap")
 
@@ -177,8 +183,9 @@ def save_edits(seg, out_dir, records) -> dict:
     """Rewrite every output of ``out_dir`` from ``seg`` and add ``records`` to its run record.
 
     The files ``topomap segment`` wrote there (labels, room graph in each
-    format, overlay; :func:`topomap.run.job.write_segmentation`) are all
-    replaced or none is; the run record's ``edits`` list gets ``records``
+    format, overlay; :func:`topomap.run.job.write_segmentation`) and the Nav2
+    route graphs the run record notes (:func:`nav2_routes`) are all replaced
+    or none is; the run record's ``edits`` list gets ``records``
     (each with the time, ``"at"``, UTC), its ``files`` and ``row`` are
     updated, so a later ``topomap segment`` of the same unchanged map into
     the same folder finds it up to date and keeps the edits. A failed write
@@ -187,18 +194,28 @@ def save_edits(seg, out_dir, records) -> dict:
     Returns
     -------
     dict
-        ``{name: path}`` of the files written.
+        ``{name: path}`` of the files written (a Nav2 route graph under ``"nav2:" + its path``).
+
+    Raises
+    ------
+    PlanningError, ParameterError
+        A noted Nav2 route graph cannot be made from the edited rooms (no file is changed).
     """
     folder = Path(out_dir)
     old = (folder / RECORD).read_text(encoding="utf-8") if (folder / RECORD).is_file() else None
     rec = dict(read_record(folder) or {})
+    routes = nav2_routes(seg, folder, rec)  # made before any file is touched: an error changes nothing
     rec.setdefault("topomap", __version__)
     at = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
     rec["edits"] = list(rec.get("edits") or []) + [dict(r, at=at) for r in records]
     write_record(folder, dict(rec, status=INCOMPLETE))
     try:
-        written = write_segmentation(seg, folder, overlay=(folder / "overlay.png").exists(),
-                                     geojson=(folder / "rooms.geojson").exists())
+        with ExitStack() as stack:  # the route graphs are renamed into place after the folder's files
+            for path, data in routes.items():
+                stack.enter_context(atomic_write(path)).write(data)
+            written = write_segmentation(seg, folder, overlay=(folder / "overlay.png").exists(),
+                                         geojson=(folder / "rooms.geojson").exists())
+        written.update({f"nav2:{path}": path for path in routes})
         files = output_stamps(folder)
         row = dict(rec.get("row") or {}, **summary_counts(seg))
         write_record(folder, dict(rec, status=COMPLETE, files={**(rec.get("files") or {}), **files}, row=row))
@@ -206,6 +223,27 @@ def save_edits(seg, out_dir, records) -> dict:
         restore_record(folder, old, True)
         raise
     return written
+
+
+def nav2_routes(seg, folder: Path, record: dict) -> dict:
+    """``{path: GeoJSON bytes}``: the Nav2 route graph of ``seg`` for every export the run record ``record``
+    of ``folder`` notes (:func:`topomap.run.record.nav2_exports`), with the clearance it was exported with.
+
+    Raises
+    ------
+    PlanningError, ParameterError
+        A route graph cannot be made (the message names its file).
+    """
+    out = {}
+    for note in nav2_exports(record):
+        path = folder / note["path"]  # an absolute path stays itself
+        clearance = DEFAULT_CLEARANCE if note["clearance"] is None else note["clearance"]
+        try:
+            route = route_graph(seg, clearance=clearance)
+        except Exception as exc:
+            raise type(exc)(f"{path}: the Nav2 route graph of the edited rooms: {first_line(exc)}") from None
+        out[path] = route_graph_bytes(route)
+    return out
 
 
 def edit_outputs(out_dir, edits):

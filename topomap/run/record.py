@@ -4,7 +4,9 @@ Every output folder of ``topomap segment`` gets one (see the rules of
 :mod:`topomap.run.batch`): the map it holds (absolute path), size and
 modification time of the input files, the options, the topomap version,
 size and modification time of every output file, the map's summary row and,
-after ``topomap edit``, the edits made. It is written first as
+after ``topomap edit``, the edits made, and the Nav2 route graphs exported from
+its room graph (``topomap export OUT/rooms.graphml --nav2 FILE``), which
+``topomap edit`` rewrites with the rest. It is written first as
 ``"status": "incomplete"`` and rewritten as ``"complete"`` after the last
 output file, always atomically; a failed run puts the earlier record back.
 A batch skips a map whose record is complete and still true
@@ -24,7 +26,8 @@ from ..io.export import OUTPUT_FILES
 from ..io.files import atomic_write
 
 __all__ = ["RECORD", "INCOMPLETE", "COMPLETE", "OUTPUT_NAMES", "file_stamp", "input_files", "fingerprint",
-           "output_stamps", "read_record", "write_record", "restore_record", "up_to_date"]
+           "output_stamps", "read_record", "write_record", "restore_record", "up_to_date", "add_nav2_export",
+           "nav2_exports"]
 
 #: Name of the run record in every output folder.
 RECORD = "topomap_run.json"
@@ -117,3 +120,37 @@ def up_to_date(record: dict, settings: dict, folder: Path) -> bool:
     if not files or any(file_stamp(f) != v for f, v in inputs.items()):
         return False
     return all(file_stamp(folder / name) == v for name, v in files.items())
+
+
+def add_nav2_export(graph_path, nav2_path, clearance: Optional[float]) -> bool:
+    """Note in the run record of the folder of ``graph_path`` that a Nav2 route graph was exported from it
+    to ``nav2_path`` with ``clearance`` (m; None: the default), so that ``topomap edit`` rewrites it.
+
+    Nothing is noted (False) when ``graph_path`` is not a room graph file of an output folder with a
+    complete run record. The path is kept relative to the folder when it lies in it, else absolute; a
+    later export to the same file replaces the earlier note.
+    """
+    folder = Path(os.path.abspath(graph_path)).parent
+    rec = read_record(folder)
+    if not rec or rec.get("status") != COMPLETE or Path(graph_path).name not in OUTPUT_NAMES:
+        return False
+    target = Path(os.path.abspath(nav2_path))
+    try:
+        where = str(target.relative_to(folder))
+    except ValueError:
+        where = str(target)
+    notes = [n for n in nav2_exports(rec) if n["path"] != where]
+    write_record(folder, dict(rec, nav2=notes + [{"path": where, "clearance": clearance}]))
+    return True
+
+
+def nav2_exports(record: dict) -> list:
+    """The Nav2 exports a run record notes (:func:`add_nav2_export`): ``[{"path": str, "clearance": float or
+    None}, ...]`` (a path relative to the folder or absolute); malformed notes are left out."""
+    notes = record.get("nav2") if isinstance(record, dict) else None
+    out = []
+    for n in notes if isinstance(notes, list) else []:
+        if isinstance(n, dict) and isinstance(n.get("path"), str) and n["path"] \
+                and (n.get("clearance") is None or isinstance(n.get("clearance"), (int, float))):
+            out.append({"path": n["path"], "clearance": n.get("clearance")})
+    return out
