@@ -403,6 +403,54 @@ def test_compressed_bag_that_expands_hugely_is_refused(tmp_path, monkeypatch, st
     _one_error_line(res, bag)
 
 
+def _ros1_bag(path, width, height, compression):
+    from rosbags.rosbag1 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    ts = get_typestore(Stores.ROS1_NOETIC)
+    w = Writer(path)
+    w.set_compression(getattr(Writer.CompressionFormat, compression))
+    with w:
+        conn = w.add_connection("/map", "nav_msgs/msg/OccupancyGrid", typestore=ts)
+        w.write(conn, 10**9, ts.serialize_ros1(_occ(ts, width, height), "nav_msgs/msg/OccupancyGrid"))
+    return path
+
+
+@pytest.mark.parametrize("compression", ["BZ2", "LZ4"])
+def test_compressed_ros1_bag_that_expands_hugely_is_refused(tmp_path, monkeypatch, compression):
+    pytest.importorskip("rosbags")
+    from topomap.io import ros
+    from topomap.errors import BagError
+
+    bag = _ros1_bag(tmp_path / "bomb.bag", 2000, 2000, compression)  # 4 MB of zeros in one chunk
+    assert bag.stat().st_size < 100_000
+    assert io.load_map(bag).shape == (2000, 2000)  # within the default bound: read
+    monkeypatch.setattr(ros, "MIN_EXPANSION_BYTES", 1 << 20)  # so that 4 MB is "huge" here
+    monkeypatch.setattr(ros, "MAX_EXPANSION", 10)
+    with pytest.raises(BagError, match=r"bomb.bag: a chunk of bomb.bag expands to more than 1,048,576 bytes "
+                                       r".*refused before decompressing"):
+        io.load_map(bag)
+    _one_error_line(_run("segment", bag, "-o", tmp_path / "out"), bag)
+
+
+def test_ros1_chunk_whose_size_header_lies_is_refused(tmp_path):
+    """A chunk that says it holds 1,000 bytes and expands to 4 MB: its size header is not taken on trust."""
+    pytest.importorskip("rosbags")
+    import struct
+
+    from topomap.errors import BagError
+
+    bag = _ros1_bag(tmp_path / "liar.bag", 2000, 2000, "BZ2")
+    raw = bytearray(bag.read_bytes())
+    at = raw.index(b"size=") + 5
+    assert struct.unpack_from("<I", raw, at)[0] >= 4_000_000
+    struct.pack_into("<I", raw, at, 1000)
+    bag.write_bytes(bytes(raw))
+    with pytest.raises(BagError, match=r"liar.bag: a chunk of liar.bag expands to more than the 1,000 bytes its "
+                                       r"header says"):
+        io.load_map(bag)
+
+
 # --------------------------------------------------------------------------
 # Messages name the file at fault, and show no internals
 # --------------------------------------------------------------------------

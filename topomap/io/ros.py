@@ -356,6 +356,7 @@ MAX_EXPANSION = 1000
 MIN_EXPANSION_BYTES = 64 << 20
 
 _MCAP_MAGIC = b"\x89MCAP0\r\n"
+_ROS1_MAGIC = b"#ROSBAG V2.0\n"
 
 
 def _decompressor(kind: str, raw):
@@ -373,6 +374,10 @@ def _decompressor(kind: str, raw):
         import lz4.frame
 
         return lz4.frame.open(raw, "rb")
+    if kind == "bz2":
+        import bz2
+
+        return bz2.open(raw, "rb")
     return None  # an unknown compression: rosbags refuses it
 
 
@@ -388,85 +393,144 @@ def _expanded(stream, limit: int) -> int:
     return n
 
 
+class _Budget:
+    """The bytes a bag may decompress to in all: :data:`MAX_EXPANSION` times its packed bytes, at least
+    :data:`MIN_EXPANSION_BYTES`; :meth:`spend` raises BagError past it."""
+
+    def __init__(self, name: str, packed: int):
+        self.name, self.packed = name, packed
+        self.limit = max(MAX_EXPANSION * packed, MIN_EXPANSION_BYTES)
+        self.total = 0
+
+    @property
+    def left(self) -> int:
+        return self.limit - self.total
+
+    def spend(self, n: int, what: str) -> None:
+        self.total += n
+        if self.total > self.limit:
+            raise BagError(f"{self.name}: {what} expands to more than {self.limit:,} bytes ({MAX_EXPANSION} "
+                           f"times the bag's {self.packed:,} bytes): refused before decompressing it")
+
+    def chunk(self, kind: str, data: bytes, claimed: int, what: str) -> None:
+        """Spend a chunk of compression ``kind`` whose header claims ``claimed`` bytes: refused when the
+        claim is over the budget, or when ``data`` really expands to more than it claims."""
+        if claimed > self.left:
+            self.spend(claimed, what)
+        stream = _decompressor(kind, io.BytesIO(data))
+        if stream is not None:  # its size header may lie: count what it really expands to
+            try:
+                real = _expanded(stream, claimed)
+            except Exception:  # noqa: BLE001 - corrupt data: rosbags reports it
+                real = 0
+            if real > claimed:
+                raise BagError(f"{self.name}: {what} expands to more than the {claimed:,} bytes its header says")
+        self.spend(claimed, what)
+
+
+def _bag_files(p: Path, name: str):
+    """``(files, compression mode, compression format)`` of bag ``p``: the file itself, or the files a
+    ROS 2 bag directory's ``metadata.yaml`` lists."""
+    if not p.is_dir():
+        return [p], "", ""
+    import yaml
+
+    meta_path = p / "metadata.yaml"
+    if meta_path.stat().st_size > 1 << 20:
+        raise BagError(f"{name}: metadata.yaml is {meta_path.stat().st_size:,} bytes, more than 1 MiB")
+    try:
+        meta = yaml.load(meta_path.read_bytes(), Loader=yaml_loader())["rosbag2_bagfile_information"]
+        files = [p / Path(str(f)).name for f in meta.get("relative_file_paths") or []]
+        mode = str(meta.get("compression_mode") or "").lower()
+        fmt = str(meta.get("compression_format") or "").lower()
+    except Exception as exc:  # noqa: BLE001 - any odd metadata
+        raise BagError(one_line(f"{name}: not a readable bag (metadata.yaml: "
+                                f"{one_line(exc) or type(exc).__name__})")) from None
+    return [f for f in files if f.is_file()], mode, fmt
+
+
 def _check_expansion(p: Path, name: str):
     """BagError when bag ``p`` decompresses to more than :data:`MAX_EXPANSION` times its bytes: ROS 2
     file compression (each ``.zstd`` file), ROS 2 message compression of a sqlite3 bag (each message),
-    and MCAP chunks (each chunk, its size header checked against its data). Streams, bounded memory."""
-    files, mode, fmt = [p], "", ""
-    if p.is_dir():
-        import yaml
-
-        meta_path = p / "metadata.yaml"
-        if meta_path.stat().st_size > 1 << 20:
-            raise BagError(f"{name}: metadata.yaml is {meta_path.stat().st_size:,} bytes, more than 1 MiB")
-        try:
-            meta = yaml.load(meta_path.read_bytes(), Loader=yaml_loader())["rosbag2_bagfile_information"]
-            files = [p / Path(str(f)).name for f in meta.get("relative_file_paths") or []]
-            mode = str(meta.get("compression_mode") or "").lower()
-            fmt = str(meta.get("compression_format") or "").lower()
-        except Exception as exc:  # noqa: BLE001 - any odd metadata
-            raise BagError(one_line(f"{name}: not a readable bag (metadata.yaml: "
-                                    f"{one_line(exc) or type(exc).__name__})")) from None
-    files = [f for f in files if f.is_file()]
-    packed = sum(f.stat().st_size for f in files)
-    budget = max(MAX_EXPANSION * packed, MIN_EXPANSION_BYTES)
-    total = 0
-
-    def spend(n, what):
-        nonlocal total
-        total += n
-        if total > budget:
-            raise BagError(f"{name}: {what} expands to more than {budget:,} bytes ({MAX_EXPANSION} times the "
-                           f"bag's {packed:,} bytes): refused before decompressing it")
-
+    MCAP chunks and ROS 1 chunks (bz2, lz4; each chunk, its size header checked against its data).
+    Streams, bounded memory."""
+    files, mode, fmt = _bag_files(p, name)
+    budget = _Budget(name, sum(f.stat().st_size for f in files))
     for f in files:
         if mode == "file" and fmt == "zstd":
             with open(f, "rb") as raw:
-                spend(_expanded(_decompressor("zstd", raw), budget - total), f"{f.name} (file compression)")
-            continue
-        if mode == "message" and fmt == "zstd" and f.suffix == ".db3":
-            import sqlite3  # only a bag of zstd-compressed messages needs it (a C module some Pythons lack)
+                budget.spend(_expanded(_decompressor("zstd", raw), budget.left), f"{f.name} (file compression)")
+        elif mode == "message" and fmt == "zstd" and f.suffix == ".db3":
+            _check_messages(f, budget)
+        else:
+            with open(f, "rb") as fh:
+                magic = fh.read(len(_ROS1_MAGIC))
+                if magic.startswith(_MCAP_MAGIC):
+                    fh.seek(len(_MCAP_MAGIC))
+                    _check_mcap_chunks(fh, f.name, budget)
+                elif magic == _ROS1_MAGIC:
+                    _check_ros1_chunks(fh, f.name, budget)
 
-            con = sqlite3.connect(f"file:{f}?mode=ro", uri=True)
-            try:
-                for (data,) in con.execute("SELECT data FROM messages"):
-                    spend(_expanded(_decompressor("zstd", io.BytesIO(data)), budget - total),
-                          f"a message of {f.name}")
-            except sqlite3.Error:
-                pass  # not a bag database: rosbags says so
-            finally:
-                con.close()
+
+def _check_messages(f: Path, budget: _Budget) -> None:
+    """Spend every zstd-compressed message of the sqlite3 bag ``f``."""
+    import sqlite3  # only a bag of zstd-compressed messages needs it (a C module some Pythons lack)
+
+    con = sqlite3.connect(f"file:{f}?mode=ro", uri=True)
+    try:
+        for (data,) in con.execute("SELECT data FROM messages"):
+            budget.spend(_expanded(_decompressor("zstd", io.BytesIO(data)), budget.left), f"a message of {f.name}")
+    except sqlite3.Error:
+        pass  # not a bag database: rosbags says so
+    finally:
+        con.close()
+
+
+def _check_mcap_chunks(fh, name: str, budget: _Budget) -> None:
+    """Spend every chunk of the MCAP file ``fh`` (read past its magic)."""
+    while True:
+        head = fh.read(9)
+        if len(head) < 9:
+            break
+        op, length = struct.unpack("<BQ", head)
+        if op != 0x06:  # not a chunk
+            fh.seek(length, 1)
             continue
-        with open(f, "rb") as fh:
-            if fh.read(8) != _MCAP_MAGIC:
-                continue
-            while True:
-                head = fh.read(9)
-                if len(head) < 9:
-                    break
-                op, length = struct.unpack("<BQ", head)
-                if op != 0x06:  # not a chunk
-                    fh.seek(length, 1)
-                    continue
-                rec = fh.read(min(length, packed))
-                if len(rec) < 32:
-                    break
-                claimed = struct.unpack_from("<Q", rec, 16)[0]
-                (clen,) = struct.unpack_from("<I", rec, 28)
-                kind = rec[32:32 + clen].decode("ascii", "replace")
-                data = rec[32 + clen + 8:]
-                if claimed > budget - total:
-                    spend(claimed, f"an MCAP chunk of {f.name}")
-                stream = _decompressor(kind, io.BytesIO(data))
-                if stream is not None:  # its size header may lie: count what it really expands to
-                    try:
-                        real = _expanded(stream, claimed)
-                    except Exception:  # noqa: BLE001 - corrupt data: rosbags reports it
-                        real = 0
-                    if real > claimed:
-                        raise BagError(f"{name}: an MCAP chunk of {f.name} expands to more than the "
-                                       f"{claimed:,} bytes its header says")
-                spend(claimed, f"an MCAP chunk of {f.name}")
+        rec = fh.read(min(length, budget.packed))
+        if len(rec) < 32:
+            break
+        claimed = struct.unpack_from("<Q", rec, 16)[0]
+        (clen,) = struct.unpack_from("<I", rec, 28)
+        kind = rec[32:32 + clen].decode("ascii", "replace")
+        budget.chunk(kind, rec[32 + clen + 8:], claimed, f"an MCAP chunk of {name}")
+
+
+def _check_ros1_chunks(fh, name: str, budget: _Budget) -> None:
+    """Spend every chunk of the ROS 1 bag ``fh`` (read past its magic line): records of a header (fields
+    ``name=value``, each behind its length) and data, each behind its length; a chunk (``op`` 5) names
+    its ``compression`` and its uncompressed ``size``."""
+    while True:
+        head = fh.read(4)
+        if len(head) < 4:
+            break
+        header = fh.read(min(struct.unpack("<I", head)[0], budget.packed))
+        fields, pos = {}, 0
+        while pos + 4 <= len(header):
+            (n,) = struct.unpack_from("<I", header, pos)
+            key, _, value = header[pos + 4:pos + 4 + n].partition(b"=")
+            fields[key] = value
+            pos += 4 + n
+        size = fh.read(4)
+        if len(size) < 4:
+            break
+        (length,) = struct.unpack("<I", size)
+        if fields.get(b"op") != b"\x05" or len(fields.get(b"size", b"")) != 4:
+            fh.seek(length, 1)
+            continue
+        kind = fields.get(b"compression", b"none").decode("ascii", "replace")
+        claimed = struct.unpack("<I", fields[b"size"])[0]
+        budget.chunk("" if kind == "none" else kind, fh.read(min(length, budget.packed)), claimed,
+                     f"a chunk of {name}")
 
 
 def _map_size(raw: bytes, ros2: bool):
