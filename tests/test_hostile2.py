@@ -378,7 +378,7 @@ def test_bag_map_over_the_cell_bound_is_refused_before_decoding(tmp_path, monkey
 
 
 @pytest.mark.parametrize("storage, compression", [("mcap", "STORAGE"), ("sqlite3", "FILE"), ("sqlite3", "MESSAGE"),
-                                                  ("mcap", "FILE")])
+                                                  ("mcap", "FILE"), ("mcap", "MESSAGE")])
 def test_compressed_bag_that_expands_hugely_is_refused(tmp_path, monkeypatch, storage, compression):
     pytest.importorskip("rosbags")
     import tempfile

@@ -451,7 +451,7 @@ def _bag_files(p: Path, name: str):
 
 def _check_expansion(p: Path, name: str):
     """BagError when bag ``p`` decompresses to more than :data:`MAX_EXPANSION` times its bytes: ROS 2
-    file compression (each ``.zstd`` file), ROS 2 message compression of a sqlite3 bag (each message),
+    file compression (each ``.zstd`` file), ROS 2 message compression (each message, in sqlite3 or MCAP),
     MCAP chunks and ROS 1 chunks (bz2, lz4; each chunk, its size header checked against its data).
     Streams, bounded memory."""
     files, mode, fmt = _bag_files(p, name)
@@ -467,7 +467,7 @@ def _check_expansion(p: Path, name: str):
                 magic = fh.read(len(_ROS1_MAGIC))
                 if magic.startswith(_MCAP_MAGIC):
                     fh.seek(len(_MCAP_MAGIC))
-                    _check_mcap_chunks(fh, f.name, budget)
+                    _check_mcap_chunks(fh, f.name, budget, messages=mode == "message" and fmt == "zstd")
                 elif magic == _ROS1_MAGIC:
                     _check_ros1_chunks(fh, f.name, budget)
 
@@ -486,13 +486,17 @@ def _check_messages(f: Path, budget: _Budget) -> None:
         con.close()
 
 
-def _check_mcap_chunks(fh, name: str, budget: _Budget) -> None:
-    """Spend every chunk of the MCAP file ``fh`` (read past its magic)."""
+def _check_mcap_chunks(fh, name: str, budget: _Budget, messages: bool = False) -> None:
+    """Spend every chunk of the MCAP file ``fh`` (read past its magic) and, with ``messages`` (a ROS 2 bag
+    of zstd-compressed messages), every message in it."""
     while True:
         head = fh.read(9)
         if len(head) < 9:
             break
         op, length = struct.unpack("<BQ", head)
+        if op == 0x05 and messages:
+            _spend_message(fh.read(min(length, budget.packed)), name, budget)
+            continue
         if op != 0x06:  # not a chunk
             fh.seek(length, 1)
             continue
@@ -502,7 +506,34 @@ def _check_mcap_chunks(fh, name: str, budget: _Budget) -> None:
         claimed = struct.unpack_from("<Q", rec, 16)[0]
         (clen,) = struct.unpack_from("<I", rec, 28)
         kind = rec[32:32 + clen].decode("ascii", "replace")
-        budget.chunk(kind, rec[32 + clen + 8:], claimed, f"an MCAP chunk of {name}")
+        data = rec[32 + clen + 8:]
+        budget.chunk(kind, data, claimed, f"an MCAP chunk of {name}")
+        if messages:  # the chunk's records, at most its claimed size (within the budget: checked above)
+            stream = _decompressor(kind, io.BytesIO(data))
+            if stream is not None:
+                with stream:
+                    data = stream.read(claimed)
+            _spend_chunk_messages(data, name, budget)
+
+
+def _spend_chunk_messages(records: bytes, name: str, budget: _Budget) -> None:
+    """Spend every message among the MCAP ``records`` of a chunk."""
+    pos = 0
+    while pos + 9 <= len(records):
+        op, length = struct.unpack_from("<BQ", records, pos)
+        if op == 0x05:
+            _spend_message(records[pos + 9:pos + 9 + length], name, budget)
+        pos += 9 + length
+
+
+def _spend_message(content: bytes, name: str, budget: _Budget) -> None:
+    """Spend the zstd-compressed data of an MCAP message record (after its channel, sequence and two
+    times: 22 bytes)."""
+    try:
+        size = _expanded(_decompressor("zstd", io.BytesIO(content[22:])), budget.left)
+    except Exception:  # noqa: BLE001 - corrupt data: rosbags reports it
+        size = 0
+    budget.spend(size, f"a message of {name}")
 
 
 def _check_ros1_chunks(fh, name: str, budget: _Budget) -> None:
