@@ -150,3 +150,10 @@ def test_furniture_does_not_narrow_a_room_but_a_block_of_walls_does():
     filled = _kinds_of(C, []).nodes[1]["width"]
     C[55:65, 55:65] = 2                       # ... around a closet of another room
     assert _kinds_of(C, []).nodes[1]["width"] < filled - 0.1
+
+
+def test_a_strip_too_narrow_to_walk_along_is_no_corridor():
+    """0.6 m, about a person's shoulders and a margin: a narrower strip is a gap between walls."""
+    assert room_kind(1.1, 0.44, 2.6, 0) == "room"        # a sliver with no door (seen on a real map)
+    assert room_kind(1.5, 0.6, 2.5, 0) == "corridor"     # as narrow as a corridor gets
+    assert room_kind(2.0, 0.5, 4.0, 3) == "doorway"      # three doors do not make a gap a hallway

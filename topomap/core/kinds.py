@@ -52,7 +52,7 @@ from scipy import ndimage as ndi
 
 from .._fast import edt
 
-__all__ = ["KINDS", "CORRIDOR_MAX_WIDTH", "CORRIDOR_MIN_ELONGATION", "CORRIDOR_MIN_LENGTH", "CORRIDOR_MIN_DOORS",
+__all__ = ["KINDS", "CORRIDOR_MAX_WIDTH", "CORRIDOR_MIN_WIDTH", "CORRIDOR_MIN_ELONGATION", "CORRIDOR_MIN_LENGTH", "CORRIDOR_MIN_DOORS",
            "HALLWAY_MIN_DOORS", "SIDE_DOOR_MIN_RATIO", "WIDE_CORRIDOR_MAX_WIDTH", "WIDE_CORRIDOR_MIN_ELONGATION",
            "FURNITURE_MAX_AREA", "DOORWAY_MAX_AREA", "DOORWAY_MAX_WIDTH", "HALL_MIN_AREA", "HALL_MIN_WIDTH",
            "room_shape", "room_kind", "graph_place", "annotate_kinds"]
@@ -65,6 +65,9 @@ KINDS = ("corridor", "room", "hall", "doorway")
 #: kitchen, a gallery). Small rooms of homes (a washroom, a toilet, a balcony) are as narrow on this
 #: measure (0.8 to 1.3 m): their place in the room graph tells them apart, not their width.
 CORRIDOR_MAX_WIDTH = 1.2
+#: ... and at least this wide (m, mean width): a person's shoulders take about 0.5 m, so a strip
+#: narrower than this is a gap between walls or furniture that nobody walks along, not a corridor.
+CORRIDOR_MIN_WIDTH = 0.6
 #: ... and a corridor with two doors is at least this many widths long (length / width): a square
 #: has 2.25 and a 2:1 rectangle 2.9 on this measure; a passage longer than about three times its
 #: width is a corridor.
@@ -170,15 +173,17 @@ def room_kind(area: float, width: float, length: float, doors: int, *, cut: bool
     str
         ``"corridor"``, ``"doorway"``, ``"hall"`` or ``"room"``, tested in that order:
 
-        - ``"corridor"``: *corridor-shaped* — at most :data:`CORRIDOR_MAX_WIDTH` m wide, or at
-          most :data:`WIDE_CORRIDOR_MAX_WIDTH` m wide, :data:`WIDE_CORRIDOR_MIN_ELONGATION` widths
-          and :data:`CORRIDOR_MIN_LENGTH` m long — and a *hallway* (at least
+        - ``"corridor"``: *corridor-shaped* — at least :data:`CORRIDOR_MIN_WIDTH` m wide and at
+          most :data:`CORRIDOR_MAX_WIDTH` m, or a *long strip* (at most
+          :data:`WIDE_CORRIDOR_MAX_WIDTH` m wide, :data:`WIDE_CORRIDOR_MIN_ELONGATION` widths and
+          :data:`CORRIDOR_MIN_LENGTH` m long) — and a *hallway* (at least
           :data:`HALLWAY_MIN_DOORS` doors), a *passage* (:data:`CORRIDOR_MIN_DOORS` doors, at
-          least :data:`CORRIDOR_MIN_LENGTH` m and :data:`CORRIDOR_MIN_ELONGATION` widths long, a
-          cut vertex, and no dead end among its two neighbours unless it is
-          :data:`WIDE_CORRIDOR_MIN_ELONGATION` widths long) or *alone* (no door, at least
-          :data:`CORRIDOR_MIN_LENGTH` m and :data:`CORRIDOR_MIN_ELONGATION` widths long: a stair
-          hall or an entrance the map joins to no room);
+          least :data:`CORRIDOR_MIN_LENGTH` m and :data:`CORRIDOR_MIN_ELONGATION` widths long,
+          not the anteroom of a dead end among its two neighbours unless it is a long strip, and
+          not, when those two are joined another way too, opening onto them through a door at
+          least :data:`SIDE_DOOR_MIN_RATIO` times its width) or *alone* (no door, at least :data:`CORRIDOR_MIN_LENGTH` m and
+          :data:`CORRIDOR_MIN_ELONGATION` widths long: a stair hall or an entrance the map joins to
+          no room);
         - ``"doorway"``: at most :data:`DOORWAY_MAX_AREA` m² and :data:`DOORWAY_MAX_WIDTH` m
           wide, two doors or more;
         - ``"hall"``: at least :data:`HALL_MIN_AREA` m² and :data:`HALL_MIN_WIDTH` m wide;
@@ -198,7 +203,7 @@ def _corridor(width, length, doors, cut, dead_ends, widest_door) -> bool:
     elongation = length / width if width > 0 else 0.0
     long_strip = (width <= WIDE_CORRIDOR_MAX_WIDTH and elongation >= WIDE_CORRIDOR_MIN_ELONGATION
                   and length >= CORRIDOR_MIN_LENGTH)
-    if not (width <= CORRIDOR_MAX_WIDTH or long_strip):
+    if width < CORRIDOR_MIN_WIDTH or not (width <= CORRIDOR_MAX_WIDTH or long_strip):
         return False
     if doors >= HALLWAY_MIN_DOORS:
         return True
