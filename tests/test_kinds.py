@@ -40,6 +40,30 @@ def test_kind_rules():
     assert room_kind(16.0, 3.0, 5.0, 1) == "room"
 
 
+def test_kind_rules_of_the_place_in_the_graph():
+    # a 1 m x 3 m strip with two doors: a corridor when every route between its two neighbours
+    # passes through it and neither is a dead end ...
+    assert room_kind(3.0, 1.0, 3.0, 2) == "corridor"
+    assert room_kind(3.0, 1.0, 3.0, 2, cut=True, dead_ends=0, widest_door=0.9) == "corridor"
+    # ... not when one of them has no other door (the washroom before a bath) ...
+    assert room_kind(3.0, 1.0, 3.0, 2, dead_ends=1) == "room"
+    assert room_kind(2.0, 1.0, 2.0, 2, dead_ends=1) == "doorway"   # a small one: a lobby
+    # ... unless it is a long strip (the end of a corridor, six widths long or more)
+    assert room_kind(8.0, 1.0, 8.0, 2, dead_ends=1) == "corridor"
+    # a strip beside two rooms joined otherwise too, through doors much wider than itself: a balcony
+    assert room_kind(3.0, 1.0, 3.0, 2, cut=False, widest_door=2.0) == "room"
+    assert room_kind(3.0, 1.0, 3.0, 2, cut=False, widest_door=0.9) == "corridor"  # a corridor of a loop
+    assert room_kind(8.0, 1.0, 8.0, 2, cut=False, widest_door=2.0) == "room"
+    # three doors or more: a hallway, however short; one door: never a corridor; none: by its shape
+    assert room_kind(1.5, 1.0, 1.5, 3) == "corridor"
+    assert room_kind(3.0, 1.0, 3.0, 3, cut=False, dead_ends=2) == "corridor"
+    assert room_kind(4.0, 1.0, 4.0, 1) == "room"
+    assert room_kind(4.0, 1.0, 4.0, 0) == "corridor"
+    assert room_kind(2.2, 1.0, 2.2, 0) == "room"   # not three widths long
+    # wider than a home's hallway: the wide-corridor rule alone, with the same place in the graph
+    assert room_kind(5.0, 1.6, 3.1, 3) == "room"
+
+
 def test_rooms_of_a_map_get_their_kind_and_keep_it_in_files(tmp_path):
     seg = topomap.segment(topomap.from_array(corridor_with_rooms().array))
     G = seg.room_graph
@@ -57,16 +81,51 @@ def test_rooms_of_a_map_get_their_kind_and_keep_it_in_files(tmp_path):
 
 
 def _kinds_of(labels, doors, res=0.05):
+    """The room graph of ``labels`` with these doors ``(a, b)`` or ``(a, b, width)``, annotated."""
     import networkx as nx
 
     from topomap.core.kinds import annotate_kinds
 
     G = nx.MultiGraph()
     G.add_nodes_from(int(v) for v in np.unique(labels) if v)
-    for k, (a, b) in enumerate(doors):
-        G.add_edge(a, b, key=k)
+    for k, (a, b, *w) in enumerate(doors):
+        G.add_edge(a, b, key=k, width=w[0] if w else 0.8)
     annotate_kinds(G, labels, res)
     return G
+
+
+def _flat():
+    """A small flat at 0.05 m: a 1 m x 4 m hallway (1) below two bedrooms (2, 3), a 1 m x 4 m
+    balcony (4) above them, a 1 m x 3.2 m washroom (5) below the hallway and a bath (6) below it."""
+    L = np.zeros((180, 120), np.int32)
+    L[100:120, 20:100] = 1
+    L[20:100, 20:60] = 2
+    L[20:100, 60:100] = 3
+    L[0:20, 20:100] = 4
+    L[120:140, 20:84] = 5
+    L[140:180, 20:84] = 6
+    return L
+
+
+def test_the_place_in_the_graph_tells_the_narrow_rooms_of_a_flat_apart():
+    L = _flat()
+    doors = [(1, 2), (1, 3), (1, 5), (5, 6), (2, 4, 1.8), (3, 4, 1.8)]
+    G = _kinds_of(L, doors)
+    kinds = {n: d["room_kind"] for n, d in G.nodes(data=True)}
+    # hallway, balcony and washroom are all about 1 m wide and three to four widths long
+    for n in (1, 4, 5):
+        assert G.nodes[n]["width"] == pytest.approx(1.0, abs=0.15)
+        assert G.nodes[n]["length"] >= 3.0 * G.nodes[n]["width"]
+    assert kinds[1] == "corridor"       # three rooms open onto it
+    assert kinds[4] == "room"           # beside the bedrooms, through their 1.8 m glass doors
+    assert kinds[5] == "room"           # the anteroom of the bath, which has no other door
+    assert kinds[2] == kinds[3] == kinds[6] == "room"
+    # a second door of the bath to the hallway: the washroom is a passage of a loop, with doors
+    G = _kinds_of(L, doors + [(6, 1)])
+    assert G.nodes[5]["room_kind"] == "corridor"
+    # the balcony's doors as narrow as ordinary doors: a passage between the bedrooms
+    G = _kinds_of(L, doors[:4] + [(2, 4), (3, 4)])
+    assert G.nodes[4]["room_kind"] == "corridor"
 
 
 def test_furniture_does_not_narrow_a_room_but_a_block_of_walls_does():
@@ -91,3 +150,10 @@ def test_furniture_does_not_narrow_a_room_but_a_block_of_walls_does():
     filled = _kinds_of(C, []).nodes[1]["width"]
     C[55:65, 55:65] = 2                       # ... around a closet of another room
     assert _kinds_of(C, []).nodes[1]["width"] < filled - 0.1
+
+
+def test_a_strip_too_narrow_to_walk_along_is_no_corridor():
+    """0.6 m, about a person's shoulders and a margin: a narrower strip is a gap between walls."""
+    assert room_kind(1.1, 0.44, 2.6, 0) == "room"        # a sliver with no door (seen on a real map)
+    assert room_kind(1.5, 0.6, 2.5, 0) == "corridor"     # as narrow as a corridor gets
+    assert room_kind(2.0, 0.5, 4.0, 3) == "doorway"      # three doors do not make a gap a hallway
