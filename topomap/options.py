@@ -436,7 +436,8 @@ class TopomapOptions(CheckedOptions):
         cell by cell inside the rooms kept: a part of a room below it that
         is solid free space (at least ``min_room_area``, holding a free
         disk as wide as the smallest room, 1 m) is a fan the door stage did
-        not cut off, and is taken out of the room as outside
+        not cut off, and is taken out of the room as outside with the
+        cells joined to it that are more open than enclosed
         (:func:`topomap.core.outside.outside_fans`); a thin bundle of rays
         never is (across a ray the unknown is beside every cell, whatever
         lies beyond). 0 turns this off.

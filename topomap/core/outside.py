@@ -45,8 +45,17 @@ import numpy as np
 from .._fast import label, label_stats
 from .skeleton import downsample
 
-__all__ = ["DIRECTIONS", "unknown_cells", "open_unknown", "enclosure", "outside_fans", "outside_regions",
+__all__ = ["DIRECTIONS", "FAN_OPEN", "unknown_cells", "open_unknown", "enclosure", "outside_fans", "outside_regions",
            "drop_outside"]
+
+#: Share of the eight directions below which a cell next to a fan found by :func:`outside_fans` belongs
+#: to that fan: a half. A fan's cells near the facade see its wall in three directions or more (the
+#: wall itself and the two diagonals back to it, and through the window the room's far walls), so the
+#: fan test's own ``outside_enclosure`` leaves a band of the fan along the facade in the room; a cell
+#: more open than enclosed (more of its directions end in the unexplored world than at an obstacle) is
+#: no cell of a room, and joined to a fan it is the rest of that fan. Only a fan grows: on a map with
+#: no solid fan (the partial maps of the benchmark) nothing changes.
+FAN_OPEN = 0.5
 
 #: The eight grid directions ``(d_row, d_col)`` :func:`enclosure` looks along.
 DIRECTIONS = ((0, 1), (0, -1), (1, 0), (-1, 0), (1, 1), (1, -1), (-1, 1), (-1, -1))
@@ -187,14 +196,19 @@ def enclosure(free: np.ndarray, occupied: np.ndarray, resolution: float, *, open
 
 
 def outside_fans(labels: np.ndarray, n_rooms: int, encl: np.ndarray, clearance: np.ndarray, *,
-                 threshold: float, min_cells: int, width_px: float) -> np.ndarray:
+                 threshold: float, min_cells: int, width_px: float,
+                 grow_threshold: float | None = None) -> np.ndarray:
     """The cells of rooms that are solid fans of free space beyond the facade.
 
     A piece is a connected part (8-connected, within one room) of the
     room's cells whose :func:`enclosure` is below ``threshold``; it is a
     fan outside when it has at least ``min_cells`` cells and holds a cell
     at least ``width_px`` from every cell that is not free (solid free
-    space as wide as a room, not a bundle of single rays).
+    space as wide as a room, not a bundle of single rays). With
+    ``grow_threshold``, a fan also takes the cells of its room connected to
+    it whose enclosure is below that (:data:`FAN_OPEN` of the directions:
+    the part of the fan near the facade, whose cells still see the facade's
+    wall in a few directions).
 
     Parameters
     ----------
@@ -212,6 +226,8 @@ def outside_fans(labels: np.ndarray, n_rooms: int, encl: np.ndarray, clearance: 
         Least cells of a piece (the smallest room).
     width_px : float
         Least clearance (cells) of a piece's widest cell.
+    grow_threshold : float, optional
+        Directions out of 8; default: the fans are not grown.
 
     Returns
     -------
@@ -233,7 +249,16 @@ def outside_fans(labels: np.ndarray, n_rooms: int, encl: np.ndarray, clearance: 
     wide = np.bincount(comp[low & (np.asarray(clearance) >= width_px)], minlength=n + 1)
     keep = (size >= min_cells) & (wide > 0)
     keep[0] = False
-    return keep[comp]
+    fans = keep[comp]
+    if grow_threshold is not None and grow_threshold > threshold and fans.any():
+        # the fans go on through the cells more open than enclosed next to them
+        more = inner & (np.asarray(encl) < grow_threshold)
+        comp, n = label(more, 8)
+        reached = np.zeros(n + 1, bool)
+        reached[comp[fans]] = True
+        reached[0] = False
+        fans |= reached[comp]
+    return fans
 
 
 def outside_regions(labels: np.ndarray, n_rooms: int, encl: np.ndarray, *, threshold: float,

@@ -49,6 +49,7 @@ from .doors import (
     wall_threshold,
 )
 from .outside import (
+    FAN_OPEN,
     drop_outside,
     enclosure,
     outside_fans,
@@ -441,7 +442,7 @@ def _drop_outside(grid: OccupancyGrid, labels, doors, n_rooms: int, clearance, o
     # a fan is a piece at least as large as the smallest room, holding a free square as wide as it
     fans = outside_fans(labels, n_rooms, encl, clearance, threshold=threshold,
                         min_cells=int(np.ceil(opts.min_room_area / res ** 2 - 1e-9)),
-                        width_px=0.5 * np.sqrt(opts.min_room_area) / res)
+                        width_px=0.5 * np.sqrt(opts.min_room_area) / res, grow_threshold=8 * FAN_OPEN)
     is_out = outside_regions(labels, n_rooms, encl, threshold=threshold, fans=fans)
     return drop_outside(labels, doors, n_rooms, is_out, fans=fans)
 
