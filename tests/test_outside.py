@@ -163,6 +163,13 @@ def test_drop_outside_cuts_fans_out_of_the_rooms_kept():
     assert new.tolist() == [[1, 5, 5, 2, 6, 3, 4]] and n == 3 and outside == (5, 6)
 
 
+def test_drop_outside_keeps_a_room_in_one_piece():
+    labels = np.array([[1, 1, 1, 1, 1, 1, 1, 2]], np.int32)
+    fans = np.array([[0, 0, 0, 0, 1, 0, 0, 0]], bool)            # the fan cuts room 1 in two
+    new, _, n, outside = O.drop_outside(labels, [], 2, np.zeros(3, bool), fans=fans)
+    assert new.tolist() == [[1, 1, 1, 1, 3, 3, 3, 2]] and n == 2 and outside == (3,)   # the smaller piece goes with it
+
+
 def _first_hit_by_walking(free, hit, d):
     H, W = free.shape
     out = np.zeros((H, W), bool)

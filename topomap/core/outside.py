@@ -325,11 +325,28 @@ def drop_outside(labels: np.ndarray, doors: list, n_rooms: int, is_out: np.ndarr
     if fans is not None:
         cut = np.asarray(fans, bool) & (labels > 0) & (labels <= n_rooms)
         if cut.any():
+            cut = _whole_rooms(labels, cut)
             comp, n = label(cut, 8)
             top = int(labels.max())
             labels = np.where(cut, top + comp, labels).astype(np.int32)
             outside = tuple(outside) + tuple(range(top + 1, top + n + 1))
     return labels, doors, n_rooms, outside
+
+
+def _whole_rooms(labels: np.ndarray, cut: np.ndarray) -> np.ndarray:
+    """``cut`` (fan cells of rooms) with the pieces of each room that the fan cuts off from the
+    room's largest 8-connected part: a room stays one piece of free space."""
+    cut = cut.copy()
+    for r in np.unique(labels[cut]):
+        rows, cols = np.nonzero(labels == r)
+        r0, r1, c0, c1 = rows.min(), rows.max() + 1, cols.min(), cols.max() + 1
+        rest = (labels[r0:r1, c0:c1] == r) & ~cut[r0:r1, c0:c1]
+        comp, n = label(rest, 8)
+        if n > 1:
+            size = np.bincount(comp[rest], minlength=n + 1)
+            size[0] = 0
+            cut[r0:r1, c0:c1] |= rest & (comp != int(np.argmax(size)))
+    return cut
 
 
 def _drop_rooms(labels: np.ndarray, doors: list, n_rooms: int, is_out: np.ndarray, out: np.ndarray):
