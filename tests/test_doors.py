@@ -293,3 +293,22 @@ def test_pixel_graph_components_are_those_of_its_adjacency():
         assert np.unique(got).size == np.unique(comp[mask]).size
         firsts = [np.flatnonzero(lab == k)[0] for k in range(1, got.max() + 1)]  # pixels are row-major
         assert firsts == sorted(firsts)
+
+
+def test_across_corridor_keeps_the_door_at_a_corridors_mouth():
+    from topomap.core import walls as W
+
+    # a corridor 2 m wide (rows 20..59) between two 8 m walls (columns 5..164)
+    free = np.zeros((80, 170), bool)
+    free[20:60, 5:165] = True
+    faces = W.wall_faces(~free, free)
+    walls = W.long_walls(W.wall_lines(faces, min_length_px=20), max_gap_px=60, offset_px=4, min_span_px=80)
+
+    def cand(col):
+        return D.Candidate(edge=(0, 1, 0), centroid=np.array([40.0, col]), direction=np.array([0.0, 1.0]),
+                           radius=19.0, ip1=np.array([19.5, col]), ip2=np.array([60.5, col]), status=D.DOOR)
+
+    middle, mouth = cand(80.0), cand(163.0)
+    kept = D.across_corridor([(2.0, middle), (2.0, mouth)], walls, depth_px=10)
+    assert [c for _, c in kept] == [mouth]                      # both side walls end at the mouth
+    assert middle.status == D.ACROSS_CORRIDOR and mouth.status == D.DOOR

@@ -47,6 +47,66 @@ def test_without_the_stage_the_fans_join_the_rooms():
     assert seg.n_rooms == 3 and len(seg.doors) == 3             # the fans a room joined to both
 
 
+def _room_with_wide_opening(rays: bool):
+    """A 7.8 x 4.9 m room whose facade has a 3.5 m opening (wider than any door: the doors stage
+    cuts nothing there); beyond it the laser left either a solid fan of free space 5.9 m deep or
+    seven single rays (a room glimpsed through its door leaves such rays)."""
+    c = np.full((240, 200), UNKNOWN, np.int8)
+    c[20:122, 20:182] = OCCUPIED
+    c[22:120, 22:180] = FREE
+    c[120:122, 65:135] = FREE
+    rr, cc = np.mgrid[0:240, 0:200]
+    beyond = np.zeros(c.shape, bool)
+    if rays:
+        t = np.arange(110)
+        for a in np.linspace(-0.6, 0.6, 7):
+            r, k = (121 + t * np.cos(a)).astype(int), (100 + t * np.sin(a)).astype(int)
+            ok = (r < 240) & (k >= 0) & (k < 200)
+            beyond[r[ok], k[ok]] = True
+    else:
+        beyond = (rr >= 122) & (np.abs(cc - 100) <= 35 + (rr - 122) * 0.6)
+    beyond &= c == UNKNOWN
+    c[beyond] = FREE
+    return OccupancyGrid(c, 0.05), beyond
+
+
+def test_a_solid_fan_joined_to_its_room_is_cut_out_of_it():
+    grid, fan = _room_with_wide_opening(rays=False)
+    seg = topomap.segment(grid)
+    out = np.isin(seg.labels, seg.outside)
+    assert seg.n_rooms == 1 and seg.outside                     # the room stays, the fan is outside
+    assert out[fan].mean() > 0.95                               # with its band along the facade
+    assert not out[:120].any()                                  # nothing inside the facade
+    assert (seg.labels[grid.free] > 0).all()
+    assert (topomap.segment(grid, outside_enclosure=0).room_labels[fan] > 0).all()   # the stage off: the room's
+
+
+def test_single_rays_beyond_a_room_stay_in_it():
+    grid, rays = _room_with_wide_opening(rays=True)
+    seg = topomap.segment(grid)
+    assert seg.n_rooms == 1 and seg.outside == ()
+    assert (seg.room_labels[rays] > 0).all()                   # no evidence of outside: a glimpse
+
+
+def test_outside_fans_are_solid_pieces_within_one_room():
+    labels = np.zeros((40, 60), np.int32)
+    labels[:, :30], labels[:, 30:] = 1, 2
+    encl = np.full(labels.shape, 8.0, np.float32)
+    encl[5:35, 10:50] = 1.0                                     # low enclosure across both rooms
+    clearance = np.full(labels.shape, 3.0)
+    clearance[20, 15] = 10.0                                    # a wide cell in room 1 only
+    fans = O.outside_fans(labels, 2, encl, clearance, threshold=2.4, min_cells=100, width_px=10)
+    assert fans[5:35, 10:29].all() and not fans[:, 29:].any()   # room 1's piece; none across the border
+    assert not O.outside_fans(labels, 2, encl, clearance, threshold=2.4, min_cells=1000, width_px=10).any()
+    encl[5:35, 5:10] = 3.0                                      # beside the piece, more open than enclosed
+    encl[5:35, 0:5] = 5.0
+    grown = O.outside_fans(labels, 2, encl, clearance, threshold=2.4, min_cells=100, width_px=10, grow_threshold=4.0)
+    assert grown[5:35, 5:29].all() and not grown[:, :5].any() and not grown[:, 29:].any()
+    assert (O.outside_fans(labels, 2, encl, clearance, threshold=2.4, min_cells=100, width_px=10) == fans).all()
+    assert O.outside_regions(labels, 2, encl, threshold=2.4, fans=fans).tolist() == [False, False, False]
+    assert O.outside_regions(labels, 2, encl, threshold=2.4, fans=labels == 1).tolist() == [False, True, False]
+
+
 def test_a_room_half_explored_or_with_clutter_is_no_outside():
     c = np.full((140, 140), UNKNOWN, np.int8)
     c[20:102, 20:102] = OCCUPIED
@@ -91,6 +151,23 @@ def test_drop_outside_renumbers_rooms_fragments_and_doors():
     new, kept, n, outside = O.drop_outside(labels, doors, 3, is_out)
     assert new.tolist() == [[1, 1, 5, 5, 2, 2, 3, 4]] and n == 2 and outside == (5,)
     assert [(d.id, d.rooms) for d in kept] == [(0, (1, 2))]    # the doors of the outside room dropped
+
+
+def test_drop_outside_cuts_fans_out_of_the_rooms_kept():
+    labels = np.array([[1, 1, 1, 2, 2, 3, 4]], np.int32)        # rooms 1-3, fragment 4
+    fans = np.array([[0, 1, 1, 0, 1, 0, 0]], bool)              # room 2 is dropped whole
+    is_out = np.array([False, False, True, False])
+    new, kept, n, outside = O.drop_outside(labels, [], 3, is_out, fans=fans)
+    assert new.tolist() == [[1, 5, 5, 4, 4, 2, 3]] and n == 2 and outside == (4, 5)
+    new, _, n, outside = O.drop_outside(labels, [], 3, np.zeros(4, bool), fans=fans)
+    assert new.tolist() == [[1, 5, 5, 2, 6, 3, 4]] and n == 3 and outside == (5, 6)
+
+
+def test_drop_outside_keeps_a_room_in_one_piece():
+    labels = np.array([[1, 1, 1, 1, 1, 1, 1, 2]], np.int32)
+    fans = np.array([[0, 0, 0, 0, 1, 0, 0, 0]], bool)            # the fan cuts room 1 in two
+    new, _, n, outside = O.drop_outside(labels, [], 2, np.zeros(3, bool), fans=fans)
+    assert new.tolist() == [[1, 1, 1, 1, 3, 3, 3, 2]] and n == 2 and outside == (3,)   # the smaller piece goes with it
 
 
 def _first_hit_by_walking(free, hit, d):

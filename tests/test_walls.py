@@ -324,18 +324,20 @@ def test_partition_face_on_a_free_standing_table_is_no_partition():
     assert W.partition_gaps(~free, free, lines, min_structure_px=40, **kw) == []  # 2 m structure: not
 
 
-def _across_reference(p, q, index, tol, min_angle=np.deg2rad(60.0)):
+def _across_reference(p, q, index, tol, min_angle=np.deg2rad(60.0), past=None):
     # the definition, one segment and one wall at a time
     v = q - p
     d = v / max(float(np.hypot(*v)), 1e-9)
-    hit = [False, False]
+    hit, inside = [False, False], [False, False]
     for u, n, rho, t0, t1 in index.classes:
         if abs(float(d @ u)) > np.cos(min_angle):
             continue
         for k, x in enumerate((p, q)):
             r, t = float(x @ n), float(x @ u)
             hit[k] |= any(abs(r - rh) <= tol and a - tol <= t <= b + tol for rh, a, b in zip(rho, t0, t1))
-    return hit[0] and hit[1]
+            if past is not None:
+                inside[k] |= any(abs(r - rh) <= tol and a + past <= t <= b - past for rh, a, b in zip(rho, t0, t1))
+    return hit[0] and hit[1] and (past is None or inside[0] or inside[1])
 
 
 def test_across_walls_many_follows_the_definition():
@@ -360,6 +362,22 @@ def test_across_walls_many_follows_the_definition():
     want = [_across_reference(p, q, index, 3.0) for p, q in zip(P, Q)]
     assert list(many) == want
     assert 0 < sum(want) < len(want)
+    many = W.across_walls_many(P, Q, index, tol_px=3.0, past_px=10.0)
+    want_past = [_across_reference(p, q, index, 3.0, past=10.0) for p, q in zip(P, Q)]
+    assert list(many) == want_past
+    assert 0 < sum(want_past) < sum(want)
+
+
+def test_a_corridor_mouth_is_not_across_the_corridor():
+    # a corridor 2 m wide (rows 20..59) between two 8 m walls (columns 5..164)
+    free = np.zeros((80, 170), bool)
+    free[20:60, 5:165] = True
+    faces = W.wall_faces(~free, free)
+    walls = W.long_walls(W.wall_lines(faces, min_length_px=20), max_gap_px=60, offset_px=4, min_span_px=80)
+    kw = dict(tol_px=4, past_px=10)
+    assert W.across_walls_many([(19.5, 80)], [(60.5, 80)], walls, **kw)[0]    # its middle: across it
+    assert not W.across_walls_many([(19.5, 163)], [(60.5, 163)], walls, **kw)[0]   # both walls end here: its mouth
+    assert W.across_walls_many([(19.5, 163)], [(60.5, 163)], walls, tol_px=4)[0]   # without past_px: across
 
 
 def test_furniture_rows_need_mostly_furniture_in_separate_pieces():

@@ -432,7 +432,15 @@ class TopomapOptions(CheckedOptions):
         the unexplored world in most directions (0 to 2 of 8). An outside
         region is taken out of the rooms with its doors (a region of kind
         outside, reported apart from the rooms and fragments), so the room
-        graph never joins two rooms through it. 0 turns this off.
+        graph never joins two rooms through it. The same share is read
+        cell by cell inside the rooms kept: a part of a room below it that
+        is solid free space (at least ``min_room_area``, holding a free
+        disk as wide as the smallest room, 1 m) is a fan the door stage did
+        not cut off, and is taken out of the room as outside with the
+        cells joined to it that are more open than enclosed
+        (:func:`topomap.core.outside.outside_fans`); a thin bundle of rays
+        never is (across a ray the unknown is beside every cell, whatever
+        lies beyond). 0 turns this off.
     open_unknown_area : float
         Unknown regions inside free space smaller than this (m²) are
         obstacles seen in part (a chair, a box, clutter), not the unexplored

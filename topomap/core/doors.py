@@ -1253,11 +1253,17 @@ def across_corridor(accepted, walls, depth_px: float) -> list:
     A narrowing between two things that stand out of a corridor's side
     walls by less than that — pillars, wall columns, radiators, cupboards —
     is the corridor's own; a door across a corridor sits in a wall across
-    it, which stands out farther."""
+    it, which stands out farther. The corridor must also run on past the
+    narrowing: one of the two walls goes on at least ``depth_px`` past its
+    post both ways. Where both walls end at it, the narrowing is the
+    corridor's mouth — a door from its end into the room ahead, which a
+    laser map draws with posts a few centimetres proud of the walls — and
+    stays a door."""
     if not accepted:
         return []
     across = across_walls_many(np.array([c.ip1 for _, c in accepted], float),
-                               np.array([c.ip2 for _, c in accepted], float), walls, tol_px=depth_px)
+                               np.array([c.ip2 for _, c in accepted], float), walls, tol_px=depth_px,
+                               past_px=depth_px)
     kept = []
     for (width, c), a in zip(accepted, across):
         if a:

@@ -22,6 +22,18 @@ directions; :func:`drop_outside` takes them out of the rooms (they become
 regions of kind "outside", after the fragments) with their doors, so the
 room graph never joins two rooms through the space outside.
 
+A fan the door stage did not cut from the room it enters (the window or
+the open outer door is no bottleneck the doors stage accepts) leaves the
+room's mean high. :func:`outside_fans` finds such fans inside rooms: the
+parts of a room enclosed in fewer than ``outside_enclosure`` of the
+directions, cell by cell, that are solid free space (a piece as large as
+the smallest room, holding a free disk as wide as it): they are taken
+out of the room as regions outside, and a room more of whose cells are
+such fans than not is outside whole. A thin bundle of rays (a room
+glimpsed through its door on a map still being explored) is no such
+piece: across a single ray the unknown is next to every cell whatever
+lies beyond, so its enclosure says nothing about inside or outside.
+
 Each of the eight directions costs one pass over the map: time and memory
 grow linearly with the map's area.
 """
@@ -30,10 +42,20 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._fast import label_stats
+from .._fast import label, label_stats
 from .skeleton import downsample
 
-__all__ = ["DIRECTIONS", "unknown_cells", "open_unknown", "enclosure", "outside_regions", "drop_outside"]
+__all__ = ["DIRECTIONS", "FAN_OPEN", "unknown_cells", "open_unknown", "enclosure", "outside_fans", "outside_regions",
+           "drop_outside"]
+
+#: Share of the eight directions below which a cell next to a fan found by :func:`outside_fans` belongs
+#: to that fan: a half. A fan's cells near the facade see its wall in three directions or more (the
+#: wall itself and the two diagonals back to it, and through the window the room's far walls), so the
+#: fan test's own ``outside_enclosure`` leaves a band of the fan along the facade in the room; a cell
+#: more open than enclosed (more of its directions end in the unexplored world than at an obstacle) is
+#: no cell of a room, and joined to a fan it is the rest of that fan. Only a fan grows: on a map with
+#: no solid fan (the partial maps of the benchmark) nothing changes.
+FAN_OPEN = 0.5
 
 #: The eight grid directions ``(d_row, d_col)`` :func:`enclosure` looks along.
 DIRECTIONS = ((0, 1), (0, -1), (1, 0), (-1, 0), (1, 1), (1, -1), (-1, 1), (-1, -1))
@@ -173,7 +195,74 @@ def enclosure(free: np.ndarray, occupied: np.ndarray, resolution: float, *, open
     return np.where(free, mean, 0).astype(np.float32)
 
 
-def outside_regions(labels: np.ndarray, n_rooms: int, encl: np.ndarray, *, threshold: float) -> np.ndarray:
+def outside_fans(labels: np.ndarray, n_rooms: int, encl: np.ndarray, clearance: np.ndarray, *,
+                 threshold: float, min_cells: int, width_px: float,
+                 grow_threshold: float | None = None) -> np.ndarray:
+    """The cells of rooms that are solid fans of free space beyond the facade.
+
+    A piece is a connected part (8-connected, within one room) of the
+    room's cells whose :func:`enclosure` is below ``threshold``; it is a
+    fan outside when it has at least ``min_cells`` cells and holds a cell
+    at least ``width_px`` from every cell that is not free (solid free
+    space as wide as a room, not a bundle of single rays). With
+    ``grow_threshold``, a fan also takes the cells of its room connected to
+    it whose enclosure is below that (:data:`FAN_OPEN` of the directions:
+    the part of the fan near the facade, whose cells still see the facade's
+    wall in a few directions).
+
+    Parameters
+    ----------
+    labels : (M, N) ndarray of int
+        Rooms ``1..n_rooms`` (fragments after them are not judged).
+    n_rooms : int
+    encl : (M, N) ndarray of float
+        :func:`enclosure`.
+    clearance : (M, N) ndarray of float
+        Distance (cells) from each free cell to the nearest cell that is
+        not free.
+    threshold : float
+        Directions out of 8.
+    min_cells : int
+        Least cells of a piece (the smallest room).
+    width_px : float
+        Least clearance (cells) of a piece's widest cell.
+    grow_threshold : float, optional
+        Directions out of 8; default: the fans are not grown.
+
+    Returns
+    -------
+    (M, N) ndarray of bool
+    """
+    import cv2
+
+    lab = np.asarray(labels)
+    room = np.where((lab > 0) & (lab <= n_rooms), lab, 0).astype(np.float32)
+    # the cells whose 3 x 3 neighbourhood holds no other room: a piece never runs from one room into the next
+    high = cv2.dilate(room, np.ones((3, 3), np.uint8))
+    low_lab = cv2.erode(np.where(room > 0, room, np.float32(n_rooms + 1)), np.ones((3, 3), np.uint8))
+    inner = (room > 0) & (high == room) & (low_lab == room)
+    low = inner & (np.asarray(encl) < threshold)
+    comp, n = label(low, 8)
+    if n == 0:
+        return low
+    size = np.bincount(comp[low], minlength=n + 1)
+    wide = np.bincount(comp[low & (np.asarray(clearance) >= width_px)], minlength=n + 1)
+    keep = (size >= min_cells) & (wide > 0)
+    keep[0] = False
+    fans = keep[comp]
+    if grow_threshold is not None and grow_threshold > threshold and fans.any():
+        # the fans go on through the cells more open than enclosed next to them
+        more = inner & (np.asarray(encl) < grow_threshold)
+        comp, n = label(more, 8)
+        reached = np.zeros(n + 1, bool)
+        reached[comp[fans]] = True
+        reached[0] = False
+        fans |= reached[comp]
+    return fans
+
+
+def outside_regions(labels: np.ndarray, n_rooms: int, encl: np.ndarray, *, threshold: float,
+                    fans=None) -> np.ndarray:
     """Which rooms are outside: the mean :func:`enclosure` of their cells below ``threshold``.
 
     Parameters
@@ -185,6 +274,9 @@ def outside_regions(labels: np.ndarray, n_rooms: int, encl: np.ndarray, *, thres
         :func:`enclosure`.
     threshold : float
         Directions out of 8.
+    fans : (M, N) ndarray of bool, optional
+        :func:`outside_fans`: a room more of whose cells are fans than not
+        is outside too.
 
     Returns
     -------
@@ -198,14 +290,20 @@ def outside_regions(labels: np.ndarray, n_rooms: int, encl: np.ndarray, *, thres
     cells = np.bincount(lab[m], minlength=n_rooms + 1)
     total = np.bincount(lab[m], weights=encl[m], minlength=n_rooms + 1)
     out = (cells > 0) & (total < threshold * cells)
+    if fans is not None:
+        out |= 2 * np.bincount(lab[m & fans], minlength=n_rooms + 1) > cells
     out[0] = False
     if out[1:].all():
         out[:] = False
     return out[:n_rooms + 1]
 
 
-def drop_outside(labels: np.ndarray, doors: list, n_rooms: int, is_out: np.ndarray):
+def drop_outside(labels: np.ndarray, doors: list, n_rooms: int, is_out: np.ndarray, fans=None):
     """Rooms marked ``is_out`` taken out of the rooms, with their doors.
+
+    With ``fans`` (:func:`outside_fans`), the fan cells of the rooms kept
+    are taken out of them too: each 8-connected piece of them becomes an
+    outside region, after the rooms taken out whole.
 
     Returns
     -------
@@ -219,12 +317,43 @@ def drop_outside(labels: np.ndarray, doors: list, n_rooms: int, is_out: np.ndarr
     outside : tuple of int
         The labels of the outside regions.
     """
+    out_rooms = np.flatnonzero(is_out[1:n_rooms + 1]) + 1
+    if out_rooms.size:
+        labels, doors, n_rooms, outside = _drop_rooms(labels, doors, n_rooms, is_out, out_rooms)
+    else:
+        outside = ()
+    if fans is not None:
+        cut = np.asarray(fans, bool) & (labels > 0) & (labels <= n_rooms)
+        if cut.any():
+            cut = _whole_rooms(labels, cut)
+            comp, n = label(cut, 8)
+            top = int(labels.max())
+            labels = np.where(cut, top + comp, labels).astype(np.int32)
+            outside = tuple(outside) + tuple(range(top + 1, top + n + 1))
+    return labels, doors, n_rooms, outside
+
+
+def _whole_rooms(labels: np.ndarray, cut: np.ndarray) -> np.ndarray:
+    """``cut`` (fan cells of rooms) with the pieces of each room that the fan cuts off from the
+    room's largest 8-connected part: a room stays one piece of free space."""
+    cut = cut.copy()
+    for r in np.unique(labels[cut]):
+        rows, cols = np.nonzero(labels == r)
+        r0, r1, c0, c1 = rows.min(), rows.max() + 1, cols.min(), cols.max() + 1
+        rest = (labels[r0:r1, c0:c1] == r) & ~cut[r0:r1, c0:c1]
+        comp, n = label(rest, 8)
+        if n > 1:
+            size = np.bincount(comp[rest], minlength=n + 1)
+            size[0] = 0
+            cut[r0:r1, c0:c1] |= rest & (comp != int(np.argmax(size)))
+    return cut
+
+
+def _drop_rooms(labels: np.ndarray, doors: list, n_rooms: int, is_out: np.ndarray, out: np.ndarray):
+    """:func:`drop_outside` of the rooms ``out`` (the labels where ``is_out``)."""
     top = int(labels.max()) if labels.size else 0
-    if not is_out.any():
-        return labels, doors, n_rooms, ()
     lut = np.zeros(top + 1, np.int32)
     keep = np.flatnonzero(~is_out[1:n_rooms + 1]) + 1
-    out = np.flatnonzero(is_out[1:n_rooms + 1]) + 1
     n_kept = len(keep)
     lut[keep] = np.arange(1, n_kept + 1, dtype=np.int32)
     frag = np.arange(n_rooms + 1, top + 1)

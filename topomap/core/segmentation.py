@@ -49,8 +49,10 @@ from .doors import (
     wall_threshold,
 )
 from .outside import (
+    FAN_OPEN,
     drop_outside,
     enclosure,
+    outside_fans,
     outside_regions,
 )
 from .skeleton import (
@@ -428,14 +430,21 @@ def furniture_keep(grid: OccupancyGrid, looked: OccupancyGrid, clutter, opts, *,
     return wall_grid.mask(looked.free.shape, keep=~rows)
 
 
-def _drop_outside(grid: OccupancyGrid, labels, doors, n_rooms: int, opts: TopomapOptions):
-    """Stage "outside": the rooms a laser saw beyond the facade taken out of the rooms
-    (:mod:`topomap.core.outside`)."""
+def _drop_outside(grid: OccupancyGrid, labels, doors, n_rooms: int, clearance, opts: TopomapOptions):
+    """Stage "outside": the rooms a laser saw beyond the facade, and the solid fans of free space
+    beyond it inside the other rooms, taken out of the rooms (:mod:`topomap.core.outside`).
+    ``clearance``: the distance (cells) from each free cell to the nearest one that is not."""
 
-    encl = enclosure(grid.free, grid.occupied, grid.resolution, open_area=opts.open_unknown_area,
+    res = grid.resolution
+    encl = enclosure(grid.free, grid.occupied, res, open_area=opts.open_unknown_area,
                        window=opts.enclosure_window, gray=grid.gray)
-    is_out = outside_regions(labels, n_rooms, encl, threshold=8 * opts.outside_enclosure)
-    return drop_outside(labels, doors, n_rooms, is_out)
+    threshold = 8 * opts.outside_enclosure
+    # a fan is a piece at least as large as the smallest room, holding a free square as wide as it
+    fans = outside_fans(labels, n_rooms, encl, clearance, threshold=threshold,
+                        min_cells=int(np.ceil(opts.min_room_area / res ** 2 - 1e-9)),
+                        width_px=0.5 * np.sqrt(opts.min_room_area) / res, grow_threshold=8 * FAN_OPEN)
+    is_out = outside_regions(labels, n_rooms, encl, threshold=threshold, fans=fans)
+    return drop_outside(labels, doors, n_rooms, is_out, fans=fans)
 
 
 @dataclass
@@ -620,7 +629,7 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
     outside = ()
     if opts.outside_enclosure > 0 and n_rooms:
         with timer("outside"):
-            labels, door_objs, n_rooms, outside = _drop_outside(rooms_grid, labels, door_objs, n_rooms, opts)
+            labels, door_objs, n_rooms, outside = _drop_outside(rooms_grid, labels, door_objs, n_rooms, d_free, opts)
     params = opts.as_params()
     if prior is not None:
         params["prior"] = prior.previous.where  # the previous result whose doors were the prior

@@ -825,19 +825,27 @@ def across_walls(p, q, walls, *, tol_px: float, min_angle: float = np.deg2rad(60
                                   walls, tol_px=tol_px, min_angle=min_angle)[0])
 
 
-def across_walls_many(P, Q, walls, *, tol_px: float, min_angle: float = np.deg2rad(60.0)) -> np.ndarray:
+def across_walls_many(P, Q, walls, *, tol_px: float, min_angle: float = np.deg2rad(60.0),
+                      past_px: float | None = None) -> np.ndarray:
     """:func:`across_walls` of the segments ``P[i]``-``Q[i]`` (``(E, 2)``
-    arrays): ``(E,)`` bool."""
+    arrays): ``(E,)`` bool.
+
+    With ``past_px``, one of the two walls must also run on at least
+    ``past_px`` past its end of the segment, both ways along it: the
+    passage goes on past the segment (a corridor past a narrowing of its
+    own), rather than ending there (the corridor's mouth, where both side
+    walls end)."""
     if not isinstance(walls, WallIndex):
         walls = WallIndex(walls)
     P, Q = np.asarray(P, float).reshape(-1, 2), np.asarray(Q, float).reshape(-1, 2)
     v = Q - P
     d = v / np.maximum(np.hypot(v[:, 0], v[:, 1]), 1e-9)[:, None]
     hit = np.zeros((2, len(P)), bool)
+    inside = np.zeros((2, len(P)), bool)
     for u, n, rho, t0, t1 in walls.classes:
         steep = np.abs(d[:, 0] * u[0] + d[:, 1] * u[1]) <= np.cos(min_angle)
         for k, X in enumerate((P, Q)):
-            todo = steep & ~hit[k]
+            todo = steep & ~(hit[k] if past_px is None else hit[k] & inside[k])
             if not todo.any():
                 continue
             x = X[todo]
@@ -846,11 +854,19 @@ def across_walls_many(P, Q, walls, *, tol_px: float, min_angle: float = np.deg2r
             lo = np.searchsorted(rho, r - tol_px)
             hi = np.searchsorted(rho, r + tol_px, side="right")
             on = np.zeros(len(x), bool)
+            deep = np.zeros(len(x), bool)
             for step in range(int((hi - lo).max(initial=0))):  # the walls within tol_px of each end
                 w = np.minimum(lo + step, len(rho) - 1)
-                on |= (lo + step < hi) & (t0[w] - tol_px <= t) & (t <= t1[w] + tol_px)
-            hit[k, np.flatnonzero(todo)] = on
-    return hit[0] & hit[1]
+                near = lo + step < hi
+                on |= near & (t0[w] - tol_px <= t) & (t <= t1[w] + tol_px)
+                if past_px is not None:
+                    deep |= near & (t0[w] + past_px <= t) & (t <= t1[w] - past_px)
+            idx = np.flatnonzero(todo)
+            hit[k, idx] |= on
+            inside[k, idx] |= deep
+    if past_px is None:
+        return hit[0] & hit[1]
+    return hit[0] & hit[1] & (inside[0] | inside[1])
 
 
 def long_wall_gaps(obstacle: np.ndarray, free: np.ndarray, walls: list, *, min_gap_px: float,
