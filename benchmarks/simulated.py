@@ -93,6 +93,31 @@ def table(rows) -> str:
     return "\n".join(out) + "\n"
 
 
+def _command(a) -> str:
+    """The command line of this run, as the section quotes it."""
+    cmd = f"python benchmarks/simulated.py CORPUS --jobs {a.jobs}"
+    if a.maps:
+        cmd += f" --maps '{a.maps}'"
+    if a.split:
+        cmd += f" --split {a.split}"
+    if a.methods != METHODS:
+        cmd += f" --methods {a.methods}"
+    return cmd
+
+
+def _subset_text(a, rows, n_cases: int) -> str:
+    """The sentence that says which cases a run on a subset scored ('' for the whole corpus)."""
+    if not (a.maps or a.split):
+        return ""
+    from topomap.bench.datasets import _simulated_cases, plan_split
+
+    n_all = len(_simulated_cases(Path(a.directory)))
+    halves = [plan_split(m) for m in {r["map"] for r in rows}]
+    return (f" A fixed subset, for the time at hand: the cases named by `--maps`"
+            f"{' and `--split`' if a.split else ''}, {n_cases} of the corpus's {n_all} "
+            f"({halves.count('dev')} dev, {halves.count('held-out')} held-out).")
+
+
 def main(argv=None) -> int:
     from topomap.bench.benchmark import run_benchmark, write_rows
 
@@ -136,23 +161,9 @@ def main(argv=None) -> int:
     if a.csv is not None:
         write_rows(rows, a.csv)
     n_cases = len({r["map"] for r in rows})
-    cmd = f"python benchmarks/simulated.py CORPUS --jobs {a.jobs}"
-    if a.maps:
-        cmd += f" --maps '{a.maps}'"
-    if a.split:
-        cmd += f" --split {a.split}"
-    if a.methods != METHODS:
-        cmd += f" --methods {a.methods}"
+    cmd = _command(a)
     tab = table(rows)
-    subset = ""
-    if a.maps or a.split:
-        from topomap.bench.datasets import _simulated_cases, plan_split
-
-        n_all = len(_simulated_cases(Path(a.directory)))
-        halves = [plan_split(m) for m in {r["map"] for r in rows}]
-        subset = (f" A fixed subset, for the time at hand: the cases named by `--maps`"
-                  f"{' and `--split`' if a.split else ''}, {n_cases} of the corpus's {n_all} "
-                  f"({halves.count('dev')} dev, {halves.count('held-out')} held-out).")
+    subset = _subset_text(a, rows, n_cases)
     errors = sorted({f"{r['map']} ({r['variant']}): {r['error']}" for r in rows if r.get("error")})
     err_text = ("\nFailed runs:\n\n" + "\n".join(f"- {e}" for e in errors[:10]) + "\n") if errors else ""
     text = f"""## Simulated maps of home floor plans
