@@ -550,3 +550,21 @@ def test_a_room_graph_outside_an_output_folder_notes_no_export(out_dir, tmp_path
     assert _cli("export", elsewhere / "rooms.graphml", "--nav2", elsewhere / "route.geojson").exit_code == 0
     assert not (elsewhere / "topomap_run.json").exists()
     assert "nav2" not in json.loads((out_dir / "topomap_run.json").read_text())
+
+
+def test_segmenting_the_folder_again_rewrites_its_nav2_route_graphs(out_dir, tmp_path):
+    """A changed map segmented into the same folder: the route graph exported from it follows the new rooms."""
+    route = out_dir / "route.geojson"
+    assert _cli("export", out_dir / "rooms.graphml", "--nav2", route).exit_code == 0
+    before = route.read_bytes()
+    a, res = _array()
+    a[40:60, 120:135] = False  # a block of wall in the corridor: other rooms, another route graph
+    save_map(from_array(a, resolution=res), tmp_path / "map")
+    r = _cli("segment", tmp_path / "map.yaml", "-o", out_dir)
+    assert r.exit_code == 0, r.output
+    assert route.read_bytes() != before
+    assert json.loads((out_dir / "topomap_run.json").read_text())["nav2"] == [{"path": "route.geojson",
+                                                                              "clearance": None}]
+    fresh = tmp_path / "fresh.geojson"
+    assert _cli("export", out_dir / "rooms.graphml", "--nav2", fresh).exit_code == 0
+    assert route.read_bytes() == fresh.read_bytes()

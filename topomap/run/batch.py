@@ -93,7 +93,7 @@ from ..grid import share_memory
 from ..io.files import atomic_write
 from .job import STAGES, segment_file, summary_counts
 from .record import COMPLETE, INCOMPLETE, OUTPUT_NAMES, RECORD, file_stamp, fingerprint, input_files, \
-    output_stamps, read_record, restore_record, up_to_date, write_record
+    nav2_exports, output_stamps, read_record, restore_record, up_to_date, write_record
 
 __all__ = ["segment_many", "output_dirs", "read_summary", "RECORD", "SUMMARY", "SUMMARY_COLUMNS",
            "OUTPUT_NAMES", "STATUSES", "OK", "SKIPPED", "FAILED", "ERROR", "PENDING", "INCOMPLETE", "COMPLETE",
@@ -321,10 +321,14 @@ def _run_one(task: dict) -> dict:
         # writing the record removes the temporaries a killed run left here (io.atomic_write)
         if (folder / RECORD).exists():
             previous = (folder / RECORD).read_text()
+        # the Nav2 route graphs exported from the folder's room graph are made again with it
+        nav2 = nav2_exports(read_record(folder) or {}) if previous is not None else []
+        if nav2:
+            record = dict(record, nav2=nav2)
         write_record(folder, dict(record, status=INCOMPLETE))  # a kill from here on: the map runs again
         claimed = True
         seg = segment_file(task["path"], folder, s["resolution"], s["method"], s["skeletons"],
-                           **task["write_options"])
+                           nav2=nav2, **task["write_options"])
         row.update(summary_counts(seg), outside_area_m2=float(seg.outside_area))
         row["seconds"] = time.perf_counter() - t0
         row.update({f"t_{k}": float(v) for k, v in seg.timings.items()})

@@ -27,13 +27,11 @@ from ..grid import FREE, OCCUPIED, OccupancyGrid
 from ..io.export import NODE_TYPES, load_graph, load_label_map
 from ..io.files import atomic_write
 from ..io.maps import load_map
-from ..io.nav2 import route_graph_bytes
-from ..planning.nav2 import DEFAULT_CLEARANCE, route_graph
-from .job import summary_counts, write_segmentation
+from .job import nav2_routes, summary_counts, write_segmentation
 from .record import COMPLETE, INCOMPLETE, RECORD, fingerprint, nav2_exports, output_stamps, read_record, \
     restore_record, write_record
 
-__all__ = ["load_segmentation", "save_edits", "nav2_routes", "edit_outputs"]
+__all__ = ["load_segmentation", "save_edits", "edit_outputs"]
 
 log = logging.getLogger("topomap")
 
@@ -204,7 +202,7 @@ def save_edits(seg, out_dir, records) -> dict:
     folder = Path(out_dir)
     old = (folder / RECORD).read_text(encoding="utf-8") if (folder / RECORD).is_file() else None
     rec = dict(read_record(folder) or {})
-    routes = nav2_routes(seg, folder, rec)  # made before any file is touched: an error changes nothing
+    routes = nav2_routes(seg, folder, nav2_exports(rec))  # made before any file is touched: an error changes nothing
     rec.setdefault("topomap", __version__)
     at = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
     rec["edits"] = list(rec.get("edits") or []) + [dict(r, at=at) for r in records]
@@ -223,27 +221,6 @@ def save_edits(seg, out_dir, records) -> dict:
         restore_record(folder, old, True)
         raise
     return written
-
-
-def nav2_routes(seg, folder: Path, record: dict) -> dict:
-    """``{path: GeoJSON bytes}``: the Nav2 route graph of ``seg`` for every export the run record ``record``
-    of ``folder`` notes (:func:`topomap.run.record.nav2_exports`), with the clearance it was exported with.
-
-    Raises
-    ------
-    PlanningError, ParameterError
-        A route graph cannot be made (the message names its file).
-    """
-    out = {}
-    for note in nav2_exports(record):
-        path = folder / note["path"]  # an absolute path stays itself
-        clearance = DEFAULT_CLEARANCE if note["clearance"] is None else note["clearance"]
-        try:
-            route = route_graph(seg, clearance=clearance)
-        except Exception as exc:
-            raise type(exc)(f"{path}: the Nav2 route graph of the edited rooms: {first_line(exc)}") from None
-        out[path] = route_graph_bytes(route)
-    return out
 
 
 def edit_outputs(out_dir, edits):

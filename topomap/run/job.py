@@ -21,13 +21,16 @@ from pathlib import Path
 import numpy as np
 
 from .._fast import BackgroundCall
+from ..errors import first_line
 # modules, not their functions: a function replaced in its module (a test's stand-in) is the one called
 from ..core import segmentation
 from ..io import export, plot
 from ..io.files import atomic_write
+from ..io.nav2 import route_graph_bytes
 from ..io.maps import DEFAULT_RESOLUTION, from_array, load_map, yaml_beside
 from ..io.previous import read_previous
 from ..io.ros import staged_bag
+from ..planning.nav2 import DEFAULT_CLEARANCE, route_graph
 from ..planning.paths import travel_graph
 
 __all__ = ["segment_file", "write_segmentation", "summary_counts", "preload", "warm_up", "STAGES", "PRELOAD"]
@@ -113,7 +116,7 @@ def _read_map(path, resolution, topic, at):
 
 
 def segment_file(path, outdir, resolution=None, method=None, skeletons=False, *, topic=None, at=None, bag=None,
-                 previous=None, overlay=True, geojson=True):
+                 previous=None, overlay=True, geojson=True, nav2=()):
     """Segment the map file ``path`` and write its outputs into ``outdir``: one map of ``topomap segment``.
 
     Parameters
@@ -138,13 +141,18 @@ def segment_file(path, outdir, resolution=None, method=None, skeletons=False, *,
         and ``changes.json`` is written beside the graph.
     overlay, geojson : bool, optional
         Write ``overlay.png``, ``rooms.geojson``.
+    nav2 : sequence of dict, optional
+        The Nav2 route graphs exported from the folder's previous room graph
+        (:func:`topomap.run.record.nav2_exports` of its run record): each is
+        made again from the new rooms (:func:`nav2_routes`).
 
     Returns
     -------
     Segmentation
         Its ``timings`` also hold ``load``, ``write`` and ``job`` (seconds).
-        The outputs (with the bag and ``changes.json``) are written all or
-        none; an error leaves the earlier outputs as they were.
+        The outputs (with the bag, ``changes.json`` and the Nav2 route graphs)
+        are written all or none; an error leaves the earlier outputs as they
+        were.
     """
     t0 = time.perf_counter()
     grid = _read_map(path, resolution, topic, at)
@@ -167,12 +175,36 @@ def segment_file(path, outdir, resolution=None, method=None, skeletons=False, *,
         if previous is not None:  # the change record beside the graph (room IDs follow the previous graph)
             fh = stack.enter_context(atomic_write(Path(outdir) / "changes.json", "w"))
             json.dump(seg.changes.as_dict(), fh, indent=1)
+        for route_path, data in nav2_routes(seg, outdir, nav2).items():  # Nav2 exports of the folder
+            stack.enter_context(atomic_write(route_path)).write(data)
         write_segmentation(seg, outdir, skeletons=skeletons, overlay=overlay, geojson=geojson,
                            timings=seg.timings)
     seg.timings["load"] = t1 - t0
     seg.timings["write"] = time.perf_counter() - t2
     seg.timings["job"] = time.perf_counter() - t0
     return seg
+
+
+def nav2_routes(seg, folder, notes) -> dict:
+    """``{path: GeoJSON bytes}``: the Nav2 route graph of ``seg`` for every export ``notes`` names (what the run
+    record of the output folder ``folder`` notes: :func:`topomap.run.record.nav2_exports`), with the clearance
+    it was exported with; a relative path is taken in ``folder``.
+
+    Raises
+    ------
+    PlanningError, ParameterError
+        A route graph cannot be made (the message names its file).
+    """
+    out = {}
+    for note in notes:
+        path = Path(folder) / note["path"]  # an absolute path stays itself
+        clearance = DEFAULT_CLEARANCE if note["clearance"] is None else note["clearance"]
+        try:
+            route = route_graph(seg, clearance=clearance)
+        except Exception as exc:
+            raise type(exc)(f"{path}: the Nav2 route graph of the edited rooms: {first_line(exc)}") from None
+        out[path] = route_graph_bytes(route)
+    return out
 
 
 def summary_counts(seg) -> dict:
