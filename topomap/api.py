@@ -2,7 +2,8 @@
 
 The core (:mod:`topomap.core`) never opens a file; :func:`segment` here is
 :func:`topomap.core.segmentation.segment` with ``previous`` also accepted as
-the path of a saved room graph, read with :func:`topomap.io.previous.read_previous`.
+the path of a saved room graph, read with :func:`topomap.io.previous.read_previous`: the one
+place that does (``topomap segment --previous`` goes through it too).
 """
 
 from __future__ import annotations
@@ -10,7 +11,7 @@ from __future__ import annotations
 import os
 import time
 
-from .core.segmentation import segment as segment_grid
+from .core import segmentation
 from .grid import OccupancyGrid
 from .io.previous import read_previous
 
@@ -53,11 +54,11 @@ def segment(grid, *, method: str = None, previous=None, **params):
         ``previous`` is a file that cannot be loaded.
     """
     if not isinstance(previous, (str, os.PathLike)) or not isinstance(grid, OccupancyGrid):
-        return segment_grid(grid, method=method, previous=previous, **params)
+        return segmentation.segment(grid, method=method, previous=previous, **params)
     t0 = time.perf_counter()
     prior = read_previous(previous, within=grid)
     t_read = time.perf_counter() - t0
-    seg = segment_grid(grid, method=method, previous=prior, **params)
+    seg = segmentation.segment(grid, method=method, previous=prior, **params)
     seg.timings["previous"] = seg.timings.get("previous", 0.0) + t_read
     seg.timings["total"] = seg.timings.get("total", 0.0) + t_read
     return seg
