@@ -283,6 +283,23 @@ class TopomapOptions(CheckedOptions):
         ``min_door_width`` past the gap. On a robot's map a room often opens
         onto a corridor through a doorway as wide as the corridor, where
         the clearance does not narrow; the wall's line shows the doorway.
+    gaps : bool
+        Also cut at gaps in thin walls across the free-space skeleton
+        (:func:`topomap.core.walls.thin_wall_gaps`): where the line across
+        the skeleton meets two laser hits (or drawn walls) between
+        ``min_door_width`` and ``max_door_width`` apart, and beyond each the
+        wall goes on along the line for ``gap_wall``, no thicker than
+        ``wall_thickness``, on a structure at least ``partition_structure``
+        long. A doorway into a passage no wider than itself (the end of a
+        hallway, a glass door onto a balcony strip) narrows nothing, so the
+        clearance shows no door there; the wall it is in does. A doorway
+        where a door is cut already (within its own width) is not cut again.
+    gap_wall : float
+        With ``gaps``, how far (m) the wall must go on past each post of a
+        gap, along the gap's line: 0.3 m, the thickness of the thickest
+        inner walls. A shorter stretch of obstacle beyond a post is a wall
+        crossed across its thickness (the side wall of a corridor, met face
+        on), not the wall the doorway is in.
     beside_wall : float
         With ``openings``, a gap at most this wide (m) between the end of a
         straight wall and the face of a wall that crosses its line is cut
@@ -476,6 +493,8 @@ class TopomapOptions(CheckedOptions):
     wide_opening: float = option(1.5, "length")
     min_room_area: float = option(1.0, "area")
     openings: bool = option(True, "bool")
+    gaps: bool = option(True, "bool")
+    gap_wall: float = option(0.3, "length")
     beside_wall: float = option(1.0, "length")
     alcove_depth: float = option(1.2, "length")
     closet_depth: float = option(0.6, "length")

@@ -28,7 +28,7 @@ __all__ = ["Candidate", "Door", "passage_candidates", "intersection_points",
            "wall_threshold", "select_doors", "segment_crosses", "passage_minima",
            "nearest_wall_points", "protrusion", "protrusion_at", "occupied_skeleton_lines",
            "find_bottlenecks", "judge_doors", "suppress_duplicates", "opening_candidates", "across_corridor",
-           "STATUSES"]
+           "gaps_without_doors", "STATUSES"]
 
 # --------------------------------------------------------------------------
 # Candidate statuses: why a candidate was kept or refused (see the "How it
@@ -70,11 +70,14 @@ ACROSS_CORRIDOR = "across a corridor"
 #: topomap: neither post is a laser hit (no occupied cell within ``frontier_post``): the edges of unexplored space.
 UNEXPLORED_POSTS = "between unexplored edges"
 
+#: topomap: a gap in a thin wall across the skeleton (``gaps``), cut as a door.
+WALL_GAP = "gap in a thin wall"
+
 #: Every status a candidate can end with or pass through.
 STATUSES = (CANDIDATE, DOOR, NO_WALL_BOTH_SIDES, NO_ENDPOINTS, NO_PROTRUDING_WALL_NEAR, CENTRES_APART,
             CROSSES_WALL_SKELETON, WIDTH_OUT_OF_RANGE, POSTS_NOT_FACING, NO_PROTRUDING_WALL, MOUTH,
             MOUTH_WITHOUT_PROTRUDING_WALLS, DUPLICATE, WIDE_WITHOUT_WALL_ENDS, WALL_OPENING, ACROSS_CORRIDOR,
-            UNEXPLORED_POSTS)
+            UNEXPLORED_POSTS, WALL_GAP)
 
 
 @dataclass
@@ -1298,9 +1301,10 @@ def seen_posts(accepted, seen: np.ndarray) -> list:
     return kept
 
 
-def opening_candidates(openings, resolution: float) -> list:
-    """``(width m, Candidate)`` of wall openings (:func:`topomap.core.walls.wall_openings`),
-    status :data:`WALL_OPENING`, for :func:`suppress_duplicates`."""
+def opening_candidates(openings, resolution: float, *, status: str = WALL_OPENING) -> list:
+    """``(width m, Candidate)`` of wall openings (:func:`topomap.core.walls.wall_openings`), or of
+    gaps in thin walls (``status`` :data:`WALL_GAP`), status :data:`WALL_OPENING` by default, for
+    :func:`suppress_duplicates`."""
     openings = list(openings)
     if not openings:
         return []
@@ -1312,8 +1316,29 @@ def opening_candidates(openings, resolution: float) -> list:
     centre = (P + Q) / 2
     direction = V / np.maximum(n, 1e-9)[:, None]
     width, half = (n * resolution).tolist(), (n / 2).tolist()
-    return [(w, Candidate(edge=None, centroid=c, direction=d, radius=h, ip1=p, ip2=q, status=WALL_OPENING))
+    return [(w, Candidate(edge=None, centroid=c, direction=d, radius=h, ip1=p, ip2=q, status=status))
             for (p, q), w, c, d, h in zip(openings, width, centre, direction, half)]
+
+
+def gaps_without_doors(gaps, kept) -> list:
+    """The gaps (``((r, c), (r, c))`` posts, pixels) whose midpoint lies at least its own width from
+    every segment of ``kept``: a doorway where a door is cut already needs no second cut (across
+    a thick wall, two cuts a wall's thickness apart would leave a sliver between them)."""
+    from scipy.spatial import cKDTree
+
+    if not gaps or not kept:
+        return list(gaps)
+    G, S = np.asarray(gaps, float).reshape(-1, 2, 2), np.asarray(kept, float).reshape(-1, 2, 2)
+    mid, width = (G[:, 0] + G[:, 1]) / 2, np.hypot(*(G[:, 1] - G[:, 0]).T)
+    # the segments within reach of each midpoint, from a k-d tree of their midpoints (linear, not
+    # every pair): a segment is no nearer than its midpoint less half its length
+    half = np.hypot(*(S[:, 1] - S[:, 0]).T) / 2
+    near = cKDTree((S[:, 0] + S[:, 1]) / 2).query_ball_point(mid, width + float(half.max()) + 1e-6)
+    g = np.repeat(np.arange(len(G)), [len(js) for js in near])
+    j = np.fromiter(chain.from_iterable(near), np.intp, count=g.size)
+    close = np.zeros(len(G), bool)
+    close[g[point_segment_distances(mid[g], S[j, 0], S[j, 1]) < width[g]]] = True
+    return [gap for gap, c in zip(gaps, close) if not c]
 
 
 def suppress_duplicates(accepted, resolution: float, *, kept=()) -> list:

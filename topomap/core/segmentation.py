@@ -36,8 +36,10 @@ from ..options import PaperOptions, TopomapOptions, check_keywords, options_from
 from . import baselines
 from .masks import clutter_mask, clutter_parts, close_wall_gaps, preprocess_masks, solid_components, without_clutter
 from .doors import (
+    WALL_GAP,
     across_corridor,
     find_bottlenecks,
+    gaps_without_doors,
     intersection_points,
     judge_doors,
     occupied_skeleton_lines,
@@ -77,6 +79,7 @@ from .walls import (
     straight_share,
     wall_faces,
     wall_lines,
+    thin_wall_gaps,
     wall_mask,
     wall_openings,
 )
@@ -524,6 +527,25 @@ def _find_doors(free_graph, occupied_graph, occupied_clearance, wall_grid, seen:
     return thr_px, cands, suppress_duplicates(accepted, res)
 
 
+def _cut_gaps(free_graph, free, hits, segs, cands, wall_grid, opts: TopomapOptions, resolution: float,
+              clearance):
+    """Stage "gaps" of the default method: the gaps in thin walls
+    (:func:`topomap.core.walls.thin_wall_gaps`) where no door is cut yet, one
+    per doorway, not between pillars of a corridor (as doors are not,
+    ``pillar_depth``), added to the door segments ``segs`` and the candidates ``cands``."""
+    res = resolution
+    gaps = thin_wall_gaps(free_graph, free, hits, min_width_px=opts.min_door_width / res,
+                          max_width_px=opts.max_door_width / res, along_px=opts.gap_wall / res,
+                          thick_px=opts.wall_thickness / res, structure_px=opts.partition_structure / res,
+                          pillar_px=opts.pillar_depth / res, max_radius=opts.max_door_width / 2,
+                          clearance=clearance)
+    found = opening_candidates(gaps_without_doors(gaps, segs), res, status=WALL_GAP)
+    cands = cands + [c for _, c in found]
+    if wall_grid.long_walls and opts.pillar_depth > 0:
+        found = across_corridor(found, wall_grid.index, opts.pillar_depth / res)
+    return segs + suppress_duplicates(found, res, kept=segs), cands
+
+
 def _cut_rooms(rooms_grid: OccupancyGrid, segs, space, clearance, opts: TopomapOptions):
     """Stage "rooms" of the default method: labels, doors and room count of the rooms cut at ``segs``."""
     res = rooms_grid.resolution
@@ -551,7 +573,9 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
     (:func:`topomap_graphs`), bottlenecks
     (:func:`topomap.core.doors.find_bottlenecks`), door judging
     (:func:`topomap.core.doors.judge_doors`), duplicate suppression
-    (:func:`topomap.core.doors.suppress_duplicates`), cutting rooms
+    (:func:`topomap.core.doors.suppress_duplicates`), openings in walls
+    (:func:`topomap.core.walls.wall_openings`), gaps in thin walls
+    (:func:`topomap.core.walls.thin_wall_gaps`), cutting rooms
     (:func:`topomap.core.rooms.cut_rooms`).
 
     Parameters
@@ -621,6 +645,9 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
             ops = opening_candidates(wall_grid.openings(opts, hits=rooms_grid.occupied), res)
             segs = segs + suppress_duplicates(ops, res, kept=segs)
             cands = cands + [c for _, c in ops]
+    if opts.gaps:
+        with timer("gaps"):
+            segs, cands = _cut_gaps(free_graph, free, rooms_grid.occupied, segs, cands, wall_grid, opts, res, d_free)
     if prior is not None:
         with timer("prior doors"):
             segs = prior.adjust(rooms_grid, segs, opts, walls=~free, space=space)

@@ -22,7 +22,7 @@ import numpy as np
 
 __all__ = ["wall_faces", "wall_lines", "straight_share", "wall_openings", "wall_directions", "long_walls",
            "across_walls", "across_walls_many", "WallIndex", "long_wall_gaps", "partition_gaps", "face_runs",
-           "straight_lines", "furniture_rows", "wall_mask", "scale_walls"]
+           "straight_lines", "furniture_rows", "wall_mask", "scale_walls", "thin_wall_gaps"]
 
 
 #: The 4-neighbours of a cell (not the cell itself), as a morphology kernel.
@@ -921,3 +921,199 @@ def long_wall_gaps(obstacle: np.ndarray, free: np.ndarray, walls: list, *, min_g
     p, q = p[wide], q[wide]
     deep = _depth_ok(obstacle, p, q, depth_px, closet_px=closet_px, behind_px=behind_px)
     return [(p[i], q[i]) for i in np.flatnonzero(deep)]
+
+
+def _cross_sections(free_graph, step: float, max_radius: float = np.inf):
+    """Points every ``step`` pixels along the free-space skeleton's branches (not within 2
+    pixels of a branch's end) and the unit vector across the branch there: ``(K, 2)``,
+    ``(K, 2)``. A coarse skeleton's paths step over several cells: the points lie between
+    them too, so that no wall thicker than ``step`` is stepped over. Points of a clearance
+    (``radius``, metres) above ``max_radius`` are left out."""
+    pts, across = [], []
+    for _, _, d in free_graph.edges(data=True):
+        p = np.asarray(d["path"], float)
+        if len(p) < 3:
+            continue
+        arc = np.r_[0.0, np.cumsum(np.hypot(*np.diff(p, axis=0).T))]
+        if arc[-1] <= 4.0:
+            continue
+        t = np.arange(2.0, arc[-1] - 2.0, step)
+        at = np.stack([np.interp(t, arc, p[:, 0]), np.interp(t, arc, p[:, 1])], 1)
+        ahead = np.stack([np.interp(t + 2, arc, p[:, 0]), np.interp(t + 2, arc, p[:, 1])], 1)
+        back = np.stack([np.interp(t - 2, arc, p[:, 0]), np.interp(t - 2, arc, p[:, 1])], 1)
+        v = ahead - back
+        n = np.hypot(v[:, 0], v[:, 1])
+        ok = n > 0
+        if "radius" in d and np.isfinite(max_radius):
+            ok &= np.interp(t, arc, np.asarray(d["radius"], float)) <= max_radius
+        pts.append(at[ok])
+        across.append(np.stack([-v[ok, 1], v[ok, 0]], 1) / n[ok, None])
+    if not pts:
+        return np.zeros((0, 2)), np.zeros((0, 2))
+    return np.concatenate(pts), np.concatenate(across)
+
+
+def thin_wall_gaps(free_graph, free: np.ndarray, hits: np.ndarray, *, min_width_px: float,
+                   max_width_px: float, along_px: float, thick_px: float, structure_px: float,
+                   pillar_px: float = 0.0, step: float = 1.0, max_radius: float = np.inf,
+                   clearance=None) -> list:
+    """Gaps in thin walls across the free-space skeleton: doorways that narrow nothing.
+
+    A doorway into a passage no wider than itself (the end of a hallway, a
+    glass door onto a balcony strip) is no clearance bottleneck, yet it is a
+    gap in a wall. Every ``step`` pixels along the skeleton the line across
+    the branch meets obstacles at two *posts*; the gap between them is a
+    doorway when
+
+    - the posts are ``min_width_px`` to ``max_width_px`` apart;
+    - each post is a laser hit or a drawn wall (``hits`` within a cell of
+      it), not the edge of unknown space;
+    - beyond each post the obstacle goes on *along the line* for
+      ``along_px`` (90 % of its cells): the wall the doorway is in, not a
+      wall crossed across its thickness;
+    - that stretch of wall is thin: free space within ``thick_px`` on both
+      of its faces at 90 % of its cells. A corridor's cross-section meets
+      its side walls face on: beyond its posts the wall runs across the
+      line, and moving along the corridor stays inside it;
+    - not both posts are pillars: obstacles thin for less than
+      ``pillar_px`` beyond the post, then the wall they stand against
+      (solid on to ``pillar_px``, not thin): a narrowing between pillars,
+      columns or cupboards is the corridor's own;
+    - the obstacle at each post belongs to a structure at least
+      ``structure_px`` long or wide (8-connected): a free-standing piece of
+      furniture beside a wall is no door post.
+
+    Parameters
+    ----------
+    free_graph : networkx.MultiGraph
+        Free-space skeleton graph (``path`` per edge, map pixels).
+    free, hits : (M, N) ndarray of bool
+        The free cells doors are searched in, and the map's occupied cells.
+    min_width_px, max_width_px, along_px, thick_px, pillar_px, structure_px : float
+        Pixels, as above (``pillar_px`` 0: no pillar test).
+    step : float
+        The skeleton is tried every ``step`` pixels along its branches.
+    clearance : (M, N) ndarray of float, optional
+        Distance (pixels) of every free cell to the nearest obstacle (the
+        method's clearance; computed when not given).
+    max_radius : float
+        Points of the skeleton with a clearance above this (metres, the
+        graph's ``radius``) are not tried: their posts are further apart
+        than ``max_width_px`` (half of it, in metres).
+
+    Returns
+    -------
+    list of ((r, c), (r, c))
+        The two posts of each gap found, pixels: several along one doorway
+        (the caller keeps one, :func:`topomap.core.doors.suppress_duplicates`).
+    """
+    P, N = _cross_sections(free_graph, step, max_radius=max_radius)
+    if len(P) == 0:
+        return []
+    # the map's obstacles padded, so that every point looked at is inside (outside the map: obstacle)
+    pad = int(max_width_px + along_px + thick_px) + 3
+    solid = np.pad(~np.asarray(free, bool), pad, constant_values=True)
+
+    def is_solid(Q):
+        q = np.rint(Q).astype(np.intp) + pad
+        return solid[q[..., 0], q[..., 1]]
+
+    if clearance is None:
+        from .._fast import edt
+
+        clearance = edt(np.asarray(free, bool))
+    near = np.pad(np.asarray(clearance, np.float32), pad)
+
+    def clear_at(Q):
+        q = np.rint(Q).astype(np.intp) + pad
+        return near[q[..., 0], q[..., 1]]
+
+    # march across the branch one way, then (where the obstacle came near enough) the other
+    f1 = _first_obstacle(is_solid, clear_at, P, N, int(max_width_px) + 1)
+    sel = np.flatnonzero((f1 > 0) & (f1 < max_width_px))
+    P, N, f1 = P[sel], N[sel], f1[sel]
+    f2 = _first_obstacle(is_solid, clear_at, P, -N, int(max_width_px) + 1)
+    width = f1 + f2
+    sel = np.flatnonzero((f2 > 0) & (width >= min_width_px) & (width <= max_width_px))
+    N, p1, p2 = N[sel], P[sel] + N[sel] * f1[sel, None], P[sel] - N[sel] * f2[sel, None]
+    sel = np.flatnonzero(_near_any(hits, p1) & _near_any(hits, p2))
+    N, p1, p2 = N[sel], p1[sel], p2[sel]
+    a = np.arange(1, max(int(round(along_px)), 1) + 1, dtype=float)
+    k = np.arange(1, max(int(round(thick_px)), 1) + 1, dtype=float)
+    # beyond each post, the wall the doorway is in: the obstacle goes on along the line ...
+    keep = _goes_on(is_solid, p1, N, a) & _goes_on(is_solid, p2, -N, a)
+    N, p1, p2 = N[keep], p1[keep], p2[keep]
+    # ... and is thin there
+    keep = _thin_beyond(is_solid, p1, N, a, k)
+    N, p1, p2 = N[keep], p1[keep], p2[keep]
+    keep = _thin_beyond(is_solid, p2, -N, a, k)
+    N, p1, p2 = N[keep], p1[keep], p2[keep]
+    if pillar_px > along_px:
+        # a pillar: thin for a stretch, then the wall it stands against (solid, not thin) before
+        # ``pillar_px``; a gap between two of them is the corridor's, not a doorway
+        b = np.arange(1, int(round(pillar_px)) + 1, dtype=float)
+        pillar = [_goes_on(is_solid, p, D, b) & ~_thin_beyond(is_solid, p, D, b, k) for p, D in ((p1, N), (p2, -N))]
+        keep = ~(pillar[0] & pillar[1])
+        N, p1, p2 = N[keep], p1[keep], p2[keep]
+    # last, on the few left: the obstacle beyond each post is part of a structure
+    obstacle = ~np.asarray(free, bool)
+    seen = {}  # a doorway's jambs are met again at every step through it
+
+    def on_structure(q):
+        key = (int(round(q[0])), int(round(q[1])))
+        if key not in seen:
+            seen[key] = _on_structure(obstacle, (*q, *q), structure_px)
+        return seen[key]
+
+    return [(tuple(u.tolist()), tuple(v.tolist())) for u, v, n in zip(p1, p2, N)
+            if on_structure(u + n) and on_structure(v - n)]
+
+
+def _goes_on(is_solid, post, D, a) -> np.ndarray:
+    """Whether the obstacle goes on from each post ``(K, 2)`` along ``D`` for the steps ``a``
+    (90 % of them)."""
+    return is_solid(post[:, None, :] + D[:, None, :] * a[None, :, None]).mean(1) >= 0.9
+
+
+def _thin_beyond(is_solid, post, D, a, k) -> np.ndarray:
+    """Whether the obstacle from each post ``(K, 2)`` on along ``D`` (the steps ``a``) is thin: free
+    within the steps ``k`` on both of its faces (across ``D``) at 90 % of the steps."""
+    line = post[:, None, :] + D[:, None, :] * a[None, :, None]
+    across = D[:, ::-1] * np.array([1.0, -1.0])
+    keep = np.ones(len(post), bool)
+    for side in (1.0, -1.0):
+        probe = line[:, :, None, :] + side * across[:, None, None, :] * k[None, None, :, None]
+        keep &= (~is_solid(probe)).any(2).mean(1) >= 0.9
+    return keep
+
+
+def _first_obstacle(is_solid, clearance, P, D, n: int) -> np.ndarray:
+    """Steps (pixels, 0..n) from each point ``P`` along ``D`` to the first obstacle cell
+    (``is_solid``); ``n + 1`` where there is none within ``n``. Sphere tracing: from a point
+    ``c`` (``clearance``, pixels) from every obstacle, the next ``floor(c) - 1`` steps cannot
+    round onto an obstacle cell, so the march jumps them."""
+    t = np.zeros(len(P))
+    done = np.zeros(len(P), bool)
+    for _ in range(n + 1):
+        live = np.flatnonzero(~done)
+        if live.size == 0:
+            break
+        Q = P[live] + D[live] * t[live, None]
+        hit = is_solid(Q)
+        done[live[hit]] = True
+        go = live[~hit]
+        c = clearance(Q[~hit])
+        t[go] += np.maximum(np.floor(c) - 1.0, 1.0)
+        done[go[t[go] > n]] = True
+    return np.where(t <= n, t, n + 1).astype(np.int64)
+
+
+def _near_any(mask: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    """Whether ``mask`` holds a cell within one cell (8-neighbourhood) of each point ``(K, 2)``."""
+    H, W = mask.shape
+    q = np.rint(pts).astype(np.int64)
+    out = np.zeros(len(q), bool)
+    for dr in (-1, 0, 1):
+        for dc in (-1, 0, 1):
+            out |= mask[np.clip(q[:, 0] + dr, 0, H - 1), np.clip(q[:, 1] + dc, 0, W - 1)]
+    return out
