@@ -50,7 +50,7 @@ import networkx as nx
 import numpy as np
 from scipy import ndimage as ndi
 
-from .._fast import edt
+from .._fast import edt, label
 
 __all__ = ["KINDS", "CORRIDOR_MAX_WIDTH", "CORRIDOR_MIN_WIDTH", "CORRIDOR_MIN_ELONGATION", "CORRIDOR_MIN_LENGTH", "CORRIDOR_MIN_DOORS",
            "HALLWAY_MIN_DOORS", "SIDE_DOOR_MIN_RATIO", "WIDE_CORRIDOR_MAX_WIDTH", "WIDE_CORRIDOR_MIN_ELONGATION",
@@ -131,7 +131,9 @@ def room_shape(mask: np.ndarray, resolution: float) -> dict:
         ``area`` (m²), ``width`` (m, mean width), ``length`` (m, ``area / width``) and
         ``elongation`` (``length / width``), as the module docstring defines them.
     """
-    m = np.pad(np.asarray(mask, bool), 1)
+    mask = np.asarray(mask, bool)
+    m = np.zeros((mask.shape[0] + 2, mask.shape[1] + 2), bool)
+    m[1:-1, 1:-1] = mask
     n = int(np.count_nonzero(m))
     if n == 0:
         return {"area": 0.0, "width": 0.0, "length": 0.0, "elongation": 0.0}
@@ -219,7 +221,7 @@ def _without_furniture(L, n, resolution):
     """The cells of room ``n`` in its box of labels ``L``, with the enclosed patches of no room's cells
     (furniture, pillars) of at most :data:`FURNITURE_MAX_AREA` m² filled in."""
     m = L == n
-    holes, k = ndi.label(~m)
+    holes, k = label(~m, 4)
     if k == 0:
         return m
     size = np.bincount(holes.ravel(), minlength=k + 1)
