@@ -222,14 +222,15 @@ def _without_furniture(L, n, resolution):
     (furniture, pillars) of at most :data:`FURNITURE_MAX_AREA` m² filled in."""
     m = L == n
     holes, k = label(~m, 4)
-    if k == 0:
-        return m
-    size = np.bincount(holes.ravel(), minlength=k + 1)
-    fill = size * resolution ** 2 <= FURNITURE_MAX_AREA
+    fill = np.ones(k + 1, bool)
     fill[0] = False
-    edge = np.concatenate([holes[0], holes[-1], holes[:, 0], holes[:, -1]])
-    fill[edge] = False  # reaches the box's border: not enclosed
-    fill[holes[(L != 0) & ~m]] = False  # holds another room's cells
+    fill[np.concatenate([holes[0], holes[-1], holes[:, 0], holes[:, -1]])] = False  # reach the box's border
+    if fill.any():  # enclosed patches: only those small enough and holding no other room's cells
+        fill &= np.bincount(holes.ravel(), minlength=k + 1) * resolution ** 2 <= FURNITURE_MAX_AREA
+    if fill.any():
+        fill[holes[(L != 0) & ~m]] = False
+    if not fill.any():
+        return m
     return m | fill[holes]
 
 
@@ -240,10 +241,11 @@ def graph_place(G) -> tuple:
     Linear in the rooms and doors (:func:`networkx.articulation_points`). A door from a room to
     itself is no route and counts for neither.
     """
-    S = nx.Graph(G)
-    S.remove_edges_from(list(nx.selfloop_edges(S)))
+    S = nx.Graph()
+    S.add_nodes_from(G)
+    S.add_edges_from((a, b) for a, b in G.edges() if a != b)
     cut = set(nx.articulation_points(S))
-    dead = {n: sum(1 for m in S[n] if S.degree(m) == 1) for n in S}
+    dead = {n: sum(1 for m in S[n] if len(S[m]) == 1) for n in S}  # no self-loops: the degree
     return cut, dead
 
 
