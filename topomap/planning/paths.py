@@ -341,8 +341,9 @@ def _merged_nodes(mask, lab, n, cen, f):
     node[members] = members[:, :1]
     cen = cen.copy()
     cen[members[:, 0]] = np.stack([(GR + 0.5) * 2 * f - 0.5, (GC + 0.5) * 2 * f - 0.5], 1)
-    used, node = np.unique(node, return_inverse=True)
-    return node, cen[used]
+    used = np.zeros(n + 1, bool)  # the nodes left, numbered in order (np.unique without its sort)
+    used[node] = True
+    return (np.cumsum(used) - 1)[node], cen[used]
 
 
 def block_any(m: np.ndarray, f: int) -> np.ndarray:
