@@ -245,7 +245,8 @@ def graph_place(G) -> tuple:
     S.add_nodes_from(G)
     S.add_edges_from((a, b) for a, b in G.edges() if a != b)
     cut = set(nx.articulation_points(S))
-    dead = {n: sum(1 for m in S[n] if len(S[m]) == 1) for n in S}  # no self-loops: the degree
+    adj = {n: list(nbrs) for n, nbrs in S.adjacency()}
+    dead = {n: sum(1 for m in adj[n] if len(adj[m]) == 1) for n in adj}  # no self-loops: the degree
     return cut, dead
 
 

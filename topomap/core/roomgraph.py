@@ -432,11 +432,12 @@ def room_graph(seg) -> nx.MultiGraph:
     r1, c1 = boxes[:, [1, 3]].max(axis=0)
     ir, ic = _interior_points(labels[r0:r1, c0:c1], n, cen, int(r0), int(c0))
     ix, iy = grid.pixel_to_world(ir.astype(float), ic.astype(float))
+    cx, cy = grid.pixel_to_world(cen[:, 0], cen[:, 1])
     for i in range(1, n + 1):
         if cnt[i] == 0:
             continue
         r, c = cen[i]
-        x, y = grid.pixel_to_world(r, c)
+        x, y = cx[i], cy[i]
         G.add_node(i, area=float(cnt[i] * area_cell), cells=int(cnt[i]), x=float(x), y=float(y),
                    row=float(r), col=float(c), interior_x=float(ix[i]), interior_y=float(iy[i]),
                    interior_row=float(ir[i]), interior_col=float(ic[i]), polygon=polys.get(i))
