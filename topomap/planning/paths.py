@@ -206,13 +206,14 @@ class RoomSpace:
         cells = _coarse_door_distances(self.mask, pts, f, need)  # (k, k) distances in cells
         cells[seen] = _octile(*(pts[:, None, :] - pts[None, :, :]).transpose(2, 0, 1))[seen]
         short = REFINE_CELLS * f if f > 1 else 0
-        for i in range(len(ids)):
-            near = [j for j in range(i + 1, len(ids)) if cells[i, j] < short and not seen[i, j]]
-            if near:
-                cells[i, near] = _windowed_distances(self.mask, pts, i, near, cells[i, near], f)
+        close = np.triu((cells < short) & ~seen, 1)  # (a row's refinement changes only that row)
+        for i in np.flatnonzero(close.any(axis=1)):
+            near = np.flatnonzero(close[i])
+            cells[i, near] = _windowed_distances(self.mask, pts, i, list(near), cells[i, near], f)
         res = self.room_map.resolution
-        return {(ids[i], ids[j]): float(cells[i, j]) * res
-                for i in range(len(ids)) for j in range(i + 1, len(ids)) if np.isfinite(cells[i, j])}
+        I, J = np.triu_indices(len(ids), 1)
+        ok = np.isfinite(cells[I, J])
+        return {(ids[i], ids[j]): L * res for i, j, L in zip(I[ok].tolist(), J[ok].tolist(), cells[I, J][ok].tolist())}
 
 
 #: Rooms with at least this many doors: open floor merged into larger travel nodes
