@@ -317,8 +317,7 @@ def _largest_map(maps, profile, floor):
              "command uses, loaded once before the first map; `warmup`: the job once on a tiny map, so "
              "one-off first-call costs are not in the first map; all three paid once per command, so "
              "shared by all maps of a batch; the clearance is computed on a second thread during "
-             "`preprocess` and `skeletons`, the rooms' clearance during `room_graph`, and the overlay and "
-             "the labels.png image during `travel`: "
+             "`preprocess` and `skeletons`, and the overlay and the labels.png image during `travel`: "
              "`overlay` is what the job still waits for them after it):", "",
              "| stage | ms | share of the map's job |", "| --- | ---: | ---: |"]
     for k in TOPO_STAGES:
