@@ -15,7 +15,7 @@ import numpy as np
 import networkx as nx
 from scipy import ndimage as ndi
 
-from .._fast import BackgroundCall, edt, lookup, ranges
+from .._fast import edt, lookup, ranges
 from .geometry import label_rings, mask_rings, true_bbox
 from .kinds import annotate_kinds
 
@@ -325,10 +325,11 @@ def interior_points(labels: np.ndarray, n: int, centroids=None):
     return _interior_points(L, n, centroids, r0, c0)
 
 
-def _clearance(L):
-    """``(clear, start, lab, vmax)`` of the room labels ``L``: each cell's clearance (:func:`interior_points`;
-    float32), and the runs of one label along the rows: their first cells (flat), labels and largest
-    clearances."""
+def _interior_points(L, n, centroids, r0, c0):
+    """:func:`interior_points` of the labels ``L`` (``0..n``), the box of the map's labels whose first
+    cell is ``(r0, c0)``: rows and columns in the map."""
+    rows = np.full(n + 1, -1, np.int64)
+    cols = np.full(n + 1, -1, np.int64)
     # cells whose 4 neighbours are of their own room (each pair of neighbours compared once); the
     # cells on the map's border are on their room's edge
     inner = L > 0
@@ -342,27 +343,18 @@ def _clearance(L):
     inner[:, [0, -1]] = False
     clear = edt(inner, exact=False)  # 0 on the rooms' edges, else the distance to the nearest edge cell
     del inner
+    # runs of one label along the rows: each room's largest clearance is the largest of its runs'
+    # largest, and only the runs that reach within half a cell of it hold candidates
     W = L.shape[1]
     brk = np.ones(L.shape, bool)
     brk[:, 1:] = ~same
     del same
     start = np.flatnonzero(brk)
     del brk
-    return clear, start, L[start // W, start % W], np.maximum.reduceat(clear.ravel(), start)
-
-
-def _interior_points(L, n, centroids, r0, c0, runs=None):
-    """:func:`interior_points` of the labels ``L`` (``0..n``), the box of the map's labels whose first
-    cell is ``(r0, c0)``: rows and columns in the map; ``runs``: :func:`_clearance` of ``L`` when
-    already found."""
-    rows = np.full(n + 1, -1, np.int64)
-    cols = np.full(n + 1, -1, np.int64)
-    clear, start, lab, vmax = _clearance(L) if runs is None else runs
-    # each room's largest clearance is the largest of its runs' largest, and only the runs that reach
-    # within half a cell of it hold candidates
-    W = L.shape[1]
     end = np.r_[start[1:], L.size]
+    lab = L[start // W, start % W]
     val = clear.ravel()
+    vmax = np.maximum.reduceat(val, start)
     top = np.zeros(n + 1, val.dtype)
     np.maximum.at(top, lab, vmax)  # each room's largest clearance (label 0: ignored)
     sel = np.flatnonzero((lab > 0) & (vmax >= top[lab] - 0.5))
@@ -417,10 +409,6 @@ def room_graph(seg) -> nx.MultiGraph:
                       outside_area=float(getattr(seg, "outside_area", 0.0)))
     if n == 0:
         return G
-    # the clearance of the rooms' cells (for their interior points) on a second core meanwhile
-    r0, r1, c0, c1 = true_bbox(labels > 0)
-    inside = labels[r0:r1, c0:c1]
-    clearance = BackgroundCall(_clearance, inside)
     # cell counts, row / column sums and boxes per room and the outlines: one pass over the labels
     detailed = _detailed(labels, n)  # rooms beyond the outline detail limit: their rings are not traced here
     rings = label_rings(_without(labels, detailed))
@@ -438,7 +426,11 @@ def room_graph(seg) -> nx.MultiGraph:
     area_cell = grid.resolution ** 2
     with np.errstate(invalid="ignore", divide="ignore"):
         cen = np.stack([sr[:n + 1] / cnt[:n + 1], sc[:n + 1] / cnt[:n + 1]], 1)
-    ir, ic = _interior_points(inside, n, cen, r0, c0, clearance.result())
+    # the box of all rooms (the union of theirs: labels are 0..n here)
+    boxes = np.array([(sl[0].start, sl[0].stop, sl[1].start, sl[1].stop) for sl in objs if sl is not None])
+    r0, c0 = boxes[:, [0, 2]].min(axis=0)
+    r1, c1 = boxes[:, [1, 3]].max(axis=0)
+    ir, ic = _interior_points(labels[r0:r1, c0:c1], n, cen, int(r0), int(c0))
     ix, iy = grid.pixel_to_world(ir.astype(float), ic.astype(float))
     cx, cy = grid.pixel_to_world(cen[:, 0], cen[:, 1])
     for i in range(1, n + 1):
