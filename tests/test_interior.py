@@ -163,3 +163,48 @@ def test_cli_tour_from_room(saved):
     assert out["order"][0] == 3 and sorted(out["order"]) == [1, 2, 3, 4, 5] and not out["unreachable"]
     r = _run("tour", d / "rooms.graphml")
     assert r.exit_code == 2
+
+
+def _interior_cell_by_cell(labels, n, centroids):
+    """interior_points by its rule, cell by cell: the clearance (OpenCV's 5 x 5 chamfer distance to the
+    nearest cell on a room's edge or of no room), each room's cells within half a cell of its largest,
+    the one nearest its centroid, the first in a row-major scan of equals."""
+    from topomap._fast import edt
+
+    L = np.where((labels > 0) & (labels <= n), labels, 0)
+    P = np.pad(L, 1)
+    inner = (L > 0) & (P[:-2, 1:-1] == L) & (P[2:, 1:-1] == L) & (P[1:-1, :-2] == L) & (P[1:-1, 2:] == L)
+    clear = edt(np.pad(inner, 1), exact=False)[1:-1, 1:-1]
+    rows = np.full(n + 1, -1)
+    cols = np.full(n + 1, -1)
+    for i in range(1, n + 1):
+        rr, cc = np.nonzero(L == i)
+        if rr.size == 0:
+            continue
+        v = clear[rr, cc]
+        near = np.flatnonzero(v >= v.max() - np.float32(0.5))
+        d2 = (rr[near] - centroids[i, 0]) ** 2 + (cc[near] - centroids[i, 1]) ** 2
+        k = near[np.flatnonzero(d2 == d2.min())[0]]
+        rows[i], cols[i] = rr[k], cc[k]
+    return rows, cols
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_interior_points_follow_their_rule_cell_by_cell(seed):
+    """Blocky random rooms (with labels above n: fragments, and a label without cells) on maps whose
+    rooms reach the border or not: the same cells as the rule applied cell by cell."""
+    rng = np.random.default_rng(seed)
+    h, w = (int(v) for v in rng.integers(20, 70, 2))
+    coarse = rng.integers(0, 8, (h // 5 + 1, w // 5 + 1))
+    labels = np.kron(coarse, np.ones((5, 5), np.int32))[:h, :w].astype(np.int32)
+    labels[rng.random((h, w)) < 0.05] = 0  # specks of no room
+    if seed % 2:
+        labels[:, :3] = 0  # rooms off the left border
+    n = 6  # label 7: fragments
+    labels[labels == 3] = 0  # room 3 without cells
+    cen = np.array([[0.0, 0.0]] + [list(np.argwhere(labels == i).mean(axis=0)) if (labels == i).any()
+                                   else [0.0, 0.0] for i in range(1, n + 1)])
+    rows, cols = interior_points(labels, n, cen)
+    want_rows, want_cols = _interior_cell_by_cell(labels, n, cen)
+    np.testing.assert_array_equal(rows, want_rows)
+    np.testing.assert_array_equal(cols, want_cols)

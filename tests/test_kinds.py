@@ -157,3 +157,30 @@ def test_a_strip_too_narrow_to_walk_along_is_no_corridor():
     assert room_kind(1.1, 0.44, 2.6, 0) == "room"        # a sliver with no door (seen on a real map)
     assert room_kind(1.5, 0.6, 2.5, 0) == "corridor"     # as narrow as a corridor gets
     assert room_kind(2.0, 0.5, 4.0, 3) == "doorway"      # three doors do not make a gap a hallway
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_the_patches_filled_are_those_of_the_rule(seed):
+    """A room's cells with its enclosed patches filled, against the rule with scipy's labelling: the
+    4-connected pieces of its box's other cells that reach neither the box's border nor another room's
+    cell, up to FURNITURE_MAX_AREA; on blocky random rooms with specks of no room."""
+    from scipy import ndimage as ndi
+
+    from topomap.core.kinds import FURNITURE_MAX_AREA, _without_furniture
+
+    rng = np.random.default_rng(seed)
+    for _ in range(40):
+        h, w = (int(v) for v in rng.integers(1, 40, 2))
+        f = int(rng.integers(1, 6))
+        L = np.kron(rng.integers(0, 4, (h // f + 1, w // f + 1)), np.ones((f, f), int))[:h, :w]
+        L = np.where(rng.random((h, w)) < rng.random() * 0.3, 0, L)
+        res = float(rng.choice([0.05, 0.2, 0.5]))
+        for n in range(1, 4):
+            m = L == n
+            holes, k = ndi.label(~m)
+            size = np.bincount(holes.ravel(), minlength=k + 1)
+            fill = size * res ** 2 <= FURNITURE_MAX_AREA
+            fill[0] = False
+            fill[np.concatenate([holes[0], holes[-1], holes[:, 0], holes[:, -1]])] = False
+            fill[holes[(L != 0) & ~m]] = False
+            np.testing.assert_array_equal(_without_furniture(L, n, res), m | fill[holes])

@@ -50,7 +50,7 @@ import networkx as nx
 import numpy as np
 from scipy import ndimage as ndi
 
-from .._fast import edt
+from .._fast import edt, label
 
 __all__ = ["KINDS", "CORRIDOR_MAX_WIDTH", "CORRIDOR_MIN_WIDTH", "CORRIDOR_MIN_ELONGATION", "CORRIDOR_MIN_LENGTH", "CORRIDOR_MIN_DOORS",
            "HALLWAY_MIN_DOORS", "SIDE_DOOR_MIN_RATIO", "WIDE_CORRIDOR_MAX_WIDTH", "WIDE_CORRIDOR_MIN_ELONGATION",
@@ -131,7 +131,9 @@ def room_shape(mask: np.ndarray, resolution: float) -> dict:
         ``area`` (m²), ``width`` (m, mean width), ``length`` (m, ``area / width``) and
         ``elongation`` (``length / width``), as the module docstring defines them.
     """
-    m = np.pad(np.asarray(mask, bool), 1)
+    mask = np.asarray(mask, bool)
+    m = np.zeros((mask.shape[0] + 2, mask.shape[1] + 2), bool)
+    m[1:-1, 1:-1] = mask
     n = int(np.count_nonzero(m))
     if n == 0:
         return {"area": 0.0, "width": 0.0, "length": 0.0, "elongation": 0.0}
@@ -219,15 +221,16 @@ def _without_furniture(L, n, resolution):
     """The cells of room ``n`` in its box of labels ``L``, with the enclosed patches of no room's cells
     (furniture, pillars) of at most :data:`FURNITURE_MAX_AREA` m² filled in."""
     m = L == n
-    holes, k = ndi.label(~m)
-    if k == 0:
-        return m
-    size = np.bincount(holes.ravel(), minlength=k + 1)
-    fill = size * resolution ** 2 <= FURNITURE_MAX_AREA
+    holes, k = label(~m, 4)
+    fill = np.ones(k + 1, bool)
     fill[0] = False
-    edge = np.concatenate([holes[0], holes[-1], holes[:, 0], holes[:, -1]])
-    fill[edge] = False  # reaches the box's border: not enclosed
-    fill[holes[(L != 0) & ~m]] = False  # holds another room's cells
+    fill[np.concatenate([holes[0], holes[-1], holes[:, 0], holes[:, -1]])] = False  # reach the box's border
+    if fill.any():  # enclosed patches: only those small enough and holding no other room's cells
+        fill &= np.bincount(holes.ravel(), minlength=k + 1) * resolution ** 2 <= FURNITURE_MAX_AREA
+    if fill.any():
+        fill[holes[(L != 0) & ~m]] = False
+    if not fill.any():
+        return m
     return m | fill[holes]
 
 
@@ -238,10 +241,12 @@ def graph_place(G) -> tuple:
     Linear in the rooms and doors (:func:`networkx.articulation_points`). A door from a room to
     itself is no route and counts for neither.
     """
-    S = nx.Graph(G)
-    S.remove_edges_from(list(nx.selfloop_edges(S)))
+    S = nx.Graph()
+    S.add_nodes_from(G)
+    S.add_edges_from((a, b) for a, b in G.edges() if a != b)
     cut = set(nx.articulation_points(S))
-    dead = {n: sum(1 for m in S[n] if S.degree(m) == 1) for n in S}
+    adj = {n: list(nbrs) for n, nbrs in S.adjacency()}
+    dead = {n: sum(1 for m in adj[n] if len(adj[m]) == 1) for n in adj}  # no self-loops: the degree
     return cut, dead
 
 

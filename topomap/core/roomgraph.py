@@ -15,7 +15,7 @@ import numpy as np
 import networkx as nx
 from scipy import ndimage as ndi
 
-from .._fast import edt, lookup
+from .._fast import edt, lookup, ranges
 from .geometry import label_rings, mask_rings, true_bbox
 from .kinds import annotate_kinds
 
@@ -320,27 +320,50 @@ def interior_points(labels: np.ndarray, n: int, centroids=None):
         return rows, cols
     r0, r1, c0, c1 = box
     L = L[r0:r1, c0:c1]
-    L = np.where(L <= n, L, 0) if L.max() > n else L
-    # cells whose 4 neighbours are of their own room (in place: one more mask at a time); the
+    if L.max() > n or L.min() < 0:
+        L = np.where((L > 0) & (L <= n), L, 0)
+    return _interior_points(L, n, centroids, r0, c0)
+
+
+def _interior_points(L, n, centroids, r0, c0):
+    """:func:`interior_points` of the labels ``L`` (``0..n``), the box of the map's labels whose first
+    cell is ``(r0, c0)``: rows and columns in the map."""
+    rows = np.full(n + 1, -1, np.int64)
+    cols = np.full(n + 1, -1, np.int64)
+    # cells whose 4 neighbours are of their own room (each pair of neighbours compared once); the
     # cells on the map's border are on their room's edge
     inner = L > 0
-    inner[1:] &= L[1:] == L[:-1]
-    inner[:-1] &= L[:-1] == L[1:]
-    inner[:, 1:] &= L[:, 1:] == L[:, :-1]
-    inner[:, :-1] &= L[:, :-1] == L[:, 1:]
+    same = L[1:] == L[:-1]
+    inner[1:] &= same
+    inner[:-1] &= same
+    same = L[:, 1:] == L[:, :-1]
+    inner[:, 1:] &= same
+    inner[:, :-1] &= same
     inner[[0, -1], :] = False
     inner[:, [0, -1]] = False
     clear = edt(inner, exact=False)  # 0 on the rooms' edges, else the distance to the nearest edge cell
     del inner
-    flat, val = L.ravel(), clear.ravel()
-    cells = np.flatnonzero(flat)
-    lab, v = flat[cells], val[cells]
-    top = np.zeros(n + 1, v.dtype)
-    np.maximum.at(top, lab, v)  # each room's largest clearance
-    keep = v >= top[lab] - 0.5
+    # runs of one label along the rows: each room's largest clearance is the largest of its runs'
+    # largest, and only the runs that reach within half a cell of it hold candidates
+    W = L.shape[1]
+    brk = np.ones(L.shape, bool)
+    brk[:, 1:] = ~same
+    del same
+    start = np.flatnonzero(brk)
+    del brk
+    end = np.r_[start[1:], L.size]
+    lab = L[start // W, start % W]
+    val = clear.ravel()
+    vmax = np.maximum.reduceat(val, start)
+    top = np.zeros(n + 1, val.dtype)
+    np.maximum.at(top, lab, vmax)  # each room's largest clearance (label 0: ignored)
+    sel = np.flatnonzero((lab > 0) & (vmax >= top[lab] - 0.5))
+    cells = ranges(start[sel], end[sel])
+    lab = np.repeat(lab[sel], end[sel] - start[sel])
+    keep = val[cells] >= top[lab] - 0.5
     cand, lab = cells[keep], lab[keep]
-    del cells, v
-    r, c = np.divmod(cand, L.shape[1])
+    del cells
+    r, c = np.divmod(cand, W)
     if centroids is not None:
         cen = np.asarray(centroids, float)
         d2 = (r + r0 - cen[lab, 0]) ** 2 + (c + c0 - cen[lab, 1]) ** 2
@@ -403,13 +426,18 @@ def room_graph(seg) -> nx.MultiGraph:
     area_cell = grid.resolution ** 2
     with np.errstate(invalid="ignore", divide="ignore"):
         cen = np.stack([sr[:n + 1] / cnt[:n + 1], sc[:n + 1] / cnt[:n + 1]], 1)
-    ir, ic = interior_points(labels, n, cen)
+    # the box of all rooms (the union of theirs: labels are 0..n here)
+    boxes = np.array([(sl[0].start, sl[0].stop, sl[1].start, sl[1].stop) for sl in objs if sl is not None])
+    r0, c0 = boxes[:, [0, 2]].min(axis=0)
+    r1, c1 = boxes[:, [1, 3]].max(axis=0)
+    ir, ic = _interior_points(labels[r0:r1, c0:c1], n, cen, int(r0), int(c0))
     ix, iy = grid.pixel_to_world(ir.astype(float), ic.astype(float))
+    cx, cy = grid.pixel_to_world(cen[:, 0], cen[:, 1])
     for i in range(1, n + 1):
         if cnt[i] == 0:
             continue
         r, c = cen[i]
-        x, y = grid.pixel_to_world(r, c)
+        x, y = cx[i], cy[i]
         G.add_node(i, area=float(cnt[i] * area_cell), cells=int(cnt[i]), x=float(x), y=float(y),
                    row=float(r), col=float(c), interior_x=float(ix[i]), interior_y=float(iy[i]),
                    interior_row=float(ir[i]), interior_col=float(ic[i]), polygon=polys.get(i))

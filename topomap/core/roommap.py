@@ -256,32 +256,58 @@ class RoomMap:
 
         A segment may run on past the place where its rooms meet, through a wall into a part of one
         of them that the other does not reach: its cell closest to the midpoint can lie there, and
-        a route to it from the other room does not exist."""
-        if did in self._door_points:
-            return self._door_points[did]
-        a, b, p1, p2 = self.doors[did][:4]
-        rr, cc = self.door_cells(did)
-        point = None
-        if len(rr):
-            H, W = self.shape
-            r0, c0 = max(int(rr.min()) - 1, 0), max(int(cc.min()) - 1, 0)
-            r1, c1 = min(int(rr.max()) + 2, H), min(int(cc.max()) + 2, W)
-            labels = np.pad(self.window_labels({a, b}, (r0, r1, c0, c1)), 1)
-            lr, lc = rr - r0 + 1, cc - c0 + 1
-            on = labels[lr, lc] > 0
-            if on.any():
-                near_a = np.zeros(len(rr), bool)
-                near_b = np.zeros(len(rr), bool)
-                for dr in (-1, 0, 1):
-                    for dc in (-1, 0, 1):
-                        v = labels[lr + dr, lc + dc]
-                        near_a |= v == a
-                        near_b |= v == b
-                both = on & near_a & near_b
-                cand = both if both.any() else on
-                mr, mc = (p1[0] + p2[0]) / 2, (p1[1] + p2[1]) / 2
-                d2 = np.where(cand, (rr - mr) ** 2 + (cc - mc) ** 2, np.inf)
-                i = int(np.argmin(d2))
-                point = (int(rr[i]), int(cc[i]))
-        self._door_points[did] = point
-        return point
+        a route to it from the other room does not exist.
+
+        For a segmentation the cells of every door are found together, at the first call."""
+        if did not in self._door_points:
+            ids = sorted(self.doors) if self.seg is not None else [did]
+            self._door_points.update(zip(ids, self._find_door_points(ids)))
+        return self._door_points[did]
+
+    def _find_door_points(self, ids) -> list:
+        """:meth:`door_point` of the doors ``ids``, all in one pass over their cells."""
+        cells = [self.door_cells(d) for d in ids]
+        count = np.array([len(rr) for rr, _ in cells], np.intp)
+        door = np.repeat(np.arange(len(ids)), count)
+        rr = np.concatenate([rr for rr, _ in cells] + [np.zeros(0, np.intp)])
+        cc = np.concatenate([cc for _, cc in cells] + [np.zeros(0, np.intp)])
+        a = np.array([self.doors[d][0] for d in ids], np.int64)
+        b = np.array([self.doors[d][1] for d in ids], np.int64)
+        mid = np.array([((p1[0] + p2[0]) / 2, (p1[1] + p2[1]) / 2) for p1, p2 in
+                        (self.doors[d][2:4] for d in ids)], float).reshape(-1, 2)
+        around = self._around_doors(ids, cells, rr, cc, a[door], b[door])  # (9, cells): the 3 x 3 neighbours
+        on = around[4] > 0
+        both = on & (around == a[door]).any(axis=0) & (around == b[door]).any(axis=0)
+        has_on = np.bincount(door[on], minlength=len(ids)) > 0
+        has_both = np.bincount(door[both], minlength=len(ids)) > 0
+        cand = np.where(has_both[door], both, on)
+        d2 = np.where(cand, (rr - mid[door, 0]) ** 2 + (cc - mid[door, 1]) ** 2, np.inf)
+        order = np.lexsort((np.arange(door.size), d2, door))  # per door: the closest, the first of equals
+        first = order[np.r_[True, door[order][1:] != door[order][:-1]]] if door.size else order
+        best = dict(zip(door[first].tolist(), first.tolist()))
+        return [(int(rr[best[i]]), int(cc[best[i]])) if has_on[i] else None for i in range(len(ids))]
+
+    def _around_doors(self, ids, cells, rr, cc, a, b) -> np.ndarray:
+        """``(9, len(rr))``: at the 3 x 3 neighbours of each door cell ``rr, cc`` (row-major, the cell
+        itself at index 4; ``cells``: those of the doors ``ids`` in turn), its label when it is one of
+        that door's rooms ``a``, ``b``, else 0 (off the map too)."""
+        H, W = self.shape
+        out = np.zeros((9, rr.size), np.int64)
+        if self.seg is not None:
+            labels = self.seg.labels
+            for k, (dr, dc) in enumerate((dr, dc) for dr in (-1, 0, 1) for dc in (-1, 0, 1)):
+                r, c = rr + dr, cc + dc
+                ok = (r >= 0) & (r < H) & (c >= 0) & (c < W)
+                out[k, ok] = labels[r[ok], c[ok]]
+            return np.where((out == a) | (out == b), out, 0)
+        at = 0
+        for d, (dr_, dc_) in zip(ids, cells):  # a graph: each door's window of its two rooms, rasterised
+            if len(dr_):
+                r0, c0 = max(int(dr_.min()) - 1, 0), max(int(dc_.min()) - 1, 0)
+                r1, c1 = min(int(dr_.max()) + 2, H), min(int(dc_.max()) + 2, W)
+                labels = np.pad(self.window_labels(set(self.doors[d][:2]), (r0, r1, c0, c1)), 1)
+                lr, lc = dr_ - r0 + 1, dc_ - c0 + 1
+                for k, (dr, dc) in enumerate((dr, dc) for dr in (-1, 0, 1) for dc in (-1, 0, 1)):
+                    out[k, at:at + len(dr_)] = labels[lr + dr, lc + dc]
+            at += len(dr_)
+        return out

@@ -206,13 +206,14 @@ class RoomSpace:
         cells = _coarse_door_distances(self.mask, pts, f, need)  # (k, k) distances in cells
         cells[seen] = _octile(*(pts[:, None, :] - pts[None, :, :]).transpose(2, 0, 1))[seen]
         short = REFINE_CELLS * f if f > 1 else 0
-        for i in range(len(ids)):
-            near = [j for j in range(i + 1, len(ids)) if cells[i, j] < short and not seen[i, j]]
-            if near:
-                cells[i, near] = _windowed_distances(self.mask, pts, i, near, cells[i, near], f)
+        close = np.triu((cells < short) & ~seen, 1)  # (a row's refinement changes only that row)
+        for i in np.flatnonzero(close.any(axis=1)):
+            near = np.flatnonzero(close[i])
+            cells[i, near] = _windowed_distances(self.mask, pts, i, list(near), cells[i, near], f)
         res = self.room_map.resolution
-        return {(ids[i], ids[j]): float(cells[i, j]) * res
-                for i in range(len(ids)) for j in range(i + 1, len(ids)) if np.isfinite(cells[i, j])}
+        I, J = np.triu_indices(len(ids), 1)
+        ok = np.isfinite(cells[I, J])
+        return {(ids[i], ids[j]): L * res for i, j, L in zip(I[ok].tolist(), J[ok].tolist(), cells[I, J][ok].tolist())}
 
 
 #: Rooms with at least this many doors: open floor merged into larger travel nodes
@@ -341,8 +342,9 @@ def _merged_nodes(mask, lab, n, cen, f):
     node[members] = members[:, :1]
     cen = cen.copy()
     cen[members[:, 0]] = np.stack([(GR + 0.5) * 2 * f - 0.5, (GC + 0.5) * 2 * f - 0.5], 1)
-    used, node = np.unique(node, return_inverse=True)
-    return node, cen[used]
+    used = np.zeros(n + 1, bool)  # the nodes left, numbered in order (np.unique without its sort)
+    used[node] = True
+    return (np.cumsum(used) - 1)[node], cen[used]
 
 
 def block_any(m: np.ndarray, f: int) -> np.ndarray:
@@ -374,8 +376,9 @@ def block_any(m: np.ndarray, f: int) -> np.ndarray:
 
 
 def _touching(a, b):
-    """Label pairs of 8-adjacent cells, ``a`` the row above ``b`` (0 = no cell)."""
-    out = []
+    """Label pairs of 8-adjacent cells, ``a`` the row above ``b`` (0 = no cell): the labels above and
+    the labels below (lists of arrays, one each way of touching)."""
+    above, below = [], []
     w = a.shape[1]
     on_a, on_b = a > 0, b > 0
     for dc in (-1, 0, 1):
@@ -385,8 +388,9 @@ def _touching(a, b):
         x, y = x[ok], y[ok]
         keep = np.ones(len(x), bool)  # runs of the same pair along a block edge: keep one
         keep[1:] = (x[1:] != x[:-1]) | (y[1:] != y[:-1])
-        out.append(np.stack([x[keep], y[keep]], 1))
-    return out
+        above.append(x[keep])
+        below.append(y[keep])
+    return above, below
 
 
 def _coarse_door_distances(mask, pts, f, need=None):
@@ -418,15 +422,16 @@ def _coarse_door_distances(mask, pts, f, need=None):
     many = k >= MANY_DOORS
     lab, n, cen = _block_components(mask, f)
     nb = len(lab[f::f])
-    pairs = _touching(lab[f - 1::f][:nb], lab[f::f])
+    us, vs = _touching(lab[f - 1::f][:nb], lab[f::f])  # the pairs of touching pieces, each way
     right = np.ascontiguousarray(lab[:, f::f].T)  # the columns at the blocks' edges, as rows
     left = np.ascontiguousarray(lab[:, f - 1::f][:, :len(right)].T)
-    pairs += [p[:, ::-1] for p in _touching(left, right)]
+    ls, rs = _touching(left, right)
+    us, vs = us + rs, vs + ls
     if many and f > 1:  # open floor merged: pieces -> their nodes
         node, cen = _merged_nodes(mask, lab, n, cen, f)
-        E = node[np.concatenate(pairs)]
-        E = E[E[:, 0] != E[:, 1]]
-        pairs = [E]
+        u, v = node[np.concatenate(us)], node[np.concatenate(vs)]
+        apart = u != v
+        us, vs = [u[apart]], [v[apart]]
         n = len(cen) - 1
         lab_node = lambda v: node[v]  # noqa: E731
     else:
@@ -438,17 +443,17 @@ def _coarse_door_distances(mask, pts, f, need=None):
         near = lab_node(near[near > 0])
         su.append(np.full(len(near), n + 1 + i))
         sv.append(near)
-    E = np.concatenate(pairs + [np.stack([np.concatenate(su), np.concatenate(sv)], 1)]).astype(np.int32)
+    u, v = np.concatenate(us + su).astype(np.int32), np.concatenate(vs + sv).astype(np.int32)
     pr = np.concatenate([cen[:, 0], pts[:, 0]])
     pc = np.concatenate([cen[:, 1], pts[:, 1]])
-    A = _travel_matrix(E, n + 1 + k, lambda u, v: _octile(pr[u] - pr[v], pc[u] - pc[v]) + 1e-9, both_ways=many)
+    A = _travel_matrix(u, v, n + 1 + k, lambda u, v: _octile(pr[u] - pr[v], pc[u] - pc[v]) + 1e-9, both_ways=many)
     rows = np.nonzero(np.triu(need, 1).any(axis=1))[0]  # one search from each door with a pair i < j
     out[rows] = dijkstra(A, directed=many, indices=n + 1 + rows)[:, n + 1:]
     return out
 
 
-def _travel_matrix(E, m, length, *, both_ways):
-    """The (m, m) CSR matrix joining each pair of rows of ``E`` ((e, 2) ints, repeats allowed) by
+def _travel_matrix(a, b, m, length, *, both_ways):
+    """The (m, m) CSR matrix joining each pair ``a[i], b[i]`` of nodes ((e,) ints, repeats allowed) by
     ``length(u, v)`` (arrays of node indices -> lengths), one entry per pair.
 
     With ``both_ways`` every pair is entered in both directions, to be searched as a directed
@@ -458,7 +463,7 @@ def _travel_matrix(E, m, length, *, both_ways):
     """
     from scipy.sparse import coo_matrix
 
-    rows, cols = (np.concatenate([E[:, 0], E[:, 1]]), np.concatenate([E[:, 1], E[:, 0]])) if both_ways else E.T
+    rows, cols = (np.concatenate([a, b]), np.concatenate([b, a])) if both_ways else (a, b)
     # one entry per pair (the sparse matrix merges repeats), then its length
     A = coo_matrix((np.ones(len(rows), np.float32), (rows, cols)), shape=(m, m)).tocsr()
     u = np.repeat(np.arange(m), np.diff(A.indptr))
