@@ -28,7 +28,7 @@ __all__ = ["Candidate", "Door", "passage_candidates", "intersection_points",
            "wall_threshold", "select_doors", "segment_crosses", "passage_minima",
            "nearest_wall_points", "protrusion", "protrusion_at", "occupied_skeleton_lines",
            "find_bottlenecks", "judge_doors", "suppress_duplicates", "opening_candidates", "across_corridor",
-           "gaps_without_doors", "STATUSES"]
+           "STATUSES"]
 
 # --------------------------------------------------------------------------
 # Candidate statuses: why a candidate was kept or refused (see the "How it
@@ -1318,27 +1318,6 @@ def opening_candidates(openings, resolution: float, *, status: str = WALL_OPENIN
     width, half = (n * resolution).tolist(), (n / 2).tolist()
     return [(w, Candidate(edge=None, centroid=c, direction=d, radius=h, ip1=p, ip2=q, status=status))
             for (p, q), w, c, d, h in zip(openings, width, centre, direction, half)]
-
-
-def gaps_without_doors(gaps, kept) -> list:
-    """The gaps (``((r, c), (r, c))`` posts, pixels) whose midpoint lies at least its own width from
-    every segment of ``kept``: a doorway where a door is cut already needs no second cut (across
-    a thick wall, two cuts a wall's thickness apart would leave a sliver between them)."""
-    from scipy.spatial import cKDTree
-
-    if not gaps or not kept:
-        return list(gaps)
-    G, S = np.asarray(gaps, float).reshape(-1, 2, 2), np.asarray(kept, float).reshape(-1, 2, 2)
-    mid, width = (G[:, 0] + G[:, 1]) / 2, np.hypot(*(G[:, 1] - G[:, 0]).T)
-    # the segments within reach of each midpoint, from a k-d tree of their midpoints (linear, not
-    # every pair): a segment is no nearer than its midpoint less half its length
-    half = np.hypot(*(S[:, 1] - S[:, 0]).T) / 2
-    near = cKDTree((S[:, 0] + S[:, 1]) / 2).query_ball_point(mid, width + float(half.max()) + 1e-6)
-    g = np.repeat(np.arange(len(G)), [len(js) for js in near])
-    j = np.fromiter(chain.from_iterable(near), np.intp, count=g.size)
-    close = np.zeros(len(G), bool)
-    close[g[point_segment_distances(mid[g], S[j, 0], S[j, 1]) < width[g]]] = True
-    return [gap for gap, c in zip(gaps, close) if not c]
 
 
 def suppress_duplicates(accepted, resolution: float, *, kept=()) -> list:

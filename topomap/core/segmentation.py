@@ -39,7 +39,6 @@ from .doors import (
     WALL_GAP,
     across_corridor,
     find_bottlenecks,
-    gaps_without_doors,
     intersection_points,
     judge_doors,
     occupied_skeleton_lines,
@@ -538,8 +537,8 @@ def _cut_gaps(free_graph, free, hits, segs, cands, wall_grid, opts: TopomapOptio
                           max_width_px=opts.max_door_width / res, along_px=opts.gap_wall / res,
                           thick_px=opts.wall_thickness / res, structure_px=opts.partition_structure / res,
                           pillar_px=opts.pillar_depth / res, max_radius=opts.max_door_width / 2,
-                          clearance=clearance)
-    found = opening_candidates(gaps_without_doors(gaps, segs), res, status=WALL_GAP)
+                          clearance=clearance, kept=segs)
+    found = opening_candidates(gaps, res, status=WALL_GAP)
     cands = cands + [c for _, c in found]
     if wall_grid.long_walls and opts.pillar_depth > 0:
         found = across_corridor(found, wall_grid.index, opts.pillar_depth / res)

@@ -22,7 +22,8 @@ import numpy as np
 
 __all__ = ["wall_faces", "wall_lines", "straight_share", "wall_openings", "wall_directions", "long_walls",
            "across_walls", "across_walls_many", "WallIndex", "long_wall_gaps", "partition_gaps", "face_runs",
-           "straight_lines", "furniture_rows", "wall_mask", "scale_walls", "thin_wall_gaps"]
+           "straight_lines", "furniture_rows", "wall_mask", "scale_walls", "thin_wall_gaps",
+           "gaps_without_doors"]
 
 
 #: The 4-neighbours of a cell (not the cell itself), as a morphology kernel.
@@ -928,35 +929,42 @@ def _cross_sections(free_graph, step: float, max_radius: float = np.inf):
     pixels of a branch's end) and the unit vector across the branch there: ``(K, 2)``,
     ``(K, 2)``. A coarse skeleton's paths step over several cells: the points lie between
     them too, so that no wall thicker than ``step`` is stepped over. Points of a clearance
-    (``radius``, metres) above ``max_radius`` are left out."""
-    pts, across = [], []
-    for _, _, d in free_graph.edges(data=True):
-        p = np.asarray(d["path"], float)
-        if len(p) < 3:
-            continue
-        arc = np.r_[0.0, np.cumsum(np.hypot(*np.diff(p, axis=0).T))]
-        if arc[-1] <= 4.0:
-            continue
-        t = np.arange(2.0, arc[-1] - 2.0, step)
-        at = np.stack([np.interp(t, arc, p[:, 0]), np.interp(t, arc, p[:, 1])], 1)
-        ahead = np.stack([np.interp(t + 2, arc, p[:, 0]), np.interp(t + 2, arc, p[:, 1])], 1)
-        back = np.stack([np.interp(t - 2, arc, p[:, 0]), np.interp(t - 2, arc, p[:, 1])], 1)
-        v = ahead - back
-        n = np.hypot(v[:, 0], v[:, 1])
-        ok = n > 0
-        if "radius" in d and np.isfinite(max_radius):
-            ok &= np.interp(t, arc, np.asarray(d["radius"], float)) <= max_radius
-        pts.append(at[ok])
-        across.append(np.stack([-v[ok, 1], v[ok, 0]], 1) / n[ok, None])
-    if not pts:
+    (``radius``, metres) above ``max_radius`` are left out. Every branch at once: the paths
+    laid end to end, each on its own stretch of one arc length."""
+    from .._fast import ranges
+
+    paths = [(np.asarray(d["path"], float), d.get("radius")) for _, _, d in free_graph.edges(data=True)
+             if len(d["path"]) >= 3]
+    if not paths:
         return np.zeros((0, 2)), np.zeros((0, 2))
-    return np.concatenate(pts), np.concatenate(across)
+    P = np.concatenate([p for p, _ in paths])
+    n = np.array([len(p) for p, _ in paths])
+    first = np.cumsum(n) - n
+    steps = np.hypot(*np.diff(P, axis=0).T)
+    steps[first[1:] - 1] = 8.0  # between two paths: a stretch no sample reaches (t +- 2 stays inside)
+    arc = np.r_[0.0, np.cumsum(steps)]
+    lo, hi = arc[first] + 2.0, arc[first + n - 1] - 2.0
+    count = np.maximum(np.ceil((hi - lo) / step).astype(np.int64), 0)
+    t = np.repeat(lo, count) + (ranges(np.zeros_like(count), count) * step)
+    if t.size == 0:
+        return np.zeros((0, 2)), np.zeros((0, 2))
+
+    def at(x):
+        return np.stack([np.interp(x, arc, P[:, 0]), np.interp(x, arc, P[:, 1])], 1)
+
+    v = at(t + 2) - at(t - 2)
+    norm = np.hypot(v[:, 0], v[:, 1])
+    ok = norm > 0
+    if np.isfinite(max_radius) and all(r is not None for _, r in paths):
+        R = np.concatenate([np.asarray(r, float) for _, r in paths])
+        ok &= np.interp(t, arc, R) <= max_radius
+    return at(t[ok]), np.stack([-v[ok, 1], v[ok, 0]], 1) / norm[ok, None]
 
 
 def thin_wall_gaps(free_graph, free: np.ndarray, hits: np.ndarray, *, min_width_px: float,
                    max_width_px: float, along_px: float, thick_px: float, structure_px: float,
                    pillar_px: float = 0.0, step: float = 1.0, max_radius: float = np.inf,
-                   clearance=None) -> list:
+                   clearance=None, kept=()) -> list:
     """Gaps in thin walls across the free-space skeleton: doorways that narrow nothing.
 
     A doorway into a passage no wider than itself (the end of a hallway, a
@@ -993,6 +1001,9 @@ def thin_wall_gaps(free_graph, free: np.ndarray, hits: np.ndarray, *, min_width_
         Pixels, as above (``pillar_px`` 0: no pillar test).
     step : float
         The skeleton is tried every ``step`` pixels along its branches.
+    kept : list of ((r, c), (r, c)), optional
+        Door segments cut already: a gap whose midpoint lies within its own
+        width of one of them is that doorway (:func:`gaps_without_doors`).
     clearance : (M, N) ndarray of float, optional
         Distance (pixels) of every free cell to the nearest obstacle (the
         method's clearance; computed when not given).
@@ -1055,6 +1066,9 @@ def thin_wall_gaps(free_graph, free: np.ndarray, hits: np.ndarray, *, min_width_
         pillar = [_goes_on(is_solid, p, D, b) & ~_thin_beyond(is_solid, p, D, b, k) for p, D in ((p1, N), (p2, -N))]
         keep = ~(pillar[0] & pillar[1])
         N, p1, p2 = N[keep], p1[keep], p2[keep]
+    if kept:  # a doorway a door is cut in already needs no second cut
+        sel = gaps_without_doors(p1, p2, kept)
+        N, p1, p2 = N[sel], p1[sel], p2[sel]
     # last, on the few left: the obstacle beyond each post is part of a structure
     obstacle = ~np.asarray(free, bool)
     seen = {}  # a doorway's jambs are met again at every step through it
@@ -1106,6 +1120,32 @@ def _first_obstacle(is_solid, clearance, P, D, n: int) -> np.ndarray:
         t[go] += np.maximum(np.floor(c) - 1.0, 1.0)
         done[go[t[go] > n]] = True
     return np.where(t <= n, t, n + 1).astype(np.int64)
+
+
+def gaps_without_doors(p1: np.ndarray, p2: np.ndarray, kept) -> np.ndarray:
+    """Whether each gap (posts ``p1[i]``, ``p2[i]``, ``(K, 2)`` pixels) has its midpoint at least its
+    own width from every segment of ``kept`` (``((r, c), (r, c))``): a doorway where a door is cut
+    already needs no second cut (across a thick wall, two cuts a wall's thickness apart would leave
+    a sliver between them). ``(K,)`` bool."""
+    from itertools import chain
+
+    from scipy.spatial import cKDTree
+
+    from .geometry import point_segment_distances
+
+    keep = np.ones(len(p1), bool)
+    if len(p1) == 0 or not len(kept):
+        return keep
+    S = np.asarray(kept, float).reshape(-1, 2, 2)
+    mid, width = (p1 + p2) / 2, np.hypot(*(p2 - p1).T)
+    # the segments within reach of each midpoint, from a k-d tree of their midpoints (linear, not
+    # every pair): a segment is no nearer than its midpoint less half its length
+    half = np.hypot(*(S[:, 1] - S[:, 0]).T) / 2
+    near = cKDTree((S[:, 0] + S[:, 1]) / 2).query_ball_point(mid, width + float(half.max()) + 1e-6)
+    g = np.repeat(np.arange(len(mid)), [len(js) for js in near])
+    j = np.fromiter(chain.from_iterable(near), np.intp, count=g.size)
+    keep[g[point_segment_distances(mid[g], S[j, 0], S[j, 1]) < width[g]]] = False
+    return keep
 
 
 def _near_any(mask: np.ndarray, pts: np.ndarray) -> np.ndarray:
