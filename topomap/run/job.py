@@ -42,7 +42,7 @@ log = logging.getLogger("topomap")
 #: ``write_<file>``; ``job`` is the map from loading to the last file; ``start``, ``import`` and
 #: ``warmup`` are the command's own, before the first map.
 STAGES = ("start", "import", "warmup", "load", "previous", "preprocess", "walls", "furniture", "skeletons",
-          "graphs", "doors", "openings", "prior doors", "rooms", "match", "segment", "total", "room_graph", "travel",
+          "graphs", "doors", "openings", "gaps", "prior doors", "rooms", "outside", "match", "segment", "total", "room_graph", "travel",
           "overlay", "write_labels", "write_label_map_pgm", "write_label_map", "write_graphml", "write_json",
           "write_geojson", "write_overlay", "write", "job")
 
