@@ -1092,12 +1092,13 @@ def _goes_on(is_solid, post, D, a) -> np.ndarray:
 def _thin_beyond(is_solid, post, D, a, k) -> np.ndarray:
     """Whether the obstacle from each post ``(K, 2)`` on along ``D`` (the steps ``a``) is thin: free
     within the steps ``k`` on both of its faces (across ``D``) at 90 % of the steps."""
-    line = post[:, None, :] + D[:, None, :] * a[None, :, None]
-    across = D[:, ::-1] * np.array([1.0, -1.0])
     keep = np.ones(len(post), bool)
-    for side in (1.0, -1.0):
-        probe = line[:, :, None, :] + side * across[:, None, None, :] * k[None, None, :, None]
-        keep &= (~is_solid(probe)).any(2).mean(1) >= 0.9
+    for lo in range(0, len(post), 4096):  # in chunks: the probes of a point are len(a) * len(k) * 2 cells
+        line = post[lo:lo + 4096, None, :] + D[lo:lo + 4096, None, :] * a[None, :, None]
+        across = D[lo:lo + 4096, ::-1] * np.array([1.0, -1.0])
+        for side in (1.0, -1.0):
+            probe = line[:, :, None, :] + side * across[:, None, None, :] * k[None, None, :, None]
+            keep[lo:lo + 4096] &= (~is_solid(probe)).any(2).mean(1) >= 0.9
     return keep
 
 
