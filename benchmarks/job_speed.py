@@ -201,11 +201,18 @@ def _load():
 # the report
 # --------------------------------------------------------------------------
 
-#: Every stage --profile reports (topomap.run.job.STAGES), but the sums (segment/total, write, job).
-WRITES = ["write_labels", "write_label_map_pgm", "write_label_map", "write_graphml", "write_json", "write_geojson",
-          "write_overlay"]
-TOPO_STAGES = ["start", "import", "warmup", "load", "preprocess", "walls", "furniture", "skeletons", "graphs", "doors",
-               "openings", "rooms", "room_graph", "travel", "overlay"] + WRITES
+def topo_stages() -> list:
+    """Every stage --profile reports (:data:`topomap.run.job.STAGES`), but the sums (segment/total,
+    write, job) and those of a run with a previous result (previous, prior doors, match). Imported
+    here, not at the top: the child jobs time their own imports."""
+    from topomap.run.job import STAGES
+
+    return [s for s in STAGES if s not in ("previous", "prior doors", "match", "segment", "total", "write", "job")]
+
+
+def writes() -> list:
+    """The stages that write one file each (``write_<file>``)."""
+    return [s for s in topo_stages() if s.startswith("write_")]
 #: The stages of the command itself, paid once before the first map.
 ONCE = ("start", "import", "warmup")
 
@@ -285,9 +292,9 @@ def _time_split(profile, watershed):
     groups = [("start, imports, warm-up (once)", list(ONCE)), ("load", ["load"]),
               ("segmentation (`segment()`)", ["total"]), ("room graph", ["room_graph"]),
               ("travel distances", ["travel"]), ("overlay drawn", ["overlay"]),
-              ("files written", WRITES)]
+              ("files written", writes())]
     topo_sum = {k: sum(d.get(k, 0.0) for d in profile.values()) for k in
-                [*ONCE, "load", "total", "room_graph", "travel", "overlay", *WRITES, "job"]}
+                [*ONCE, "load", "total", "room_graph", "travel", "overlay", *writes(), "job"]}
     water_sum = {k: sum(d.get(k, 0.0) for d in watershed.values())
                  for k in ["import", "load", "distance", "segment", "write", "job"]}
     lines = ["Where the time goes, summed over the maps (last round; the watershed job's own stages beside "
@@ -320,7 +327,7 @@ def _largest_map(maps, profile, floor):
              "`preprocess` and `skeletons`, and the overlay and the labels.png image during `travel`: "
              "`overlay` is what the job still waits for them after it):", "",
              "| stage | ms | share of the map's job |", "| --- | ---: | ---: |"]
-    for k in TOPO_STAGES:
+    for k in topo_stages():
         if k in st:
             share = "" if k in ONCE else f"{100 * st[k] / job:.0f} %"
             lines.append(f"| {k} | {st[k] * 1000:.0f} | {share} |")
@@ -394,7 +401,7 @@ def _growth(directory, name, scales, tmp):
     head = "| stage | " + " | ".join(f"x{k} ({cells * k * k / 1e6:.1f} M)" for k in scales) + \
         f" | x{scales[-1]} / x1 |"
     out += [head, "| --- |" + " ---: |" * (len(scales) + 1)]
-    for s in TOPO_STAGES + ["job"]:
+    for s in topo_stages() + ["job"]:
         vals = [rows[("topomap", k)][2].get(s) for k in scales]
         if all(v is None for v in vals):
             continue
@@ -442,7 +449,7 @@ def _synthetic_case(tmp):
             f"every output: topomap **{t[0]:.1f} s, {t[1]:.0f} MB** peak "
             f"({t[0] / cells * 1e6 * 1000:.0f} ms and {t[1] / cells * 1e6:.0f} MB per million cells); "
             f"watershed job {w[0]:.1f} s, {w[1]:.0f} MB. topomap stages (ms): "
-            + ", ".join(f"{k} {t[2][k] * 1000:.0f}" for k in TOPO_STAGES if k in t[2]) + ".", ""]
+            + ", ".join(f"{k} {t[2][k] * 1000:.0f}" for k in topo_stages() if k in t[2]) + ".", ""]
     return out
 
 

@@ -43,6 +43,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._fast import label, label_stats
+from .geometry import true_bbox
 from .skeleton import downsample
 
 __all__ = ["DIRECTIONS", "FAN_OPEN", "unknown_cells", "open_unknown", "enclosure", "outside_fans", "outside_regions",
@@ -73,9 +74,12 @@ def unknown_cells(free: np.ndarray, occupied: np.ndarray, gray=None, *, toleranc
     unknown = ~free & ~occupied
     if gray is None or not unknown.any():
         return unknown
-    g = np.asarray(gray)
-    mode = int(np.argmax(np.bincount(g[unknown].ravel(), minlength=256)))
-    return unknown & (np.abs(g.astype(np.int16) - mode) <= tolerance)
+    at = np.flatnonzero(unknown)  # the grays of those cells only, not of the whole map
+    g = np.asarray(gray).ravel()[at]
+    mode = int(np.argmax(np.bincount(g, minlength=256)))
+    out = np.zeros(unknown.shape, bool)
+    out.ravel()[at[np.abs(g.astype(np.int16) - mode) <= tolerance]] = True
+    return out
 
 
 def open_unknown(free: np.ndarray, occupied: np.ndarray, resolution: float, *, min_area: float,
@@ -101,13 +105,22 @@ def open_unknown(free: np.ndarray, occupied: np.ndarray, resolution: float, *, m
 
 
 def _open(unknown: np.ndarray, resolution: float, min_area: float) -> np.ndarray:
-    """The cells of ``unknown`` in a region of at least ``min_area`` m² or at the map's edge."""
-    n, lab, stats, _ = label_stats(unknown, connectivity=8)
+    """The cells of ``unknown`` in a region of at least ``min_area`` m² or at the map's edge.
+    Labelled on the box of the unknown cells only (a drawn plan has a few, a scan the world round
+    the building)."""
     H, W = unknown.shape
+    out = np.zeros((H, W), bool)
+    box = true_bbox(unknown)
+    if box is None:
+        return out
+    r0, r1, c0, c1 = box
+    n, lab, stats, _ = label_stats(unknown[r0:r1, c0:c1], connectivity=8)
     x, y, w, h, area = stats.T
+    x, y = x + c0, y + r0
     keep = (area * resolution ** 2 >= min_area) | (x == 0) | (y == 0) | (x + w == W) | (y + h == H)
     keep[0] = False
-    return keep[lab]
+    out[r0:r1, c0:c1] = keep[lab]
+    return out
 
 
 def _first_hit(free: np.ndarray, hit: np.ndarray, direction) -> np.ndarray:
@@ -171,7 +184,7 @@ def enclosure(free: np.ndarray, occupied: np.ndarray, resolution: float, *, open
     free = np.asarray(free, bool)
     H, W = free.shape
     ring = np.ones((3, 3), np.uint8)
-    enclosed = np.where(free, 8.0, 0.0).astype(np.float32)
+    enclosed = np.where(free, np.float32(8.0), np.float32(0.0))
     unknown = unknown_cells(free, occupied, gray)
     if not (cv2.dilate(unknown.view(np.uint8), ring).view(bool) & free).any():
         return enclosed  # no free cell meets the unknown (a drawn plan): nothing is open

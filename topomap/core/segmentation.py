@@ -441,6 +441,8 @@ def _drop_outside(grid: OccupancyGrid, labels, doors, n_rooms: int, clearance, o
     encl = enclosure(grid.free, grid.occupied, res, open_area=opts.open_unknown_area,
                        window=opts.enclosure_window, gray=grid.gray)
     threshold = 8 * opts.outside_enclosure
+    if not (encl[labels > 0] < threshold).any():
+        return labels, doors, n_rooms, ()  # every cell of a room enclosed: no fan, no room outside
     # a fan is a piece at least as large as the smallest room, holding a free square as wide as it
     fans = outside_fans(labels, n_rooms, encl, clearance, threshold=threshold,
                         min_cells=int(np.ceil(opts.min_room_area / res ** 2 - 1e-9)),

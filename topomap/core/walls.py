@@ -1040,10 +1040,12 @@ def thin_wall_gaps(free_graph, free: np.ndarray, hits: np.ndarray, *, min_width_
         return near[q[..., 0], q[..., 1]]
 
     # march across the branch one way, then (where the obstacle came near enough) the other
-    f1 = _first_obstacle(is_solid, clear_at, P, N, int(max_width_px) + 1)
+    # the posts are no nearer than the point's clearance on either side: neither is further than
+    # max_width_px less that
+    f1 = _first_obstacle(is_solid, clear_at, P, N, int(max_width_px) + 1 - np.floor(clear_at(P)))
     sel = np.flatnonzero((f1 > 0) & (f1 < max_width_px))
     P, N, f1 = P[sel], N[sel], f1[sel]
-    f2 = _first_obstacle(is_solid, clear_at, P, -N, int(max_width_px) + 1)
+    f2 = _first_obstacle(is_solid, clear_at, P, -N, int(max_width_px) + 1 - f1)
     width = f1 + f2
     sel = np.flatnonzero((f2 > 0) & (width >= min_width_px) & (width <= max_width_px))
     N, p1, p2 = N[sel], P[sel] + N[sel] * f1[sel, None], P[sel] - N[sel] * f2[sel, None]
@@ -1102,25 +1104,25 @@ def _thin_beyond(is_solid, post, D, a, k) -> np.ndarray:
     return keep
 
 
-def _first_obstacle(is_solid, clearance, P, D, n: int) -> np.ndarray:
-    """Steps (pixels, 0..n) from each point ``P`` along ``D`` to the first obstacle cell
-    (``is_solid``); ``n + 1`` where there is none within ``n``. Sphere tracing: from a point
-    ``c`` (``clearance``, pixels) from every obstacle, the next ``floor(c) - 1`` steps cannot
-    round onto an obstacle cell, so the march jumps them."""
+#: The steps :func:`_first_obstacle` gives where there is no obstacle within its limit.
+_FAR = 1 << 40
+
+
+def _first_obstacle(is_solid, clearance, P, D, n) -> np.ndarray:
+    """Steps (pixels) from each point ``P`` along ``D`` to the first obstacle cell (``is_solid``), at
+    most ``n`` (per point, or one for all); :data:`_FAR` where there is none within ``n``. Sphere
+    tracing: from a point ``c`` (``clearance``, pixels) from every obstacle, the next
+    ``floor(c) - 1`` steps cannot round onto an obstacle cell, so the march jumps them."""
+    n = np.broadcast_to(np.asarray(n, float), (len(P),))
     t = np.zeros(len(P))
-    done = np.zeros(len(P), bool)
-    for _ in range(n + 1):
-        live = np.flatnonzero(~done)
-        if live.size == 0:
-            break
+    live = np.arange(len(P))
+    while live.size:
         Q = P[live] + D[live] * t[live, None]
         hit = is_solid(Q)
-        done[live[hit]] = True
         go = live[~hit]
-        c = clearance(Q[~hit])
-        t[go] += np.maximum(np.floor(c) - 1.0, 1.0)
-        done[go[t[go] > n]] = True
-    return np.where(t <= n, t, n + 1).astype(np.int64)
+        t[go] += np.maximum(np.floor(clearance(Q[~hit])) - 1.0, 1.0)
+        live = go[t[go] <= n[go]]
+    return np.where(t <= n, t, _FAR).astype(np.int64)
 
 
 def gaps_without_doors(p1: np.ndarray, p2: np.ndarray, kept) -> np.ndarray:
