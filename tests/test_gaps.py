@@ -115,3 +115,19 @@ def test_gap_wall_is_checked(gap_wall):
 
     with pytest.raises(ParameterError, match="gap_wall"):
         segment(from_array(strip_behind_a_wide_gap(), resolution=RES), gap_wall=gap_wall)
+
+
+def pillars_in_a_corridor():
+    """A 2 m corridor between 0.5 m thick walls with a pair of 0.35 m pillars against its walls,
+    facing each other 1.3 m apart: each pillar looks like a wall's end beyond a doorway."""
+    a = np.zeros((80, 200), bool)
+    a[20:60, 0:200] = True       # the corridor, rows 20-59 (2 m)
+    a[20:27, 96:103] = False     # pillar against the top wall (0.35 m deep, 0.35 m wide)
+    a[53:60, 96:103] = False     # pillar against the bottom wall
+    return a
+
+
+def test_a_gap_at_a_pillar_is_no_doorway():
+    assert _gaps(pillars_in_a_corridor(), pillar_px=0.5 / RES) == []
+    # what keeps it out: the pillar test (thin for less than pillar_depth, then the wall)
+    assert _gaps(pillars_in_a_corridor(), pillar_px=0.0)

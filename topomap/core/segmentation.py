@@ -532,8 +532,9 @@ def _cut_gaps(free_graph, free, hits, segs, cands, wall_grid, opts: TopomapOptio
               clearance):
     """Stage "gaps" of the default method: the gaps in thin walls
     (:func:`topomap.core.walls.thin_wall_gaps`) where no door is cut yet, one
-    per doorway, not between pillars of a corridor (as doors are not,
-    ``pillar_depth``), added to the door segments ``segs`` and the candidates ``cands``."""
+    per doorway, not at a pillar or a bump on a wall (``pillar_depth``) nor across a corridor
+    between long walls (as doors are not), added to the door segments ``segs`` and the candidates
+    ``cands``."""
     res = resolution
     gaps = thin_wall_gaps(free_graph, free, hits, min_width_px=opts.min_door_width / res,
                           max_width_px=opts.max_door_width / res, along_px=opts.gap_wall / res,

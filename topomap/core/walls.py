@@ -983,10 +983,11 @@ def thin_wall_gaps(free_graph, free: np.ndarray, hits: np.ndarray, *, min_width_
       of its faces at 90 % of its cells. A corridor's cross-section meets
       its side walls face on: beyond its posts the wall runs across the
       line, and moving along the corridor stays inside it;
-    - not both posts are pillars: obstacles thin for less than
-      ``pillar_px`` beyond the post, then the wall they stand against
-      (solid on to ``pillar_px``, not thin): a narrowing between pillars,
-      columns or cupboards is the corridor's own;
+    - neither post is a pillar: an obstacle thin for less than
+      ``pillar_px`` beyond the post, then the wall it stands against (solid
+      on to ``pillar_px``, not thin): a narrowing at a pillar, a column, a
+      cupboard or a bump on a wall is the room's own (a doorway closer than
+      that to a corner is left to the other rules too);
     - the obstacle at each post belongs to a structure at least
       ``structure_px`` long or wide (8-connected): a free-standing piece of
       furniture beside a wall is no door post.
@@ -1063,10 +1064,11 @@ def thin_wall_gaps(free_graph, free: np.ndarray, hits: np.ndarray, *, min_width_
     N, p1, p2 = N[keep], p1[keep], p2[keep]
     if pillar_px > along_px:
         # a pillar: thin for a stretch, then the wall it stands against (solid, not thin) before
-        # ``pillar_px``; a gap between two of them is the corridor's, not a doorway
+        # ``pillar_px``; a gap at one is the room's own, not a doorway (a bump on a wall across
+        # from clutter passes every other test)
         b = np.arange(1, int(round(pillar_px)) + 1, dtype=float)
         pillar = [_goes_on(is_solid, p, D, b) & ~_thin_beyond(is_solid, p, D, b, k) for p, D in ((p1, N), (p2, -N))]
-        keep = ~(pillar[0] & pillar[1])
+        keep = ~(pillar[0] | pillar[1])
         N, p1, p2 = N[keep], p1[keep], p2[keep]
     if kept:  # a doorway a door is cut in already needs no second cut
         sel = gaps_without_doors(p1, p2, kept)
