@@ -131,3 +131,29 @@ def test_a_gap_at_a_pillar_is_no_doorway():
     assert _gaps(pillars_in_a_corridor(), pillar_px=0.5 / RES) == []
     # what keeps it out: the pillar test (thin for less than pillar_depth, then the wall)
     assert _gaps(pillars_in_a_corridor(), pillar_px=0.0)
+
+
+def test_sphere_traced_march_finds_the_first_obstacle_of_a_step_by_step_march():
+    # a noisy map: rays from every free cell in random directions, to the first obstacle cell
+    from topomap._fast import edt
+    from topomap.core.walls import _FAR, _first_obstacle, clearance_lookup
+
+    rng = np.random.default_rng(3)
+    free = rng.random((90, 110)) > 0.04
+    free[:, :3] = False
+    pad = 70
+    solid = np.pad(~free, pad, constant_values=True)
+    # the clearance as thin_wall_gaps looks it up (the map's edge counted)
+    clear_at = clearance_lookup(edt(free), pad)
+
+    def look(img):
+        return lambda Q: img[np.rint(Q[..., 0]).astype(np.intp) + pad, np.rint(Q[..., 1]).astype(np.intp) + pad]
+
+    P = np.argwhere(free)[::7].astype(float) + rng.uniform(-0.4, 0.4, (len(np.argwhere(free)[::7]), 2))
+    ang = rng.uniform(0, 2 * np.pi, len(P))
+    D = np.stack([np.sin(ang), np.cos(ang)], 1)
+    got = _first_obstacle(look(solid), clear_at, P, D, 60)
+    steps = np.arange(0, 61)
+    hit = look(solid)(P[:, None, :] + D[:, None, :] * steps[None, :, None])
+    want = np.where(hit.any(1), hit.argmax(1), _FAR)
+    assert np.array_equal(got, want)

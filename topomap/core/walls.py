@@ -23,7 +23,7 @@ import numpy as np
 __all__ = ["wall_faces", "wall_lines", "straight_share", "wall_openings", "wall_directions", "long_walls",
            "across_walls", "across_walls_many", "WallIndex", "long_wall_gaps", "partition_gaps", "face_runs",
            "straight_lines", "furniture_rows", "wall_mask", "scale_walls", "thin_wall_gaps",
-           "gaps_without_doors"]
+           "gaps_without_doors", "clearance_lookup"]
 
 
 #: The 4-neighbours of a cell (not the cell itself), as a morphology kernel.
@@ -1034,11 +1034,7 @@ def thin_wall_gaps(free_graph, free: np.ndarray, hits: np.ndarray, *, min_width_
         from .._fast import edt
 
         clearance = edt(np.asarray(free, bool))
-    near = np.pad(np.asarray(clearance, np.float32), pad)
-
-    def clear_at(Q):
-        q = np.rint(Q).astype(np.intp) + pad
-        return near[q[..., 0], q[..., 1]]
+    clear_at = clearance_lookup(clearance, pad)
 
     # march across the branch one way, then (where the obstacle came near enough) the other
     # the posts are no nearer than the point's clearance on either side: neither is further than
@@ -1087,6 +1083,21 @@ def thin_wall_gaps(free_graph, free: np.ndarray, hits: np.ndarray, *, min_width_
             if on_structure(u + n) and on_structure(v - n)]
 
 
+def clearance_lookup(clearance: np.ndarray, pad: int):
+    """A function of points ``Q`` (``(..., 2)`` pixels, up to ``pad`` outside the map) giving the
+    clearance of their cells, for :func:`_first_obstacle`: the distance transform counts no cell
+    beyond the map's edge, where a march stops, so the nearer of it and the edge."""
+    near = np.pad(np.asarray(clearance, np.float32), pad)
+    H, W = np.shape(clearance)
+
+    def clear_at(Q):
+        q = np.rint(Q).astype(np.intp)
+        edge = np.minimum(np.minimum(q[..., 0] + 1, H - q[..., 0]), np.minimum(q[..., 1] + 1, W - q[..., 1]))
+        return np.minimum(near[q[..., 0] + pad, q[..., 1] + pad], np.maximum(edge, 0))
+
+    return clear_at
+
+
 def _goes_on(is_solid, post, D, a) -> np.ndarray:
     """Whether the obstacle goes on from each post ``(K, 2)`` along ``D`` for the steps ``a``
     (90 % of them)."""
@@ -1112,9 +1123,11 @@ _FAR = 1 << 40
 
 def _first_obstacle(is_solid, clearance, P, D, n) -> np.ndarray:
     """Steps (pixels) from each point ``P`` along ``D`` to the first obstacle cell (``is_solid``), at
-    most ``n`` (per point, or one for all); :data:`_FAR` where there is none within ``n``. Sphere
-    tracing: from a point ``c`` (``clearance``, pixels) from every obstacle, the next
-    ``floor(c) - 1`` steps cannot round onto an obstacle cell, so the march jumps them."""
+    most ``n`` (per point, or one for all); :data:`_FAR` where there is none within ``n``. The
+    same whole steps as a march one pixel at a time, by sphere tracing: at a point whose cell is
+    ``c`` (``clearance``, pixels) from every obstacle cell, a point at most ``c - 1.5`` further on
+    lies in a cell less than ``c`` from it (each point is within half a diagonal of its cell's
+    centre), so no obstacle cell: the march jumps ``floor(c - 1.5)`` steps (at least one)."""
     n = np.broadcast_to(np.asarray(n, float), (len(P),))
     t = np.zeros(len(P))
     live = np.arange(len(P))
@@ -1122,7 +1135,7 @@ def _first_obstacle(is_solid, clearance, P, D, n) -> np.ndarray:
         Q = P[live] + D[live] * t[live, None]
         hit = is_solid(Q)
         go = live[~hit]
-        t[go] += np.maximum(np.floor(clearance(Q[~hit])) - 1.0, 1.0)
+        t[go] += np.maximum(np.floor(clearance(Q[~hit]) - 1.5), 1.0)
         live = go[t[go] <= n[go]]
     return np.where(t <= n, t, _FAR).astype(np.int64)
 
