@@ -144,7 +144,7 @@ def test_sphere_traced_march_finds_the_first_obstacle_of_a_step_by_step_march():
     pad = 70
     solid = np.pad(~free, pad, constant_values=True)
     # the clearance as thin_wall_gaps looks it up (the map's edge counted)
-    clear_at = clearance_lookup(edt(free), pad)
+    clear_at = clearance_lookup(edt(free))
 
     def look(img):
         return lambda Q: img[np.rint(Q[..., 0]).astype(np.intp) + pad, np.rint(Q[..., 1]).astype(np.intp) + pad]
@@ -157,3 +157,13 @@ def test_sphere_traced_march_finds_the_first_obstacle_of_a_step_by_step_march():
     hit = look(solid)(P[:, None, :] + D[:, None, :] * steps[None, :, None])
     want = np.where(hit.any(1), hit.argmax(1), _FAR)
     assert np.array_equal(got, want)
+
+
+def test_wall_samples_are_per_metre_whatever_the_resolution():
+    # 0.3 m beyond a post: 6 samples on 0.05 m cells, 6 on 1 mm cells (every 50 pixels), not 300
+    # (a 1 mm map of two rooms needed 8 GB when the samples went per pixel)
+    from topomap.core.walls import _samples
+
+    assert _samples(0.3 / 0.05, 1.0).tolist() == [1, 2, 3, 4, 5, 6]
+    fine = _samples(0.3 / 0.001, 0.05 / 0.001)
+    assert len(fine) == 6 and fine[-1] == pytest.approx(300)

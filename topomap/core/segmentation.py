@@ -540,7 +540,7 @@ def _cut_gaps(free_graph, free, hits, segs, cands, wall_grid, opts: TopomapOptio
                           max_width_px=opts.max_door_width / res, along_px=opts.gap_wall / res,
                           thick_px=opts.wall_thickness / res, structure_px=opts.partition_structure / res,
                           pillar_px=opts.pillar_depth / res, max_radius=opts.max_door_width / 2,
-                          clearance=clearance, kept=segs)
+                          clearance=clearance, kept=segs, step=max(opts.wall_cell / res, 1.0))
     found = opening_candidates(gaps, res, status=WALL_GAP)
     cands = cands + [c for _, c in found]
     if wall_grid.long_walls and opts.pillar_depth > 0:

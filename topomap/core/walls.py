@@ -1001,7 +1001,11 @@ def thin_wall_gaps(free_graph, free: np.ndarray, hits: np.ndarray, *, min_width_
     min_width_px, max_width_px, along_px, thick_px, pillar_px, structure_px : float
         Pixels, as above (``pillar_px`` 0: no pillar test).
     step : float
-        The skeleton is tried every ``step`` pixels along its branches.
+        The skeleton is tried every ``step`` pixels along its branches, and
+        the walls beyond the posts are sampled every ``step`` pixels: 1 on
+        maps of 0.05 m cells, the size of a wall's cell (``wall_cell``) on
+        finer maps, so that the work per metre does not grow as the cells
+        shrink.
     kept : list of ((r, c), (r, c)), optional
         Door segments cut already: a gap whose midpoint lies within its own
         width of one of them is that doorway (:func:`gaps_without_doors`).
@@ -1022,19 +1026,19 @@ def thin_wall_gaps(free_graph, free: np.ndarray, hits: np.ndarray, *, min_width_
     P, N = _cross_sections(free_graph, step, max_radius=max_radius)
     if len(P) == 0:
         return []
-    # the map's obstacles padded, so that every point looked at is inside (outside the map: obstacle)
-    pad = int(max_width_px + along_px + thick_px) + 3
-    solid = np.pad(~np.asarray(free, bool), pad, constant_values=True)
+    free = np.asarray(free, bool)
+    H, W = free.shape
 
-    def is_solid(Q):
-        q = np.rint(Q).astype(np.intp) + pad
-        return solid[q[..., 0], q[..., 1]]
+    def is_solid(Q):  # outside the map: obstacle
+        r, c = np.rint(Q[..., 0]).astype(np.intp), np.rint(Q[..., 1]).astype(np.intp)
+        inside = (r >= 0) & (r < H) & (c >= 0) & (c < W)
+        return ~(inside & free[np.clip(r, 0, H - 1), np.clip(c, 0, W - 1)])
 
     if clearance is None:
         from .._fast import edt
 
-        clearance = edt(np.asarray(free, bool))
-    clear_at = clearance_lookup(clearance, pad)
+        clearance = edt(free)
+    clear_at = clearance_lookup(clearance)
 
     # march across the branch one way, then (where the obstacle came near enough) the other
     # the posts are no nearer than the point's clearance on either side: neither is further than
@@ -1048,8 +1052,7 @@ def thin_wall_gaps(free_graph, free: np.ndarray, hits: np.ndarray, *, min_width_
     N, p1, p2 = N[sel], P[sel] + N[sel] * f1[sel, None], P[sel] - N[sel] * f2[sel, None]
     sel = np.flatnonzero(_near_any(hits, p1) & _near_any(hits, p2))
     N, p1, p2 = N[sel], p1[sel], p2[sel]
-    a = np.arange(1, max(int(round(along_px)), 1) + 1, dtype=float)
-    k = np.arange(1, max(int(round(thick_px)), 1) + 1, dtype=float)
+    a, k = _samples(along_px, step), _samples(thick_px, step)
     # beyond each post, the wall the doorway is in: the obstacle goes on along the line ...
     keep = _goes_on(is_solid, p1, N, a) & _goes_on(is_solid, p2, -N, a)
     N, p1, p2 = N[keep], p1[keep], p2[keep]
@@ -1062,7 +1065,7 @@ def thin_wall_gaps(free_graph, free: np.ndarray, hits: np.ndarray, *, min_width_
         # a pillar: thin for a stretch, then the wall it stands against (solid, not thin) before
         # ``pillar_px``; a gap at one is the room's own, not a doorway (a bump on a wall across
         # from clutter passes every other test)
-        b = np.arange(1, int(round(pillar_px)) + 1, dtype=float)
+        b = _samples(pillar_px, step)
         pillar = [_goes_on(is_solid, p, D, b) & ~_thin_beyond(is_solid, p, D, b, k) for p, D in ((p1, N), (p2, -N))]
         keep = ~(pillar[0] | pillar[1])
         N, p1, p2 = N[keep], p1[keep], p2[keep]
@@ -1083,19 +1086,25 @@ def thin_wall_gaps(free_graph, free: np.ndarray, hits: np.ndarray, *, min_width_
             if on_structure(u + n) and on_structure(v - n)]
 
 
-def clearance_lookup(clearance: np.ndarray, pad: int):
-    """A function of points ``Q`` (``(..., 2)`` pixels, up to ``pad`` outside the map) giving the
-    clearance of their cells, for :func:`_first_obstacle`: the distance transform counts no cell
-    beyond the map's edge, where a march stops, so the nearer of it and the edge."""
-    near = np.pad(np.asarray(clearance, np.float32), pad)
-    H, W = np.shape(clearance)
+def clearance_lookup(clearance: np.ndarray):
+    """A function of points ``Q`` (``(..., 2)`` pixels, inside the map or not) giving the clearance
+    of their cells, for :func:`_first_obstacle`: the distance transform counts no cell beyond the
+    map's edge, where a march stops, so the nearer of it and the edge (0 outside the map)."""
+    near = np.asarray(clearance, np.float32)
+    H, W = near.shape
 
     def clear_at(Q):
-        q = np.rint(Q).astype(np.intp)
-        edge = np.minimum(np.minimum(q[..., 0] + 1, H - q[..., 0]), np.minimum(q[..., 1] + 1, W - q[..., 1]))
-        return np.minimum(near[q[..., 0] + pad, q[..., 1] + pad], np.maximum(edge, 0))
+        r, c = np.rint(Q[..., 0]).astype(np.intp), np.rint(Q[..., 1]).astype(np.intp)
+        edge = np.minimum(np.minimum(r + 1, H - r), np.minimum(c + 1, W - c))
+        return np.minimum(near[np.clip(r, 0, H - 1), np.clip(c, 0, W - 1)], np.maximum(edge, 0))
 
     return clear_at
+
+
+def _samples(length_px: float, step: float) -> np.ndarray:
+    """The offsets ``step, 2 step, ...`` up to ``length_px`` (rounded to whole steps, at least one):
+    one per pixel on a map of ``step`` 1, as many per metre whatever the resolution."""
+    return step * np.arange(1, max(int(round(length_px / step)), 1) + 1, dtype=float)
 
 
 def _goes_on(is_solid, post, D, a) -> np.ndarray:
