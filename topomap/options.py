@@ -291,10 +291,11 @@ class TopomapOptions(CheckedOptions):
         wall goes on along the line for ``gap_wall``, no thicker than
         ``wall_thickness``, on a structure at least ``partition_structure``
         long, and neither post a pillar or a bump on a wall (thin for less
-        than ``pillar_depth``, then the wall it stands against). A doorway into a passage no wider than itself (the end of a
-        hallway, a glass door onto a balcony strip) narrows nothing, so the
-        clearance shows no door there; the wall it is in does. A doorway
-        where a door is cut already (within its own width) is not cut again.
+        than ``pillar_depth``, then the wall it stands against). A doorway
+        into a passage no wider than itself (the end of a hallway, a glass
+        door onto a balcony strip) narrows nothing, so the clearance shows
+        no door there; the wall it is in does. A doorway where a door is cut
+        already (within its own width) is not cut again.
     gap_wall : float
         With ``gaps``, how far (m) the wall must go on past each post of a
         gap, along the gap's line: 0.3 m, the thickness of the thickest

@@ -15,13 +15,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from itertools import chain
 from operator import itemgetter
 
 import numpy as np
 
 from .._fast import ranges
-from .geometry import disk, point_segment_distances
+from .geometry import disk, points_near_segments
 from .walls import across_walls_many, wall_faces
 
 __all__ = ["Candidate", "Door", "passage_candidates", "intersection_points",
@@ -1343,27 +1342,16 @@ def suppress_duplicates(accepted, resolution: float, *, kept=()) -> list:
     list of ((r1, c1), (r2, c2))
         The door segments kept, pixels, narrowest first.
     """
-    from scipy.spatial import cKDTree
-
     accepted = sorted(accepted, key=lambda t: t[0])
     n0, n = len(kept), len(accepted)
     if not n:
         return []
     A = np.array([p for p, _ in kept] + [c.ip1 for _, c in accepted], float).reshape(-1, 2)
     B = np.array([q for _, q in kept] + [c.ip2 for _, c in accepted], float).reshape(-1, 2)
-    mids = (A[n0:] + B[n0:]) / 2
     reach = 0.5 * np.array([w for w, _ in accepted], float) / resolution
-    # the segments each door's midpoint may lie within reach of: a segment is no nearer
-    # than its midpoint less half its length, so a search around the segments' midpoints
-    # (a k-d tree: time and memory linear in the doors, not quadratic) finds every one
-    half = np.hypot(*(B - A).T) / 2
-    near_of = cKDTree((A + B) / 2).query_ball_point(mids, reach + float(half.max()) + 1e-6)
-    door = np.repeat(np.arange(n), [len(js) for js in near_of])
-    seg = np.fromiter(chain.from_iterable(near_of), np.intp, count=door.size)
+    door, seg = points_near_segments((A[n0:] + B[n0:]) / 2, reach, A, B)  # in door order
     before = seg < n0 + door  # only the segments given and the doors taken before each door
     door, seg = door[before], seg[before]
-    near = point_segment_distances(mids[door], A[seg], B[seg]) < reach[door]
-    door, seg = door[near], seg[near]  # still in door order
     # a door near a segment given is a duplicate whatever the doors before it; the others
     # in turn, on Python lists (quicker than a numpy look-up a door)
     dup = np.zeros(n, bool)

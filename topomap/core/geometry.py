@@ -13,7 +13,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["point_segment_distances", "line_pixels", "disk", "true_bbox", "metres_to_px", "mask_rings", "label_rings",
+__all__ = ["point_segment_distances", "points_near_segments", "line_pixels", "disk", "true_bbox", "metres_to_px", "mask_rings", "label_rings",
            "LabelRings"]
 
 
@@ -46,6 +46,31 @@ def point_segment_distances(p, a, b) -> np.ndarray:
     proj = a + t[..., None] * ab
     d = p - proj
     return np.hypot(d[..., 0], d[..., 1])
+
+
+def points_near_segments(points, reach, a, b) -> tuple:
+    """The pairs ``(i, j)`` of a point ``points[i]`` lying within ``reach[i]`` (strictly) of the
+    segment ``a[j]``–``b[j]``: two ``(K,)`` int arrays, in the order of the points.
+
+    The segments each point may lie that near are found with a k-d tree of the segments'
+    midpoints (a segment is no nearer than its midpoint less half its length): time and memory
+    linear in the points and segments, not in their product.
+    """
+    from itertools import chain
+
+    from scipy.spatial import cKDTree
+
+    points = np.asarray(points, float).reshape(-1, 2)
+    a, b = np.asarray(a, float).reshape(-1, 2), np.asarray(b, float).reshape(-1, 2)
+    reach = np.broadcast_to(np.asarray(reach, float), (len(points),))
+    if len(points) == 0 or len(a) == 0:
+        return np.zeros(0, np.intp), np.zeros(0, np.intp)
+    half = np.hypot(*(b - a).T) / 2
+    near_of = cKDTree((a + b) / 2).query_ball_point(points, reach + float(half.max()) + 1e-6)
+    i = np.repeat(np.arange(len(points)), [len(js) for js in near_of])
+    j = np.fromiter(chain.from_iterable(near_of), np.intp, count=i.size)
+    close = point_segment_distances(points[i], a[j], b[j]) < reach[i]
+    return i[close], j[close]
 
 
 def line_pixels(p, q, shape):

@@ -1073,7 +1073,7 @@ def thin_wall_gaps(free_graph, free: np.ndarray, hits: np.ndarray, *, min_width_
         sel = gaps_without_doors(p1, p2, kept)
         N, p1, p2 = N[sel], p1[sel], p2[sel]
     # last, on the few left: the obstacle beyond each post is part of a structure
-    obstacle = ~np.asarray(free, bool)
+    obstacle = ~free
     seen = {}  # a doorway's jambs are met again at every step through it
 
     def on_structure(q):
@@ -1154,24 +1154,13 @@ def gaps_without_doors(p1: np.ndarray, p2: np.ndarray, kept) -> np.ndarray:
     own width from every segment of ``kept`` (``((r, c), (r, c))``): a doorway where a door is cut
     already needs no second cut (across a thick wall, two cuts a wall's thickness apart would leave
     a sliver between them). ``(K,)`` bool."""
-    from itertools import chain
-
-    from scipy.spatial import cKDTree
-
-    from .geometry import point_segment_distances
+    from .geometry import points_near_segments
 
     keep = np.ones(len(p1), bool)
-    if len(p1) == 0 or not len(kept):
-        return keep
-    S = np.asarray(kept, float).reshape(-1, 2, 2)
-    mid, width = (p1 + p2) / 2, np.hypot(*(p2 - p1).T)
-    # the segments within reach of each midpoint, from a k-d tree of their midpoints (linear, not
-    # every pair): a segment is no nearer than its midpoint less half its length
-    half = np.hypot(*(S[:, 1] - S[:, 0]).T) / 2
-    near = cKDTree((S[:, 0] + S[:, 1]) / 2).query_ball_point(mid, width + float(half.max()) + 1e-6)
-    g = np.repeat(np.arange(len(mid)), [len(js) for js in near])
-    j = np.fromiter(chain.from_iterable(near), np.intp, count=g.size)
-    keep[g[point_segment_distances(mid[g], S[j, 0], S[j, 1]) < width[g]]] = False
+    if len(p1) and len(kept):
+        S = np.asarray(kept, float).reshape(-1, 2, 2)
+        near, _ = points_near_segments((p1 + p2) / 2, np.hypot(*(p2 - p1).T), S[:, 0], S[:, 1])
+        keep[near] = False
     return keep
 
 
