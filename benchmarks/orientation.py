@@ -80,6 +80,26 @@ def turn_by(a: np.ndarray, degrees: float, fill) -> np.ndarray:
     return ndi.rotate(a, degrees, order=0, reshape=True, cval=fill, prefilter=False)
 
 
+def turn_map(cells: np.ndarray, degrees: float) -> np.ndarray:
+    """Map cells (0 free, 100 occupied, -1 unknown) turned by ``degrees`` as a map drawn at that angle would
+    show them: each cell the value of the nearest cell of the map (:func:`turn_by`), and every occupied
+    cell's centre carried onto the turned grid as well, so that walls stay whole (a one-cell wall turned
+    cell by cell alone loses cells and opens gaps; a map marks every cell a laser hit)."""
+    out = turn_by(cells, degrees, -1)
+    if degrees % 360 == 0:
+        return out
+    H, W = cells.shape
+    h, w = out.shape
+    a = np.radians(degrees)
+    r, c = np.nonzero(cells == 100)
+    dr, dc = r - (H - 1) / 2, c - (W - 1) / 2
+    rr = np.rint(np.cos(a) * dr - np.sin(a) * dc + (h - 1) / 2).astype(int)
+    cc = np.rint(np.sin(a) * dr + np.cos(a) * dc + (w - 1) / 2).astype(int)
+    ok = (rr >= 0) & (rr < h) & (cc >= 0) & (cc < w)
+    out[rr[ok], cc[ok]] = 100
+    return out
+
+
 def run_angle(task):
     """One map turned by an angle that is no multiple of a right angle: its cells and its true rooms turned
     alike, scored in the turned frame (the original protocol)."""
@@ -89,7 +109,7 @@ def run_angle(task):
 
     bm, degrees, tmp, options = task
     grid = bm.load()
-    cells = turn_by(_section.ros_cells(grid), degrees, -1).astype(np.int8)
+    cells = turn_map(_section.ros_cells(grid), degrees).astype(np.int8)
     truth = turn_by(np.asarray(bm.gt_rooms), degrees, 0)
     turned = load_map(save_map(cells, Path(tmp) / f"{bm.name}_{bm.variant}_a{degrees:g}", resolution=grid.resolution))
     seg = segment(turned, **options)
@@ -187,18 +207,18 @@ the maps as they are stored.
         text += f"""
 **Turned by other angles.** A robot maps a building at whatever angle it started in, so its walls are
 rarely on the grid's axes. Every map turned by {", ".join(f"{d:g}" for d in angles)} degrees (each cell of
-the turned grid takes the value of the nearest cell of the map, as a map drawn at that angle has walls in
-steps; the true rooms turned alike), written as a PGM + YAML pair, read back and segmented, then scored in
-the turned frame with the **original protocol** (mean P / R in %):
+the turned grid takes the value of the nearest cell of the map, and every occupied cell is carried onto the
+turned grid as well so that walls stay whole, as a map drawn at that angle marks every cell a laser hit;
+the true rooms turned alike), written as a PGM + YAML pair, read back and segmented, then scored in the
+turned frame with the **original protocol** (mean P / R in %):
 
 {_angle_table(turned, groups, angles)}
 Turned by an angle off the axes, the real maps lose up to a few points of precision or recall (one map
-more); the floor plans, whose walls are several cells thick, do not. The turned copy is harsher than a map
-a robot would draw at that angle: turning a map cell by cell breaks some one-cell walls into diagonal
-steps and moves cells by up to half a cell. Turned by the angle and then turned exactly back upright
-before segmenting (every wall on the grid's axes again, but the cells resampled twice), the real maps
-score as low as turned, so the loss comes from the resampled cells, not from the directions the rules
-assume.
+more); the floor plans, whose walls are several cells thick, do not. The turned copy is not quite the map
+a robot would draw at that angle: its walls are in steps of whole cells, some a cell thicker, and its
+cells moved by up to half a cell. Turned and then turned back upright before segmenting (every wall on the
+grid's axes again, the cells resampled twice), the real maps score lower still than turned once: the loss
+follows the resampling of the cells, not the angle of the walls.
 """
     _section.write(a.out, text, table, time.perf_counter() - t0)
     return 0

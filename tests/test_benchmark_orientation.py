@@ -43,3 +43,17 @@ def test_labels_turn_with_the_map():
     assert tc.shape == tl.shape
     assert set(np.unique(tl).tolist()) == {0, 1, 2}
     assert (tc[tl > 0] == 0).mean() > 0.95  # the turned rooms lie on the turned free cells
+
+
+def test_a_turned_map_marks_every_wall_cell():
+    rng = np.random.default_rng(3)
+    cells = np.where(rng.random((50, 70)) < 0.1, 100, 0).astype(np.int8)  # scattered laser hits
+    for deg in (10, 20, 30, 45):
+        t = orientation.turn_map(cells, deg)
+        a = np.radians(deg)
+        r, c = np.nonzero(cells == 100)
+        dr, dc = r - 24.5, c - 34.5
+        rr = np.rint(np.cos(a) * dr - np.sin(a) * dc + (t.shape[0] - 1) / 2).astype(int)
+        cc = np.rint(np.sin(a) * dr + np.cos(a) * dc + (t.shape[1] - 1) / 2).astype(int)
+        assert (t[rr, cc] == 100).all()  # each hit lands on an occupied cell of the turned map
+        assert (t == 100).sum() >= (cells == 100).sum()  # none lost where two nearest cells coincide
