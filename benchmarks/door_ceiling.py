@@ -19,7 +19,11 @@ protocol** against that variant's ground truth:
   default method joins them: what a method that found every door, and no
   other cut, would score;
 * **topomap + true doors**: both sets of cuts: what the default method's
-  own cuts cost when every door is found.
+  own cuts cost when every door is found;
+* **topomap + true gaps in walls**, **topomap + true open sides**: the
+  default method's cuts and the true doors of one kind only (the kinds of the
+  second table): what finding every door of that kind, and no other, would
+  give.
 
 A second table sorts the true doors between two rooms by what the map
 shows of them, and how many of each the default method finds
@@ -53,7 +57,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _section  # noqa: E402
 from _section import _commit, _machine  # noqa: E402
 
-WAYS = ("topomap", "true doors", "topomap + true doors")
+WAYS = ("topomap", "true doors", "topomap + true doors", "topomap + true gaps in walls", "topomap + true open sides")
 #: How far (m) the wall must go on beyond each end of a doorway, and how far a found door may be.
 BEYOND, NEAR = 0.5, 0.5
 
@@ -93,14 +97,17 @@ def door_kind(free: np.ndarray, seg, resolution: float) -> str:
     return "gap"
 
 
-def _segments_ways(grid, seg, truth):
-    """The room labels of the three ways (module docstring)."""
+def _segments_ways(grid, seg, truth, kinds):
+    """The room labels of the ways (module docstring); ``kinds``: :func:`door_kind` of each true door."""
     from topomap.core.rooms import cut_rooms
 
     out = {"topomap": seg.room_labels}
     ours = [tuple(map(tuple, np.asarray(d.segment, float))) for d in seg.doors]
     min_cells = int(seg.options.min_room_area / grid.resolution ** 2)
-    for way, cuts in (("true doors", truth), ("topomap + true doors", truth + ours)):
+    gaps = [s for s, k in zip(truth, kinds) if k == "gap"]
+    sides = [s for s, k in zip(truth, kinds) if k == "open"]
+    for way, cuts in (("true doors", truth), ("topomap + true doors", truth + ours),
+                      ("topomap + true gaps in walls", gaps + ours), ("topomap + true open sides", sides + ours)):
         labels, _, n = cut_rooms(grid, cuts, min_room_cells=min_cells)
         out[way] = np.where(labels <= n, labels, 0)
     return out
@@ -116,16 +123,17 @@ def score_case(bm) -> dict:
     res = grid.resolution
     truth = true_door_segments(bm, grid)
     row = {"map": bm.name, "variant": bm.variant, "doors": []}
-    for way, labels in _segments_ways(grid, seg, truth).items():
+    kinds = [door_kind(grid.free, s, res) for s in truth]
+    for way, labels in _segments_ways(grid, seg, truth, kinds).items():
         ev = evaluate(labels, bm.map_gray, bm.gt_gray, resolution=res, scored=grid.free, gt_rooms=bm.gt_rooms)
         row[way] = (float(ev["precision"]), float(ev["recall"]), int(len(np.unique(labels[labels > 0]))))
     found = [np.mean(np.asarray(d.segment, float), 0) for d in seg.doors]
     cands = [((np.asarray(c.ip1) + np.asarray(c.ip2)) / 2 if c.ip1 is not None and c.ip2 is not None
               else np.asarray(c.centroid, float), c.status) for c in seg.candidates]
-    for s in truth:
+    for s, kind in zip(truth, kinds):
         mid = (np.asarray(s[0]) + np.asarray(s[1])) / 2
         near = min(((float(np.hypot(*(p - mid))) * res, st) for p, st in cands), default=(np.inf, "none"))
-        row["doors"].append({"kind": door_kind(grid.free, s, res),
+        row["doors"].append({"kind": kind,
                              "found": any(np.hypot(*(f - mid)) * res <= NEAR for f in found),
                              "nearest": near[1] if near[0] <= NEAR else "none"})
     return row
@@ -169,7 +177,9 @@ def _summary(rows) -> str:
             out.append(f"On the {variant}s, the doors the default method misses cost "
                        f"{m['true doors'][0] - m['topomap'][0]:.1f} points of precision (cut at the true doors only: "
                        f"{m['true doors'][0]:.1f} against {m['topomap'][0]:.1f}); its cuts where no true door is cost "
-                       f"{m['true doors'][1] - m['topomap + true doors'][1]:.1f} points of recall once every door is found.")
+                       f"{m['true doors'][1] - m['topomap + true doors'][1]:.1f} points of recall once every door is found; "
+                       f"every door that is a gap in a wall found as well would give {m['topomap + true gaps in walls'][0]:.1f}"
+                       f" precision, every open side {m['topomap + true open sides'][0]:.1f}.")
     return " ".join(out)
 
 
@@ -207,11 +217,13 @@ def main(argv=None) -> int:
 
 
 _PROSE = """\
-Each simulated case (its drawn plan and its simulated scan) segmented three ways and scored with the
+Each simulated case (its drawn plan and its simulated scan) segmented five ways and scored with the
 **original protocol** (true rooms whole; segments on the map's free cells): **topomap**, the default
 method; **true doors**, the map's free space cut along the true doors between two rooms and nothing else
 (pieces under the default method's smallest room joined to their neighbour): what a method that found
-every door and made no other cut would score; **topomap + true doors**, both sets of cuts. Rooms: the
+every door and made no other cut would score; **topomap + true doors**, both sets of cuts;
+**topomap + true gaps in walls** and **topomap + true open sides**, the default method's cuts and the true
+doors of that kind only (the kinds of the second table). Rooms: the
 rooms of the result against the true rooms, summed over the cases (cutting at the true doors, the free
 cells of no true room, such as laser fans beyond the facade, are rooms too). The second table sorts
 the true doors between two rooms by what the map shows of them: *a gap in a wall* (the
