@@ -130,6 +130,26 @@ def _angle_table(rows, groups, angles) -> str:
     return table
 
 
+def _angle_text(turned, groups, angles) -> str:
+    """The section's part on the maps turned by ``angles`` (degrees)."""
+    return f"""
+**Turned by other angles.** A robot maps a building at whatever angle it started in, so its walls are
+rarely on the grid's axes. Every map turned by {", ".join(f"{d:g}" for d in angles)} degrees (each cell of
+the turned grid takes the value of the nearest cell of the map, and every occupied cell is carried onto the
+turned grid as well so that walls stay whole, as a map drawn at that angle marks every cell a laser hit;
+the true rooms turned alike), written as a PGM + YAML pair, read back and segmented, then scored in the
+turned frame with the **original protocol** (mean P / R in %):
+
+{_angle_table(turned, groups, angles)}
+Turned by an angle off the axes, the real maps lose up to a few points of precision or recall (one map
+more); the floor plans, whose walls are several cells thick, do not. The turned copy is not quite the map
+a robot would draw at that angle: its walls are in steps of whole cells, some a cell thicker, and its
+cells moved by up to half a cell. Turned and then turned back upright before segmenting (every wall on the
+grid's axes again, the cells resampled twice), the real maps score lower still than turned once: the loss
+follows the resampling of the cells, not the angle of the walls.
+"""
+
+
 def _pose(k, mirror):
     return f"{90 * k}°" + (", mirrored" if mirror else "") + (" (as given)" if (k, mirror) == (0, False) else "")
 
@@ -204,22 +224,7 @@ figure for maps of other buildings; the tables above this section give
 the maps as they are stored.
 """
     if angles:
-        text += f"""
-**Turned by other angles.** A robot maps a building at whatever angle it started in, so its walls are
-rarely on the grid's axes. Every map turned by {", ".join(f"{d:g}" for d in angles)} degrees (each cell of
-the turned grid takes the value of the nearest cell of the map, and every occupied cell is carried onto the
-turned grid as well so that walls stay whole, as a map drawn at that angle marks every cell a laser hit;
-the true rooms turned alike), written as a PGM + YAML pair, read back and segmented, then scored in the
-turned frame with the **original protocol** (mean P / R in %):
-
-{_angle_table(turned, groups, angles)}
-Turned by an angle off the axes, the real maps lose up to a few points of precision or recall (one map
-more); the floor plans, whose walls are several cells thick, do not. The turned copy is not quite the map
-a robot would draw at that angle: its walls are in steps of whole cells, some a cell thicker, and its
-cells moved by up to half a cell. Turned and then turned back upright before segmenting (every wall on the
-grid's axes again, the cells resampled twice), the real maps score lower still than turned once: the loss
-follows the resampling of the cells, not the angle of the walls.
-"""
+        text += _angle_text(turned, groups, angles)
     _section.write(a.out, text, table, time.perf_counter() - t0)
     return 0
 
