@@ -45,6 +45,37 @@ def _naming(path, exc) -> str:
     return "" if str(path) in str(exc) else str(path)
 
 
+def parse_settings(pairs) -> dict:
+    """``--set OPTION=VALUE`` pairs as keyword options: ``true``/``false`` (also yes/no, on/off) as booleans,
+    ``none`` as None, numbers as floats, any other value as text (the method checks them all).
+
+    Raises
+    ------
+    ParameterError
+        A pair without ``=`` or without a name, or an option given twice.
+    """
+    from .errors import ParameterError
+
+    words = {"true": True, "yes": True, "on": True, "false": False, "no": False, "off": False,
+             "none": None, "null": None}
+    out = {}
+    for pair in pairs:
+        name, eq, text = pair.partition("=")
+        name, text = name.strip(), text.strip()
+        if not eq or not name:
+            raise ParameterError(f"--set {pair!r}: expected OPTION=VALUE, e.g. --set max_door_width=2.5")
+        if name in out:
+            raise ParameterError(f"--set {name}: given twice")
+        if text.lower() in words:
+            out[name] = words[text.lower()]
+        else:
+            try:
+                out[name] = float(text)
+            except ValueError:
+                out[name] = text
+    return out
+
+
 def _fail(exc, what="") -> int:
     """Print one line for ``exc`` on stderr; return the exit code to use."""
     from .errors import TopomapError, first_line
@@ -183,8 +214,12 @@ def _check_outdir(outdir):
 @click.option("--previous", type=click.Path(path_type=Path), default=None, metavar="GRAPH",
               help="Room graph of an earlier map of the same place (rooms.graphml, .json or .geojson): "
                    "rooms keep its IDs and names; writes changes.json.")
+@click.option("--set", "settings", multiple=True, metavar="OPTION=VALUE",
+              help="An option of the method (lengths in metres, areas in m²; see the options of "
+                   "topomap.segment), e.g. --set max_door_width=2.5 --set gaps=false; repeatable. Kept in "
+                   "topomap_run.json: a folder segmented with other options is run again.")
 def segment_cmd(maps, outdir, resolution, method, skeletons, no_overlay, no_geojson, profile, topic, at, bag, jobs,
-                scheduler, overwrite, previous):
+                scheduler, overwrite, previous, settings):
     """Segment MAP files (ROS YAML, PGM, PNG or a ROS bag) into rooms and doors.
 
     Writes labels.png (16-bit, 0 = not a room), labels.pgm + labels.yaml
@@ -222,6 +257,7 @@ def segment_cmd(maps, outdir, resolution, method, skeletons, no_overlay, no_geoj
 
     try:
         outdir = _check_outdir(outdir)
+        options = parse_settings(settings)
         if resolution is not None:
             from .io.metadata import check_resolution
 
@@ -254,7 +290,8 @@ def segment_cmd(maps, outdir, resolution, method, skeletons, no_overlay, no_geoj
                                    ("overlay", False if no_overlay else None),
                                    ("geojson", False if no_geojson else None)) if v is not None}
         rows = segment_many(maps, outdir, jobs=jobs, scheduler=scheduler, overwrite=overwrite,
-                            resolution=resolution, method=method, skeletons=skeletons, write_options=extra)
+                            resolution=resolution, method=method, skeletons=skeletons, options=options,
+                            write_options=extra)
     except Exception as exc:  # noqa: BLE001 - nothing ran
         sys.exit(_fail(exc))
     code = EXIT_OK

@@ -90,7 +90,7 @@ from .rooms import cut_rooms, doors_between_rooms
 log = logging.getLogger("topomap")
 
 __all__ = ["Segmentation", "Intermediates", "segment", "segment_paper", "segment_topomap", "METHODS",
-           "DEFAULT_METHOD", "cut_rooms", "doors_between_rooms"]
+           "DEFAULT_METHOD", "check_method_options", "cut_rooms", "doors_between_rooms"]
 
 
 # --------------------------------------------------------------------------
@@ -676,15 +676,18 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
     return seg
 
 
+def _baseline_keywords(name) -> set:
+    """The keyword options of the baseline ``name`` (its function's keywords but ``resolution``)."""
+    import inspect
+
+    return {k for k, p in inspect.signature(getattr(baselines, name)).parameters.items()
+            if p.kind is p.KEYWORD_ONLY and k != "resolution"}
+
+
 def _baseline(name):
     def run(grid: OccupancyGrid, **params) -> Segmentation:
-        import inspect
-
-
         fn = getattr(baselines, name)
-        allowed = {k for k, p in inspect.signature(fn).parameters.items()
-                   if p.kind is p.KEYWORD_ONLY and k != "resolution"}
-        check_keywords(name, params, allowed)
+        check_keywords(name, params, _baseline_keywords(name))
         timer = StageTimer()
         with timer("segment"):
             # every baseline ends with fill_unlabeled: all free cells labelled
@@ -707,6 +710,31 @@ METHODS = {
     "voronoi": _baseline("voronoi"),
 }
 DEFAULT_METHOD = "topomap"
+
+
+def check_method_options(method, params: dict) -> dict:
+    """The keyword options ``params`` of ``method`` (default :data:`DEFAULT_METHOD`), checked without
+    segmenting anything: a copy of them.
+
+    For ``"topomap"`` and ``"paper"`` every name must be a field of
+    :class:`~topomap.options.TopomapOptions` / :class:`~topomap.options.PaperOptions` and every value
+    valid for it; for the other methods, a keyword of their function in
+    :mod:`topomap.core.baselines` (its values are checked when it runs).
+
+    Raises
+    ------
+    ParameterError
+        Unknown method, unknown option, invalid value (the message names both).
+    """
+    method = method or DEFAULT_METHOD
+    if method not in METHODS:
+        raise ParameterError(f"unknown method {method!r}; choose from {', '.join(sorted(METHODS))}")
+    params = dict(params or {})
+    if method in ("topomap", "paper"):
+        options_from_kwargs(TopomapOptions if method == "topomap" else PaperOptions, method, kwargs=params)
+    else:
+        check_keywords(method, params, _baseline_keywords(method))
+    return params
 
 
 def segment(grid: OccupancyGrid, *, method: str = None, previous=None, **params) -> Segmentation:

@@ -86,7 +86,7 @@ from tqdm.contrib.logging import logging_redirect_tqdm
 
 from .. import __version__
 from .._fast import keep_freed_memory, one_thread
-from ..core.segmentation import METHODS
+from ..core.segmentation import METHODS, check_method_options
 from ..errors import MapFileError, MissingDependencyError, OutputExistsError, ParameterError, TopomapError, \
     first_line, named
 from ..grid import share_memory
@@ -328,7 +328,7 @@ def _run_one(task: dict) -> dict:
         write_record(folder, dict(record, status=INCOMPLETE))  # a kill from here on: the map runs again
         claimed = True
         seg = segment_file(task["path"], folder, s["resolution"], s["method"], s["skeletons"],
-                           nav2=nav2, **task["write_options"])
+                           nav2=nav2, options=s.get("options"), **task["write_options"])
         row.update(summary_counts(seg), outside_area_m2=float(seg.outside_area))
         row["seconds"] = time.perf_counter() - t0
         row.update({f"t_{k}": float(v) for k, v in seg.timings.items()})
@@ -501,7 +501,8 @@ def _line(done, total, row) -> str:
 
 def segment_many(paths: Sequence, out, *, jobs: int = 1, scheduler=None, overwrite: bool = False,
                  resolution: Optional[float] = None, method: Optional[str] = None, skeletons: bool = False,
-                 write_options: Optional[dict] = None, progress: Optional[bool] = None) -> list:
+                 options: Optional[dict] = None, write_options: Optional[dict] = None,
+                 progress: Optional[bool] = None) -> list:
     """Segment many maps and write each one's outputs, as ``topomap segment MAP... -o OUT``.
 
     Parameters
@@ -527,6 +528,10 @@ def segment_many(paths: Sequence, out, *, jobs: int = 1, scheduler=None, overwri
         Segmentation method (default :data:`topomap.core.segmentation.DEFAULT_METHOD`).
     skeletons : bool, optional
         Draw both skeleton graphs in ``overlay.png``.
+    options : dict, optional
+        Keyword options of the method (:func:`topomap.segment`: lengths in metres, areas in m²), checked
+        before any map runs (:func:`topomap.core.segmentation.check_method_options`) and kept in each
+        folder's run record: a folder segmented with other options is not up to date.
     write_options : dict, optional
         More keyword options of the single-map writer
         (:func:`topomap.run.job.segment_file`).
@@ -555,10 +560,13 @@ def segment_many(paths: Sequence, out, *, jobs: int = 1, scheduler=None, overwri
     """
     paths = [Path(p) for p in paths]
     jobs = _check_options(paths, jobs, scheduler, resolution, method)
+    options = check_method_options(method, options)
     out = Path(out)
     write_options = dict(write_options or {})
     settings = {"resolution": None if resolution is None else float(resolution), "method": method,
                 "skeletons": bool(skeletons), **{k: write_options[k] for k in sorted(write_options)}}
+    if options:  # (no key without options: folders segmented before options could be given stay up to date)
+        settings["options"] = {k: options[k] for k in sorted(options)}
     dirs = output_dirs(paths, out)
     _refuse_inputs_as_outputs(paths, dirs, write_options)
     with _output_lock(out):

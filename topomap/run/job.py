@@ -116,7 +116,7 @@ def _read_map(path, resolution, topic, at):
 
 
 def segment_file(path, outdir, resolution=None, method=None, skeletons=False, *, topic=None, at=None, bag=None,
-                 previous=None, overlay=True, geojson=True, nav2=()):
+                 previous=None, overlay=True, geojson=True, nav2=(), options=None):
     """Segment the map file ``path`` and write its outputs into ``outdir``: one map of ``topomap segment``.
 
     Parameters
@@ -145,6 +145,8 @@ def segment_file(path, outdir, resolution=None, method=None, skeletons=False, *,
         The Nav2 route graphs exported from the folder's previous room graph
         (:func:`topomap.run.record.nav2_exports` of its run record): each is
         made again from the new rooms (:func:`nav2_routes`).
+    options : dict, optional
+        Keyword options of the method (:func:`topomap.segment`).
 
     Returns
     -------
@@ -157,7 +159,7 @@ def segment_file(path, outdir, resolution=None, method=None, skeletons=False, *,
     t0 = time.perf_counter()
     grid = _read_map(path, resolution, topic, at)
     t1 = time.perf_counter()
-    seg = api.segment(grid, method=method, previous=previous)  # a previous graph file: its messages name it
+    seg = api.segment(grid, method=method, previous=previous, **(options or {}))  # a previous graph file: its messages name it
     seg.room_graph  # built here so its time is its own stage (timings["room_graph"])
     t2 = time.perf_counter()
     # the map's outputs land together or not at all: the bag and changes.json are written to temporaries
