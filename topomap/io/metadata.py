@@ -40,6 +40,7 @@ __all__ = [
     "yaml_loader",
     "check_yaml_keys",
     "read_yaml",
+    "image_named",
 ]
 
 #: Largest map YAML read, bytes (a map_server YAML is a few hundred bytes).
@@ -257,6 +258,31 @@ def read_yaml(path: Path, name: str) -> dict:
     ParameterError
         A near-miss of a known key.
     """
+    meta = _parse_yaml(path, name)
+    check_yaml_keys(name, meta)
+    return meta
+
+
+def image_named(path: Path):
+    """The image file the map YAML ``path`` names (absolute; relative names are relative to the YAML's
+    folder), or None when the YAML cannot be read or names no usable file name.
+
+    Read as :func:`read_yaml` reads it (bounded by :data:`MAX_YAML_BYTES`, no aliases, a FIFO or device
+    never opened), without its warnings and errors: for callers that only want to know the files a map
+    is made of (the run record), leaving the messages to :func:`~topomap.io.maps.load_map`.
+    """
+    path = Path(path)
+    try:
+        image = _parse_yaml(path, str(path)).get("image")
+    except (MapError, MapFileError, ParameterError):
+        return None
+    if not isinstance(image, str) or not image.strip() or "\x00" in image:
+        return None
+    return Path(os.path.abspath(path.parent / image))
+
+
+def _parse_yaml(path: Path, name: str) -> dict:
+    """The mapping of the map YAML ``path``, as :func:`read_yaml` reads it, its keys not checked."""
     import yaml
 
     check_file(name, path, "map YAML")
@@ -284,5 +310,4 @@ def read_yaml(path: Path, name: str) -> dict:
         raise MapError(named(name, f"not valid YAML: {one_line(exc) or type(exc).__name__}")) from None
     if not isinstance(meta, dict):
         raise MapError(named(name, f"map YAML must be a mapping (key: value), got {type(meta).__name__}"))
-    check_yaml_keys(name, meta)
     return meta

@@ -232,11 +232,11 @@ def _output_lock(out: Path):
 # --------------------------------------------------------------------------
 
 def _same_file(a, b) -> bool:
-    if os.path.realpath(a) == os.path.realpath(b):
-        return True
     try:
+        if os.path.realpath(a) == os.path.realpath(b):
+            return True
         return os.path.samefile(a, b)
-    except OSError:
+    except (OSError, ValueError):  # missing, or a name the system refuses (a NUL byte): load_map says so
         return False
 
 

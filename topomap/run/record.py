@@ -24,6 +24,7 @@ from typing import Optional
 from .. import __version__
 from ..io.export import OUTPUT_FILES
 from ..io.files import atomic_write
+from ..io.metadata import image_named
 
 __all__ = ["RECORD", "INCOMPLETE", "COMPLETE", "OUTPUT_NAMES", "file_stamp", "input_files", "fingerprint",
            "output_stamps", "read_record", "write_record", "restore_record", "up_to_date", "add_nav2_export",
@@ -55,14 +56,10 @@ def input_files(path: Path) -> list:
             if path.with_suffix(suffix).is_file():
                 files.append(Path(os.path.abspath(path.with_suffix(suffix))))
     if path.suffix.lower() in (".yaml", ".yml"):
-        try:
-            import yaml  # PyYAML: imported only when a map is a YAML file
-
-            image = yaml.safe_load(path.read_text()).get("image")
-            if isinstance(image, str):
-                files.append(Path(os.path.abspath(path.parent / image)))
-        except Exception:  # noqa: BLE001 - a bad YAML fails in load_map with its own message
-            pass
+        # read as load_map reads it (bounded, never a FIFO); a bad YAML fails in load_map with its own message
+        image = image_named(path)
+        if image is not None:
+            files.append(image)
     return files
 
 

@@ -1,0 +1,81 @@
+"""Hostile and odd inputs, third part: what the command line reads before it loads a map, messages that
+name the file, outputs left as they were. Each test failed before its fix."""
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from topomap import io
+from topomap.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _run(*args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def _one_error_line(res, name, code=1):
+    """The CLI's output is one error line naming ``name``, exit ``code``."""
+    lines = [ln for ln in res.output.splitlines() if ln.strip()]
+    assert res.exit_code == code, res.output
+    assert len(lines) == 1 and lines[0].startswith("error: ") and str(name) in lines[0], res.output
+    assert "internal" not in res.output and "Traceback" not in res.output
+    return lines[0]
+
+
+def _two_rooms():
+    a = np.zeros((60, 100), bool)
+    a[4:56, 4:48] = True
+    a[4:56, 52:96] = True
+    a[24:36, 48:52] = True
+    return a
+
+
+def _cli(*args, cwd, timeout=120):
+    """``topomap ARGS`` in its own process: (exit code, stderr lines)."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    res = subprocess.run([sys.executable, "-m", "topomap.cli", *map(str, args)], capture_output=True, text=True,
+                         env=env, cwd=cwd, timeout=timeout)
+    return res.returncode, [ln for ln in res.stderr.splitlines() if ln.strip()]
+
+
+# --------------------------------------------------------------------------
+# The run record's look at a map YAML is bounded like load_map's
+# --------------------------------------------------------------------------
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs")
+def test_a_fifo_named_like_a_yaml_is_refused_not_waited_on(tmp_path):
+    os.mkfifo(tmp_path / "pipe.yaml")  # nobody writes into it: reading it would wait for ever
+    code, err = _cli("segment", "pipe.yaml", "-o", "out", cwd=tmp_path, timeout=60)  # was: a hang
+    assert code == 1 and len(err) == 1 and err[0].startswith("error: pipe.yaml: "), err
+    assert not (tmp_path / "out").exists()
+
+
+def test_the_inputs_of_a_yaml_are_read_within_the_yaml_bound(tmp_path):
+    from topomap.run.record import input_files
+
+    y = tmp_path / "m.yaml"
+    # a YAML over MAX_YAML_BYTES (a 300 MB one took 1 GB and 2.5 minutes before load_map refused it)
+    y.write_text("image: other.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n#" + "x" * io.MAX_YAML_BYTES + "\n")
+    assert input_files(y) == [y.absolute()]
+    y.write_text("image: &i other.pgm\nmode: *i\n")  # aliases: refused by load_map, not expanded here
+    assert input_files(y) == [y.absolute()]
+    y.write_text("image: other.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n")
+    assert input_files(y) == [y.absolute(), (tmp_path / "other.pgm").absolute()]
+    res = _run("segment", y, "-o", tmp_path / "out")
+    _one_error_line(res, y)
+
+
+def test_an_image_name_with_a_nul_byte_is_named_in_the_error(tmp_path):
+    io.save_map(_two_rooms(), tmp_path / "map")
+    y = tmp_path / "nul.yaml"
+    y.write_text('image: "map\\0.pgm"\nresolution: 0.05\norigin: [0, 0, 0]\n')
+    line = _one_error_line(_run("segment", y, "-o", tmp_path / "out"), y)  # was: "error: embedded null byte"
+    assert "'image' must be a file name" in line, line
+    assert not (tmp_path / "out").exists()
