@@ -79,3 +79,26 @@ def test_an_image_name_with_a_nul_byte_is_named_in_the_error(tmp_path):
     line = _one_error_line(_run("segment", y, "-o", tmp_path / "out"), y)  # was: "error: embedded null byte"
     assert "'image' must be a file name" in line, line
     assert not (tmp_path / "out").exists()
+
+
+# --------------------------------------------------------------------------
+# A FIFO or device as the map
+# --------------------------------------------------------------------------
+
+def _yaml(tmp_path, name, text):
+    io.save_map(_two_rooms(), tmp_path / "map")
+    p = tmp_path / name
+    p.write_bytes(text if isinstance(text, bytes) else text.encode())
+    return p
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo") or not os.path.exists("/dev/zero"), reason="no FIFOs or /dev/zero")
+def test_a_fifo_or_device_is_not_called_empty(tmp_path):
+    from topomap.errors import MapFileError
+
+    os.mkfifo(tmp_path / "pipe.pgm")
+    y = _yaml(tmp_path, "dev.yaml", "image: /dev/zero\nresolution: 0.05\norigin: [0, 0, 0]\n")
+    for path, name in ((tmp_path / "pipe.pgm", "pipe.pgm"), (y, "/dev/zero"), (Path("/dev/zero"), "/dev/zero")):
+        with pytest.raises(MapFileError, match="is not a regular file") as ei:  # was: "is empty (0 bytes)"
+            io.load_map(path)
+        assert name in str(ei.value) and "\n" not in str(ei.value)

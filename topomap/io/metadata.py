@@ -16,6 +16,7 @@ import difflib
 import logging
 import math
 import os
+import stat
 from pathlib import Path
 
 import numpy as np
@@ -197,7 +198,7 @@ def check_file(name, path: Path, what="map file") -> None:
     MapFileNotFoundError
         No such file.
     MapFileError
-        A directory, or not readable.
+        A directory, not a regular file (a FIFO, socket or device), or not readable.
     MapError
         Empty (0 bytes).
     """
@@ -206,9 +207,12 @@ def check_file(name, path: Path, what="map file") -> None:
     if path.is_dir():
         raise MapFileError(named(name, f"{what} is a directory, not a file"))
     try:
-        size = path.stat().st_size
+        st = path.stat()
     except OSError as exc:
         raise MapFileError(named(name, f"cannot stat {what}: {exc.strerror or exc}")) from None
+    if not stat.S_ISREG(st.st_mode):  # never opened: reading a FIFO waits for a writer, a device never ends
+        raise MapFileError(named(name, f"{what} is not a regular file (a FIFO, socket or device)"))
+    size = st.st_size
     if size == 0:
         raise MapError(named(name, f"{what} is empty (0 bytes)"))
     if not os.access(path, os.R_OK):
