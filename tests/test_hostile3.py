@@ -82,7 +82,7 @@ def test_an_image_name_with_a_nul_byte_is_named_in_the_error(tmp_path):
 
 
 # --------------------------------------------------------------------------
-# A FIFO or device as the map
+# Map YAMLs: a key given twice, a FIFO or device as the image
 # --------------------------------------------------------------------------
 
 def _yaml(tmp_path, name, text):
@@ -90,6 +90,24 @@ def _yaml(tmp_path, name, text):
     p = tmp_path / name
     p.write_bytes(text if isinstance(text, bytes) else text.encode())
     return p
+
+
+@pytest.mark.parametrize("text, where", [
+    ("image: map.pgm\nresolution: 0.05\nresolution: 0.1\norigin: [0, 0, 0]\n", "'resolution' given twice (lines 2 and 3)"),
+    ("{image: map.pgm, resolution: 0.05, origin: [0, 0, 0], image: map.pgm}\n", "'image' given twice (line 1)"),
+])
+def test_a_key_given_twice_is_refused(tmp_path, text, where):
+    """PyYAML keeps the last value, map_server (yaml-cpp) the first: the two would read different maps."""
+    from topomap.errors import MapError
+
+    y = _yaml(tmp_path, "dup.yaml", text)
+    with pytest.raises(MapError, match=r"dup.yaml: not valid YAML at line \d: key " + where.replace("(", r"\(")
+                       .replace(")", r"\)")):
+        io.load_map(y)  # was: read at 0.1 m per cell
+    _one_error_line(_run("segment", y, "-o", tmp_path / "out"), y)
+    # twice in a value's own mapping (an unknown key's) is not the map's business
+    y.write_text("image: map.pgm\nresolution: 0.05\norigin: [0, 0, 0]\nnotes: {a: 1, a: 2}\n")
+    assert io.load_map(y).shape == (60, 100)
 
 
 @pytest.mark.skipif(not hasattr(os, "mkfifo") or not os.path.exists("/dev/zero"), reason="no FIFOs or /dev/zero")

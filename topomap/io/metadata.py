@@ -220,7 +220,9 @@ def check_file(name, path: Path, what="map file") -> None:
 
 
 def yaml_loader():
-    """A safe YAML loader that refuses aliases (``*name``): nothing expands (no "billion laughs")."""
+    """A safe YAML loader that refuses aliases (``*name``): nothing expands (no "billion laughs"); and a
+    key given twice in the document's mapping (PyYAML would keep the last value, map_server's yaml-cpp
+    the first: the two would read different maps)."""
     import yaml
 
     class NoAliasLoader(yaml.SafeLoader):
@@ -230,6 +232,27 @@ def yaml_loader():
                 raise yaml.composer.ComposerError(None, None, "aliases (*name) are not allowed in a map YAML",
                                                   mark)
             return super().compose_node(parent, index)
+
+        def construct_document(self, node):
+            self.top = node
+            return super().construct_document(node)
+
+        def construct_mapping(self, node, deep=False):
+            seen = {}
+            for key_node, _ in node.value if node is getattr(self, "top", None) else ():
+                if not isinstance(key_node, yaml.ScalarNode) or key_node.tag == "tag:yaml.org,2002:merge":
+                    continue
+                key, mark = self.construct_object(key_node), key_node.start_mark
+                try:
+                    first = seen.setdefault(key, mark)
+                except TypeError:  # unhashable: the constructor says so
+                    continue
+                if first is not mark:
+                    lines = f"line {mark.line + 1}" if first.line == mark.line else \
+                        f"lines {first.line + 1} and {mark.line + 1}"
+                    raise yaml.constructor.ConstructorError(
+                        None, None, f"key {one_line(repr(key))[:60]} given twice ({lines})", mark)
+            return super().construct_mapping(node, deep=deep)
 
     return NoAliasLoader
 
