@@ -82,7 +82,7 @@ def test_an_image_name_with_a_nul_byte_is_named_in_the_error(tmp_path):
 
 
 # --------------------------------------------------------------------------
-# Map YAMLs: a key given twice, a FIFO or device as the image
+# Map YAMLs: a key given twice, bytes that are not UTF-8, a FIFO or device as the image
 # --------------------------------------------------------------------------
 
 def _yaml(tmp_path, name, text):
@@ -108,6 +108,16 @@ def test_a_key_given_twice_is_refused(tmp_path, text, where):
     # twice in a value's own mapping (an unknown key's) is not the map's business
     y.write_text("image: map.pgm\nresolution: 0.05\norigin: [0, 0, 0]\nnotes: {a: 1, a: 2}\n")
     assert io.load_map(y).shape == (60, 100)
+
+
+@pytest.mark.parametrize("raw, words", [
+    (b"image: map.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n# caf\xe9\n", "byte 0xe9 at offset 55 is not UTF-8"),
+    (b"image: map.pgm\nresolution: 0.05\x07\n", "character U+0007 at offset 31 is not allowed"),
+])
+def test_bytes_yaml_cannot_read_are_shown(tmp_path, raw, words):
+    y = _yaml(tmp_path, "bytes.yaml", raw)
+    line = _one_error_line(_run("segment", y, "-o", tmp_path / "out"), y)  # was: "not valid YAML: ReaderError"
+    assert words in line, line
 
 
 @pytest.mark.skipif(not hasattr(os, "mkfifo") or not os.path.exists("/dev/zero"), reason="no FIFOs or /dev/zero")

@@ -326,6 +326,8 @@ def _parse_yaml(path: Path, name: str) -> dict:
         raise MapFileError(named(name, f"cannot read map YAML: {exc.strerror or exc}")) from None
     try:
         meta = yaml.load(text, Loader=yaml_loader())  # noqa: S506 - a SafeLoader without aliases
+    except yaml.reader.ReaderError as exc:
+        raise MapError(named(name, f"not valid YAML: {_reader_problem(exc)}")) from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}" if mark is not None else ""
@@ -338,3 +340,12 @@ def _parse_yaml(path: Path, name: str) -> dict:
     if not isinstance(meta, dict):
         raise MapError(named(name, f"map YAML must be a mapping (key: value), got {type(meta).__name__}"))
     return meta
+
+
+def _reader_problem(exc) -> str:
+    """What PyYAML's ReaderError ``exc`` found, in words: a byte that is not UTF-8 (UTF-16 with its BOM is
+    read too), or a control character YAML does not allow; with its offset in the file."""
+    if exc.encoding != "unicode" and isinstance(exc.character, int):
+        return (f"byte 0x{exc.character:02x} at offset {exc.position} is not {exc.encoding.upper()} "
+                f"({exc.reason}; a map YAML is UTF-8 text)")
+    return f"character U+{exc.character:04X} at offset {exc.position} is not allowed in YAML text ({exc.reason})"
