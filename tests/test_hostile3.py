@@ -130,3 +130,25 @@ def test_a_fifo_or_device_is_not_called_empty(tmp_path):
         with pytest.raises(MapFileError, match="is not a regular file") as ei:  # was: "is empty (0 bytes)"
             io.load_map(path)
         assert name in str(ei.value) and "\n" not in str(ei.value)
+
+
+# --------------------------------------------------------------------------
+# More rooms than the 16-bit label files hold: refused before the room graph and the rest
+# --------------------------------------------------------------------------
+
+def test_rooms_beyond_the_label_files_are_refused_right_after_segmenting(tmp_path, monkeypatch):
+    """A 1000 x 1000 one-cell checkerboard at 1 m per cell is 500,000 rooms: the job used to build the room
+    graph, travel distances and pictures of all of them (7 GB, 5 minutes) before labels.png refused them."""
+    from topomap.io import export
+    from topomap.run import job
+
+    def boom(*args, **kwargs):
+        raise AssertionError("built the room graph of rooms that cannot be written")
+
+    monkeypatch.setattr(export, "MAX_FILE_LABEL", 1)  # the two-room map has room IDs up to 2
+    monkeypatch.setattr(job, "travel_graph", boom)
+    monkeypatch.setattr("topomap.core.roomgraph.room_graph", boom)
+    m = io.save_map(_two_rooms(), tmp_path / "m")
+    line = _one_error_line(_run("segment", m, "-o", tmp_path / "out"), m)
+    assert "labels.png: room IDs up to 2 do not fit a 16-bit PNG" in line, line
+    assert not (tmp_path / "out").exists()
