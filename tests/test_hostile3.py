@@ -152,3 +152,23 @@ def test_rooms_beyond_the_label_files_are_refused_right_after_segmenting(tmp_pat
     line = _one_error_line(_run("segment", m, "-o", tmp_path / "out"), m)
     assert "labels.png: room IDs up to 2 do not fit a 16-bit PNG" in line, line
     assert not (tmp_path / "out").exists()
+
+
+# --------------------------------------------------------------------------
+# export --nav2 never replaces the room graph it reads or a file of its output folder
+# --------------------------------------------------------------------------
+
+@pytest.mark.parametrize("source, nav2", [("rooms.json", "rooms.json"), ("rooms.graphml", "rooms.json"),
+                                          ("rooms.graphml", "labels.png"), ("rooms.graphml", "topomap_run.json"),
+                                          ("rooms.graphml", "../out/rooms.geojson")])
+def test_nav2_export_never_replaces_its_input_or_the_folders_files(tmp_path, source, nav2):
+    out = tmp_path / "out"
+    assert _run("segment", io.save_map(_two_rooms(), tmp_path / "m"), "-o", out).exit_code == 0
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    line = _one_error_line(_run("export", out / source, "--nav2", out / nav2), out / nav2)  # was: exit 0,
+    assert "would replace" in line, line  # rooms.json replaced by the route graph, plan and edit broken
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    res = _run("export", out / "rooms.graphml", tmp_path / "g.json", "--nav2", tmp_path / "g.json")  # OUTPUT too
+    assert "would replace OUTPUT" in _one_error_line(res, tmp_path / "g.json") and not (tmp_path / "g.json").exists()
+    res = _run("export", out / source, "--nav2", out / "nav2.geojson")  # beside them: fine, and noted
+    assert res.exit_code == 0, res.output

@@ -571,6 +571,10 @@ def export_cmd(source, target, nav2, clearance):
             clearance = check_length("--clearance", clearance)
         if target is not None:
             graph_format(target)
+        if nav2 is not None:
+            from .run.record import check_nav2_target
+
+            check_nav2_target(source, nav2, target)
         G = load_graph(source)
         if nav2 is not None:
             from .io.nav2 import labels_beside

@@ -90,7 +90,7 @@ from ..core.segmentation import METHODS
 from ..errors import MapFileError, MissingDependencyError, OutputExistsError, ParameterError, TopomapError, \
     first_line, named
 from ..grid import share_memory
-from ..io.files import atomic_write
+from ..io.files import atomic_write, same_file
 from .job import STAGES, segment_file, summary_counts
 from .record import COMPLETE, INCOMPLETE, OUTPUT_NAMES, RECORD, file_stamp, fingerprint, input_files, \
     nav2_exports, output_stamps, read_record, restore_record, up_to_date, write_record
@@ -231,15 +231,6 @@ def _output_lock(out: Path):
 # Inputs that would be outputs, and the resume check
 # --------------------------------------------------------------------------
 
-def _same_file(a, b) -> bool:
-    try:
-        if os.path.realpath(a) == os.path.realpath(b):
-            return True
-        return os.path.samefile(a, b)
-    except (OSError, ValueError):  # missing, or a name the system refuses (a NUL byte): load_map says so
-        return False
-
-
 def _refuse_inputs_as_outputs(paths, dirs, write_options):
     """ParameterError when an output file of the run (a map's files, changes.json, summary.csv, the
     --bag) would be one of its input files (a map, the image its YAML names, the --previous graph)."""
@@ -251,7 +242,7 @@ def _refuse_inputs_as_outputs(paths, dirs, write_options):
         outs.append((Path(write_options["bag"]), "--bag"))
     for o, what in outs:
         for i in inputs:
-            if _same_file(o, i):
+            if same_file(o, i):
                 raise ParameterError(f"{what + ' ' if what else ''}{o}: is an input of this run ({i}); "
                                      "it would be replaced: choose another output")
 
