@@ -172,3 +172,26 @@ def test_nav2_export_never_replaces_its_input_or_the_folders_files(tmp_path, sou
     assert "would replace OUTPUT" in _one_error_line(res, tmp_path / "g.json") and not (tmp_path / "g.json").exists()
     res = _run("export", out / source, "--nav2", out / "nav2.geojson")  # beside them: fine, and noted
     assert res.exit_code == 0, res.output
+
+
+# --------------------------------------------------------------------------
+# Settings the run record cannot hold (JSON has no NaN): refused as options, before anything runs
+# --------------------------------------------------------------------------
+
+@pytest.mark.parametrize("at", ["nan", "inf", "-1"])
+def test_a_bag_time_that_is_not_a_time_is_refused_as_the_option(tmp_path, at):
+    m = io.save_map(_two_rooms(), tmp_path / "m")
+    line = _one_error_line(_run("segment", m, "-o", tmp_path / "out", "--time", at), "--time")
+    assert "must be seconds >= 0" in line and "JSON" not in line, line  # was: "Out of range float values are
+    assert not (tmp_path / "out").exists()  # not JSON compliant: nan" (the run record)
+
+
+@pytest.mark.parametrize("options", [dict(resolution=float("inf")), dict(write_options={"at": float("nan")})])
+def test_segment_many_refuses_settings_json_cannot_hold(tmp_path, options):
+    from topomap.errors import ParameterError
+    from topomap.run.batch import segment_many
+
+    m = io.save_map(_two_rooms(), tmp_path / "m")
+    with pytest.raises(ParameterError, match="must be"):
+        segment_many([m], tmp_path / "out", **options)
+    assert not (tmp_path / "out").exists()

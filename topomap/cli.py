@@ -226,6 +226,8 @@ def segment_cmd(maps, outdir, resolution, method, skeletons, no_overlay, no_geoj
             from .io.metadata import check_resolution
 
             check_resolution(resolution, name="--resolution")
+        if at is not None and not 0 <= at < float("inf"):  # nan too
+            raise ParameterError(f"--time must be seconds >= 0 after the start of the bag, got {at!r}")
     except Exception as exc:  # noqa: BLE001
         sys.exit(_fail(exc))
     if bag is not None:

@@ -545,9 +545,9 @@ def segment_many(paths: Sequence, out, *, jobs: int = 1, scheduler=None, overwri
         ``scheduler`` without Dask installed.
     """
     paths = [Path(p) for p in paths]
-    jobs = _check_options(paths, jobs, scheduler, resolution, method)
-    out = Path(out)
     write_options = dict(write_options or {})
+    jobs = _check_options(paths, jobs, scheduler, resolution, method, write_options.get("at"))
+    out = Path(out)
     settings = {"resolution": None if resolution is None else float(resolution), "method": method,
                 "skeletons": bool(skeletons), **{k: write_options[k] for k in sorted(write_options)}}
     dirs = output_dirs(paths, out)
@@ -556,8 +556,10 @@ def segment_many(paths: Sequence, out, *, jobs: int = 1, scheduler=None, overwri
         return _run_batch(paths, out, dirs, settings, overwrite, jobs, scheduler, write_options, progress)
 
 
-def _check_options(paths, jobs, scheduler, resolution, method) -> int:
-    """``jobs`` as an int; ParameterError for no maps, or options that are wrong or do not go together."""
+def _check_options(paths, jobs, scheduler, resolution, method, at=None) -> int:
+    """``jobs`` as an int; ParameterError for no maps, or options that are wrong or do not go together
+    (``at``: the bag time of the write options; every setting goes into the run record's JSON, which has no
+    NaN or infinity)."""
     if not paths:
         raise ParameterError("no maps given")
     if isinstance(jobs, bool) or not isinstance(jobs, numbers.Integral) or jobs < 1:
@@ -565,8 +567,10 @@ def _check_options(paths, jobs, scheduler, resolution, method) -> int:
     jobs = int(jobs)
     if scheduler is not None and jobs != 1:
         raise ParameterError(f"jobs={jobs} and a scheduler: the cluster decides how many maps run at once")
-    if resolution is not None and not (isinstance(resolution, (int, float)) and resolution > 0):
+    if resolution is not None and not (isinstance(resolution, (int, float)) and 0 < resolution < math.inf):
         raise ParameterError(f"resolution must be > 0 m/px, got {resolution!r}")
+    if at is not None and not (isinstance(at, numbers.Real) and not isinstance(at, bool) and 0 <= at < math.inf):
+        raise ParameterError(f"time must be seconds >= 0 after the start of the bag, got {at!r}")
     if method is not None and method not in METHODS:
         raise ParameterError(f"unknown method {method!r}; methods: {', '.join(METHODS)}")
     return jobs
