@@ -195,3 +195,40 @@ def test_segment_many_refuses_settings_json_cannot_hold(tmp_path, options):
     with pytest.raises(ParameterError, match="must be"):
         segment_many([m], tmp_path / "out", **options)
     assert not (tmp_path / "out").exists()
+
+
+# --------------------------------------------------------------------------
+# Room graph files: a door to a room the file does not have
+# --------------------------------------------------------------------------
+
+def _segment_out(tmp_path):
+    out = tmp_path / "out"
+    assert _run("segment", io.save_map(_two_rooms(), tmp_path / "m"), "-o", out).exit_code == 0
+    return out
+
+
+def _door_to_room_77(out, fmt):
+    import json
+
+    if fmt == "graphml":
+        text = (out / "rooms.graphml").read_text()
+        assert 'target="2"' in text
+        return text.replace('target="2"', 'target="77"')
+    data = json.loads((out / f"rooms.{fmt}").read_text())
+    if fmt == "json":
+        data["edges"][0]["target"] = 77
+    else:
+        (door,) = [f for f in data["features"] if f["properties"].get("kind") == "door"]
+        door["properties"]["rooms"] = [1, 77]
+    return json.dumps(data)
+
+
+@pytest.mark.parametrize("fmt", ["graphml", "json", "geojson"])
+def test_a_door_to_a_room_the_file_lacks_is_refused(tmp_path, fmt):
+    out = _segment_out(tmp_path)
+    g = tmp_path / f"g.{fmt}"
+    g.write_text(_door_to_room_77(out, fmt))
+    for res in (_run("tour", g, "--from-room", 1), _run("export", g, tmp_path / "x.json")):
+        line = _one_error_line(res, g)  # was: tour exit 3 "internal error: KeyError: 'x'"; export "3 rooms"
+        assert "joins room" in line and "77" in line and "not a room of the graph" in line, line
+    assert not (tmp_path / "x.json").exists()
