@@ -232,3 +232,21 @@ def test_a_door_to_a_room_the_file_lacks_is_refused(tmp_path, fmt):
         line = _one_error_line(res, g)  # was: tour exit 3 "internal error: KeyError: 'x'"; export "3 rooms"
         assert "joins room" in line and "77" in line and "not a room of the graph" in line, line
     assert not (tmp_path / "x.json").exists()
+
+
+@pytest.mark.parametrize("keep, ok", [(("id", "polygon", "area", "cells"), True), (("id",), False)])
+def test_a_room_without_its_position_is_no_internal_error(tmp_path, keep, ok):
+    """A hand-made room with its outline but no x, y or interior point is visited at a cell of it; one with
+    nothing is refused in one line (both were exit 3: KeyError 'x')."""
+    import json
+
+    out = _segment_out(tmp_path)
+    data = json.loads((out / "rooms.json").read_text())
+    data["nodes"][1] = {k: v for k, v in data["nodes"][1].items() if k in keep}
+    g = tmp_path / "g.json"
+    g.write_text(json.dumps(data))
+    res = _run("tour", g, "--from-room", 2)
+    if ok:
+        assert res.exit_code == 0 and "order: 2 -> 1" in res.output, res.output
+    else:
+        assert "room 2 has no cells" in _one_error_line(res, g)
