@@ -262,6 +262,8 @@ def segment_cmd(maps, outdir, resolution, method, skeletons, no_overlay, no_geoj
             from .io.metadata import check_resolution
 
             check_resolution(resolution, name="--resolution")
+        if at is not None and not 0 <= at < float("inf"):  # nan too
+            raise ParameterError(f"--time must be seconds >= 0 after the start of the bag, got {at!r}")
     except Exception as exc:  # noqa: BLE001
         sys.exit(_fail(exc))
     if bag is not None:
@@ -608,6 +610,10 @@ def export_cmd(source, target, nav2, clearance):
             clearance = check_length("--clearance", clearance)
         if target is not None:
             graph_format(target)
+        if nav2 is not None:
+            from .run.record import check_nav2_target
+
+            check_nav2_target(source, nav2, target)
         G = load_graph(source)
         if nav2 is not None:
             from .io.nav2 import labels_beside

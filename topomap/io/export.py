@@ -47,6 +47,7 @@ import struct
 import time
 import warnings
 import zlib
+from collections.abc import Hashable
 from contextlib import ExitStack
 from pathlib import Path
 
@@ -810,7 +811,16 @@ def _check_frame(G: nx.MultiGraph, path) -> nx.MultiGraph:
     return G
 
 
-def _parse_graphml(data: bytes) -> nx.MultiGraph:
+def _check_door_ends(name, what, ends, rooms) -> None:
+    """GraphFormatError naming ``name`` when a door (``what``) joins a room that is not among ``rooms`` (the
+    rooms the file declares): graph readers would add it as a room without outline or position."""
+    for r in ends:
+        if r not in rooms:
+            raise GraphFormatError(f"{name}: {what} joins room {one_line(repr(r))[:40]}, which is not a room "
+                                   f"of the graph")
+
+
+def _parse_graphml(data: bytes, name: str = "<graphml>") -> nx.MultiGraph:
     """The first graph of GraphML document ``data``, parsed by defusedxml with DTDs forbidden
     (a DOCTYPE, entity declaration or external reference anywhere in the document raises one of
     defusedxml's errors) and built by networkx's GraphML reader from that tree."""
@@ -822,6 +832,9 @@ def _parse_graphml(data: bytes) -> nx.MultiGraph:
         reader.xml = root
         keys, defaults = reader.find_graphml_keys(root)
         for g in root.findall(f"{{{reader.NS_GRAPHML}}}graph"):
+            rooms = {n.get("id") for n in g.findall(f"{{{reader.NS_GRAPHML}}}node")}
+            for i, e in enumerate(g.findall(f"{{{reader.NS_GRAPHML}}}edge")):
+                _check_door_ends(name, f"edge {i}", (e.get("source"), e.get("target")), rooms)
             return reader.make_graph(g, keys, defaults)
     raise nx.NetworkXError("file not successfully read as graphml")
 
@@ -852,12 +865,14 @@ def load_graphml(path) -> nx.MultiGraph:
     except OSError as exc:
         raise _bad(path, "cannot read file", exc.strerror or exc) from None
     try:
-        G = _parse_graphml(data)
+        G = _parse_graphml(data, str(path))
     except DefusedXmlException:  # DTDForbidden, EntitiesForbidden, ExternalReferenceForbidden
         # GraphML needs no document type; entity declarations can expand without bound
         raise _bad(path, "GraphML with a DOCTYPE or entity declarations is refused") from None
     except RecursionError:
         raise _bad(path, "not a valid GraphML file: nested too deeply") from None
+    except GraphFormatError:
+        raise
     except Exception as exc:  # noqa: BLE001 - ParseError, NetworkXError, ...
         raise _bad(path, "not a valid GraphML file", exc) from None
     return _check_frame(restore_types(G, str(path)), path)
@@ -927,8 +942,15 @@ def load_json(path) -> nx.MultiGraph:
     data = _read_json(path)
     if not isinstance(data, dict) or "nodes" not in data:
         raise _bad(path, "not node-link graph data (no 'nodes')")
+    edges = "edges" if "edges" in data else "links"
+    if isinstance(data["nodes"], list) and isinstance(data.get(edges), list):
+        rooms = {n.get("id") for n in data["nodes"] if isinstance(n, dict) and isinstance(n.get("id"), Hashable)}
+        for e in data[edges]:
+            if isinstance(e, dict):
+                _check_door_ends(path, f"edge {one_line(repr(e.get('door', e.get('key'))))[:20]}",
+                                 (e.get("source"), e.get("target")), rooms)
     try:
-        G = nx.node_link_graph(data, edges="edges" if "edges" in data else "links")
+        G = nx.node_link_graph(data, edges=edges)
     except Exception as exc:  # noqa: BLE001
         raise _bad(path, "not node-link graph data", exc) from None
     return _check_frame(restore_types(G, str(path)), path)
@@ -1087,6 +1109,7 @@ def from_geojson(data: dict, name: str = "<geojson>") -> nx.MultiGraph:
         except Exception:  # noqa: BLE001
             raise GraphFormatError(f"{name}: feature {i}: a door needs 'rooms' [a, b]") from None
         d = _restore(props, EDGE_TYPES, f"{name}: door feature {i}")
+        _check_door_ends(name, f"feature {i}", (a, b), G)
         G.add_edge(a, b, key=d.get("door"), **d)
     return G
 

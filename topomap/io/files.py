@@ -14,7 +14,7 @@ from ..errors import MapFileError, TopomapError, named
 
 log = logging.getLogger(__name__)
 
-__all__ = ["atomic_write", "write_bytes", "remove_stale_temporaries", "renamed_error"]
+__all__ = ["atomic_write", "write_bytes", "remove_stale_temporaries", "renamed_error", "same_file"]
 
 
 #: Temporary files :func:`atomic_write` makes: ``.NAME.topomap-pPID.RANDOM.tmp`` (the ``topomap-`` marker:
@@ -140,3 +140,14 @@ def write_bytes(path: Path, data: bytes):
     """Write ``data`` to ``path`` through :func:`atomic_write` (all of it, or nothing)."""
     with atomic_write(path) as fh:
         fh.write(data)
+
+
+def same_file(a, b) -> bool:
+    """Whether the paths ``a`` and ``b`` name one file: the same path once links are resolved (either may
+    not exist yet), or the same existing file (hard links); False for a name the system refuses (a NUL byte)."""
+    try:
+        if os.path.realpath(a) == os.path.realpath(b):
+            return True
+        return os.path.samefile(a, b)
+    except (OSError, ValueError):
+        return False

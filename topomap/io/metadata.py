@@ -16,6 +16,7 @@ import difflib
 import logging
 import math
 import os
+import stat
 from pathlib import Path
 
 import numpy as np
@@ -40,6 +41,7 @@ __all__ = [
     "yaml_loader",
     "check_yaml_keys",
     "read_yaml",
+    "image_named",
 ]
 
 #: Largest map YAML read, bytes (a map_server YAML is a few hundred bytes).
@@ -196,7 +198,7 @@ def check_file(name, path: Path, what="map file") -> None:
     MapFileNotFoundError
         No such file.
     MapFileError
-        A directory, or not readable.
+        A directory, not a regular file (a FIFO, socket or device), or not readable.
     MapError
         Empty (0 bytes).
     """
@@ -205,9 +207,12 @@ def check_file(name, path: Path, what="map file") -> None:
     if path.is_dir():
         raise MapFileError(named(name, f"{what} is a directory, not a file"))
     try:
-        size = path.stat().st_size
+        st = path.stat()
     except OSError as exc:
         raise MapFileError(named(name, f"cannot stat {what}: {exc.strerror or exc}")) from None
+    if not stat.S_ISREG(st.st_mode):  # never opened: reading a FIFO waits for a writer, a device never ends
+        raise MapFileError(named(name, f"{what} is not a regular file (a FIFO, socket or device)"))
+    size = st.st_size
     if size == 0:
         raise MapError(named(name, f"{what} is empty (0 bytes)"))
     if not os.access(path, os.R_OK):
@@ -215,7 +220,9 @@ def check_file(name, path: Path, what="map file") -> None:
 
 
 def yaml_loader():
-    """A safe YAML loader that refuses aliases (``*name``): nothing expands (no "billion laughs")."""
+    """A safe YAML loader that refuses aliases (``*name``): nothing expands (no "billion laughs"); and a
+    key given twice in the document's mapping (PyYAML would keep the last value, map_server's yaml-cpp
+    the first: the two would read different maps)."""
     import yaml
 
     class NoAliasLoader(yaml.SafeLoader):
@@ -225,6 +232,27 @@ def yaml_loader():
                 raise yaml.composer.ComposerError(None, None, "aliases (*name) are not allowed in a map YAML",
                                                   mark)
             return super().compose_node(parent, index)
+
+        def construct_document(self, node):
+            self.top = node
+            return super().construct_document(node)
+
+        def construct_mapping(self, node, deep=False):
+            seen = {}
+            for key_node, _ in node.value if node is getattr(self, "top", None) else ():
+                if not isinstance(key_node, yaml.ScalarNode) or key_node.tag == "tag:yaml.org,2002:merge":
+                    continue
+                key, mark = self.construct_object(key_node), key_node.start_mark
+                try:
+                    first = seen.setdefault(key, mark)
+                except TypeError:  # unhashable: the constructor says so
+                    continue
+                if first is not mark:
+                    lines = f"line {mark.line + 1}" if first.line == mark.line else \
+                        f"lines {first.line + 1} and {mark.line + 1}"
+                    raise yaml.constructor.ConstructorError(
+                        None, None, f"key {one_line(repr(key))[:60]} given twice ({lines})", mark)
+            return super().construct_mapping(node, deep=deep)
 
     return NoAliasLoader
 
@@ -257,6 +285,31 @@ def read_yaml(path: Path, name: str) -> dict:
     ParameterError
         A near-miss of a known key.
     """
+    meta = _parse_yaml(path, name)
+    check_yaml_keys(name, meta)
+    return meta
+
+
+def image_named(path: Path):
+    """The image file the map YAML ``path`` names (absolute; relative names are relative to the YAML's
+    folder), or None when the YAML cannot be read or names no usable file name.
+
+    Read as :func:`read_yaml` reads it (bounded by :data:`MAX_YAML_BYTES`, no aliases, a FIFO or device
+    never opened), without its warnings and errors: for callers that only want to know the files a map
+    is made of (the run record), leaving the messages to :func:`~topomap.io.maps.load_map`.
+    """
+    path = Path(path)
+    try:
+        image = _parse_yaml(path, str(path)).get("image")
+    except (MapError, MapFileError, ParameterError):
+        return None
+    if not isinstance(image, str) or not image.strip() or "\x00" in image:
+        return None
+    return Path(os.path.abspath(path.parent / image))
+
+
+def _parse_yaml(path: Path, name: str) -> dict:
+    """The mapping of the map YAML ``path``, as :func:`read_yaml` reads it, its keys not checked."""
     import yaml
 
     check_file(name, path, "map YAML")
@@ -273,6 +326,8 @@ def read_yaml(path: Path, name: str) -> dict:
         raise MapFileError(named(name, f"cannot read map YAML: {exc.strerror or exc}")) from None
     try:
         meta = yaml.load(text, Loader=yaml_loader())  # noqa: S506 - a SafeLoader without aliases
+    except yaml.reader.ReaderError as exc:
+        raise MapError(named(name, f"not valid YAML: {_reader_problem(exc)}")) from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}" if mark is not None else ""
@@ -284,5 +339,13 @@ def read_yaml(path: Path, name: str) -> dict:
         raise MapError(named(name, f"not valid YAML: {one_line(exc) or type(exc).__name__}")) from None
     if not isinstance(meta, dict):
         raise MapError(named(name, f"map YAML must be a mapping (key: value), got {type(meta).__name__}"))
-    check_yaml_keys(name, meta)
     return meta
+
+
+def _reader_problem(exc) -> str:
+    """What PyYAML's ReaderError ``exc`` found, in words: a byte that is not UTF-8 (UTF-16 with its BOM is
+    read too), or a control character YAML does not allow; with its offset in the file."""
+    if exc.encoding != "unicode" and isinstance(exc.character, int):
+        return (f"byte 0x{exc.character:02x} at offset {exc.position} is not {exc.encoding.upper()} "
+                f"({exc.reason}; a map YAML is UTF-8 text)")
+    return f"character U+{exc.character:04X} at offset {exc.position} is not allowed in YAML text ({exc.reason})"

@@ -773,6 +773,14 @@ def _is_room_id(v):
     return isinstance(v, numbers.Integral) and not isinstance(v, bool)
 
 
+def _coordinate(nd, key) -> float:
+    """The room attribute ``key`` of ``nd`` as a float; NaN when the room (of a hand-made graph) lacks it."""
+    try:
+        return float(nd[key])
+    except (KeyError, TypeError, ValueError):
+        return float("nan")
+
+
 def _room_endpoint(room_map, G, r, what):
     """``(room, (x, y), (row, col))`` of room ``r`` as a start or goal: its interior point."""
     if r not in G:
@@ -781,15 +789,11 @@ def _room_endpoint(room_map, G, r, what):
     nd = G.nodes[r]
     # the room's interior point (a cell of the room, roomgraph.interior_points); a graph without
     # it (written by an older version): the centroid, when it is in the room
-    key = ("interior_x", "interior_y") if "interior_x" in nd and "interior_y" in nd else ("x", "y")
-    x, y = float(nd[key[0]]), float(nd[key[1]])
-    row, col = room_map.cell_at(x, y) if np.isfinite(x) and np.isfinite(y) else (-1, -1)
-    if room_map.in_room(row, col, r):
-        return r, (x, y), (row, col)
-    x, y = float(nd["x"]), float(nd["y"])
-    row, col = room_map.cell_at(x, y)
-    if room_map.in_room(row, col, r):
-        return r, (x, y), (row, col)
+    for key in (("interior_x", "interior_y"), ("x", "y")):
+        x, y = _coordinate(nd, key[0]), _coordinate(nd, key[1])
+        row, col = room_map.cell_at(x, y) if np.isfinite(x) and np.isfinite(y) else (-1, -1)
+        if room_map.in_room(row, col, r):
+            return r, (x, y), (row, col)
     # centroid outside the room (L shape, ring): nearest cell of the room
     space = RoomSpace(room_map, r, doors=[])
     r0, _, c0, _ = space.win

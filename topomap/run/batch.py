@@ -90,7 +90,7 @@ from ..core.segmentation import METHODS, check_method_options
 from ..errors import MapFileError, MissingDependencyError, OutputExistsError, ParameterError, TopomapError, \
     first_line, named
 from ..grid import share_memory
-from ..io.files import atomic_write
+from ..io.files import atomic_write, same_file
 from .job import STAGES, segment_file, summary_counts
 from .record import COMPLETE, INCOMPLETE, OUTPUT_NAMES, RECORD, file_stamp, fingerprint, input_files, \
     nav2_exports, output_stamps, read_record, restore_record, up_to_date, write_record
@@ -231,15 +231,6 @@ def _output_lock(out: Path):
 # Inputs that would be outputs, and the resume check
 # --------------------------------------------------------------------------
 
-def _same_file(a, b) -> bool:
-    if os.path.realpath(a) == os.path.realpath(b):
-        return True
-    try:
-        return os.path.samefile(a, b)
-    except OSError:
-        return False
-
-
 def _refuse_inputs_as_outputs(paths, dirs, write_options):
     """ParameterError when an output file of the run (a map's files, changes.json, summary.csv, the
     --bag) would be one of its input files (a map, the image its YAML names, the --previous graph)."""
@@ -251,7 +242,7 @@ def _refuse_inputs_as_outputs(paths, dirs, write_options):
         outs.append((Path(write_options["bag"]), "--bag"))
     for o, what in outs:
         for i in inputs:
-            if _same_file(o, i):
+            if same_file(o, i):
                 raise ParameterError(f"{what + ' ' if what else ''}{o}: is an input of this run ({i}); "
                                      "it would be replaced: choose another output")
 
@@ -559,10 +550,10 @@ def segment_many(paths: Sequence, out, *, jobs: int = 1, scheduler=None, overwri
         ``scheduler`` without Dask installed.
     """
     paths = [Path(p) for p in paths]
-    jobs = _check_options(paths, jobs, scheduler, resolution, method)
+    write_options = dict(write_options or {})
+    jobs = _check_options(paths, jobs, scheduler, resolution, method, write_options.get("at"))
     options = check_method_options(method, options)
     out = Path(out)
-    write_options = dict(write_options or {})
     settings = {"resolution": None if resolution is None else float(resolution), "method": method,
                 "skeletons": bool(skeletons), **{k: write_options[k] for k in sorted(write_options)}}
     if options:  # (no key without options: folders segmented before options could be given stay up to date)
@@ -573,8 +564,10 @@ def segment_many(paths: Sequence, out, *, jobs: int = 1, scheduler=None, overwri
         return _run_batch(paths, out, dirs, settings, overwrite, jobs, scheduler, write_options, progress)
 
 
-def _check_options(paths, jobs, scheduler, resolution, method) -> int:
-    """``jobs`` as an int; ParameterError for no maps, or options that are wrong or do not go together."""
+def _check_options(paths, jobs, scheduler, resolution, method, at=None) -> int:
+    """``jobs`` as an int; ParameterError for no maps, or options that are wrong or do not go together
+    (``at``: the bag time of the write options; every setting goes into the run record's JSON, which has no
+    NaN or infinity)."""
     if not paths:
         raise ParameterError("no maps given")
     if isinstance(jobs, bool) or not isinstance(jobs, numbers.Integral) or jobs < 1:
@@ -582,8 +575,10 @@ def _check_options(paths, jobs, scheduler, resolution, method) -> int:
     jobs = int(jobs)
     if scheduler is not None and jobs != 1:
         raise ParameterError(f"jobs={jobs} and a scheduler: the cluster decides how many maps run at once")
-    if resolution is not None and not (isinstance(resolution, (int, float)) and resolution > 0):
+    if resolution is not None and not (isinstance(resolution, (int, float)) and 0 < resolution < math.inf):
         raise ParameterError(f"resolution must be > 0 m/px, got {resolution!r}")
+    if at is not None and not (isinstance(at, numbers.Real) and not isinstance(at, bool) and 0 <= at < math.inf):
+        raise ParameterError(f"time must be seconds >= 0 after the start of the bag, got {at!r}")
     if method is not None and method not in METHODS:
         raise ParameterError(f"unknown method {method!r}; methods: {', '.join(METHODS)}")
     return jobs

@@ -160,6 +160,9 @@ def segment_file(path, outdir, resolution=None, method=None, skeletons=False, *,
     grid = _read_map(path, resolution, topic, at)
     t1 = time.perf_counter()
     seg = api.segment(grid, method=method, previous=previous, **(options or {}))  # a previous graph file: its messages name it
+    # the label files hold 16-bit room IDs: more rooms than that are refused now, not after the room graph,
+    # travel distances and pictures of every room (a noise image at 1 m per cell: 500,000 rooms, 7 GB, 5 min)
+    export.file_labels(seg, export.OUTPUT_FILES["labels"], "PNG")
     seg.room_graph  # built here so its time is its own stage (timings["room_graph"])
     t2 = time.perf_counter()
     # the map's outputs land together or not at all: the bag and changes.json are written to temporaries

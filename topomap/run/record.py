@@ -22,12 +22,14 @@ from pathlib import Path
 from typing import Optional
 
 from .. import __version__
+from ..errors import ParameterError
 from ..io.export import OUTPUT_FILES
-from ..io.files import atomic_write
+from ..io.files import atomic_write, same_file
+from ..io.metadata import image_named
 
 __all__ = ["RECORD", "INCOMPLETE", "COMPLETE", "OUTPUT_NAMES", "file_stamp", "input_files", "fingerprint",
            "output_stamps", "read_record", "write_record", "restore_record", "up_to_date", "add_nav2_export",
-           "nav2_exports"]
+           "nav2_exports", "check_nav2_target"]
 
 #: Name of the run record in every output folder.
 RECORD = "topomap_run.json"
@@ -55,14 +57,10 @@ def input_files(path: Path) -> list:
             if path.with_suffix(suffix).is_file():
                 files.append(Path(os.path.abspath(path.with_suffix(suffix))))
     if path.suffix.lower() in (".yaml", ".yml"):
-        try:
-            import yaml  # PyYAML: imported only when a map is a YAML file
-
-            image = yaml.safe_load(path.read_text()).get("image")
-            if isinstance(image, str):
-                files.append(Path(os.path.abspath(path.parent / image)))
-        except Exception:  # noqa: BLE001 - a bad YAML fails in load_map with its own message
-            pass
+        # read as load_map reads it (bounded, never a FIFO); a bad YAML fails in load_map with its own message
+        image = image_named(path)
+        if image is not None:
+            files.append(image)
     return files
 
 
@@ -120,6 +118,27 @@ def up_to_date(record: dict, settings: dict, folder: Path) -> bool:
     if not files or any(file_stamp(f) != v for f, v in inputs.items()):
         return False
     return all(file_stamp(folder / name) == v for name, v in files.items())
+
+
+def check_nav2_target(graph_path, nav2_path, output=None) -> None:
+    """Refuse a Nav2 route graph file ``nav2_path`` that would replace what the export reads or what its
+    folder holds: the room graph ``graph_path``, the label files beside it, a file ``topomap segment``
+    writes into that folder (the outputs, the run record, ``changes.json``), or ``output``, the room graph
+    the same export writes.
+
+    Raises
+    ------
+    ParameterError
+        Naming ``--nav2 nav2_path`` and the file it would replace.
+    """
+    folder = Path(os.path.abspath(graph_path)).parent
+    taken = [Path(graph_path)] + ([Path(output)] if output is not None else [])
+    taken += [folder / n for n in (*OUTPUT_NAMES, RECORD, "changes.json")]
+    for t in taken:
+        if same_file(nav2_path, t):
+            what = "the room graph it is made from" if t == Path(graph_path) else \
+                "OUTPUT" if output is not None and t == Path(output) else f"the folder's {t.name}"
+            raise ParameterError(f"--nav2 {nav2_path}: would replace {what} ({t}); choose another file")
 
 
 def add_nav2_export(graph_path, nav2_path, clearance: Optional[float]) -> bool:
