@@ -57,6 +57,8 @@ def test_other_options_run_the_map_again_the_same_ones_skip_it(tmp_path):
     (["--set", "max_door_width"], ["OPTION=VALUE"]),
     (["--set", "=2"], ["OPTION=VALUE"]),
     (["--set", "gaps=on", "--set", "gaps=off"], ["gaps", "twice"]),
+    (["--method", "watershed", "--set", "min_distance=nan"], ["min_distance", "not a finite number"]),
+    (["--set", "max_door_width=inf"], ["max_door_width", "inf"]),
     (["--method", "watershed", "--set", "max_door_width=2"], ["unknown option 'max_door_width'", "min_distance"]),
 ])
 def test_bad_options_one_line_nothing_written(tmp_path, args, words):

@@ -553,6 +553,9 @@ def segment_many(paths: Sequence, out, *, jobs: int = 1, scheduler=None, overwri
     write_options = dict(write_options or {})
     jobs = _check_options(paths, jobs, scheduler, resolution, method, write_options.get("at"))
     options = check_method_options(method, options)
+    for k, v in options.items():  # the run record is JSON, which has no NaN or infinity (nor does any option)
+        if isinstance(v, numbers.Real) and not isinstance(v, bool) and not math.isfinite(v):
+            raise ParameterError(f"option {k}={v!r}: not a finite number")
     out = Path(out)
     settings = {"resolution": None if resolution is None else float(resolution), "method": method,
                 "skeletons": bool(skeletons), **{k: write_options[k] for k in sorted(write_options)}}
