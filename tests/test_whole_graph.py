@@ -101,6 +101,36 @@ def test_touching_rooms_get_a_door_of_the_boundary_length():
     assert [d.id for d in doors] == [0, 1, 2]
 
 
+def test_rooms_touching_at_one_cell_get_a_one_cell_door_along_the_shared_edge():
+    grid = from_array(np.ones((4, 4), bool), resolution=0.1)
+    labels = np.array([[1, 1, 2, 2],
+                       [1, 1, 2, 2],
+                       [3, 3, 4, 4],
+                       [3, 3, 4, 4]], np.int32)
+    labels[1, 1], labels[2, 2] = 1, 4  # room 1 and room 4 touch at a corner only
+    _, doors, _ = join_touching_rooms(grid, labels, [], 4)
+    by = {d.rooms: d for d in doors}
+    assert set(by) == {(1, 2), (1, 3), (2, 4), (3, 4), (1, 4), (2, 3)}
+    check_whole(labels, 4, doors)
+    # rooms 1 and 2 meet along column edge 1.5 | 2, rows 0-1: a door two cells long across it
+    assert by[(1, 2)].width == pytest.approx(0.2, abs=1e-9)
+    # the corner contacts (1, 4) and (2, 3) are one cell wide
+    assert by[(1, 4)].width == pytest.approx(0.1, abs=1e-9)
+    assert by[(2, 3)].width == pytest.approx(0.1, abs=1e-9)
+
+
+def test_a_map_of_single_cell_rooms_wider_than_a_door_is_one_room():
+    # a checkerboard read at 10 m per cell: every free cell is a room of its own, touching its neighbours
+    # at a corner, one cell (10 m) wide: wider than any door, so all of them are one room
+    a = (np.indices((30, 30)).sum(0) % 2).astype(bool)
+    grid = from_array(a, resolution=10.0)
+    labels = np.zeros(a.shape, np.int32)
+    labels[a] = np.arange(1, int(a.sum()) + 1)
+    out, doors, n = join_touching_rooms(grid, labels, [], int(a.sum()), max_door_width=3.0)
+    assert n == 1 and doors == []
+    assert (out[a] == 1).all()
+
+
 def test_boundary_wider_than_any_door_merges():
     grid = from_array(np.ones((20, 80), bool), resolution=0.05)
     labels = np.ones((20, 80), np.int32)

@@ -768,6 +768,11 @@ def _doorless_contacts(labels: np.ndarray, n_rooms: int, doors):
 def _far_ends(mids: np.ndarray):
     """The two farthest of the points ``mids`` ((k, 2), row/col), each carried on by half a cell
     away from the other (across the contact for one point): ``((r1, c1), (r2, c2))``."""
+    if len(mids) == 1:  # (the same as below, without the arrays: a map of many rooms has millions of these)
+        r, c = float(mids[0, 0]), float(mids[0, 1])
+        if r - np.floor(r) > 0.25:
+            return (r, c - 0.5), (r, c + 0.5)
+        return (r - 0.5, c), (r + 0.5, c)
     if len(mids) > 3:
         import cv2
 
@@ -793,6 +798,8 @@ def _far_ends(mids: np.ndarray):
 def _extent(mids: np.ndarray) -> float:
     """Length (cells) of a boundary run between two rooms: the distance between its farthest points
     plus a cell (:func:`_far_ends`)."""
+    if len(mids) == 1:
+        return 1.0  # a contact at one cell: one cell wide (exactly what _far_ends gives)
     p, q = _far_ends(mids)
     return float(np.hypot(q[0] - p[0], q[1] - p[1]))
 
