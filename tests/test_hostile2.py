@@ -27,7 +27,7 @@ def _one_error_line(res, name, code=1):
     lines = [ln for ln in res.output.splitlines() if ln.strip()]
     assert res.exit_code == code, res.output
     assert len(lines) == 1 and lines[0].startswith("error: ") and str(name) in lines[0], res.output
-    assert "internal" not in res.output and " object at 0x" not in res.output
+    assert "internal" not in res.output and " object at 0x" not in res.output and "Traceback" not in res.output
     return lines[0]
 
 

@@ -6,35 +6,12 @@ import subprocess
 import sys
 from pathlib import Path
 
-import numpy as np
 import pytest
-from click.testing import CliRunner
 
 from topomap import io
-from topomap.cli import main
+from test_hostile2 import _one_error_line, _run, _two_rooms  # the same checks as there
 
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def _run(*args):
-    return CliRunner().invoke(main, [str(a) for a in args])
-
-
-def _one_error_line(res, name, code=1):
-    """The CLI's output is one error line naming ``name``, exit ``code``."""
-    lines = [ln for ln in res.output.splitlines() if ln.strip()]
-    assert res.exit_code == code, res.output
-    assert len(lines) == 1 and lines[0].startswith("error: ") and str(name) in lines[0], res.output
-    assert "internal" not in res.output and "Traceback" not in res.output
-    return lines[0]
-
-
-def _two_rooms():
-    a = np.zeros((60, 100), bool)
-    a[4:56, 4:48] = True
-    a[4:56, 52:96] = True
-    a[24:36, 48:52] = True
-    return a
 
 
 def _cli(*args, cwd, timeout=120):
