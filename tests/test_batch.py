@@ -446,3 +446,24 @@ def test_an_input_is_never_an_output(tmp_path):
     with pytest.raises(ParameterError, match="--bag .*is an input of this run"):
         segment_many([p], tmp_path / "o", write_options={"bag": str(p)})
     assert not (tmp_path / "o").exists()
+
+
+def test_inputs_and_outputs_are_compared_in_time_linear_in_the_maps(tmp_path, monkeypatch):
+    # each file is looked up once (its resolved path, its device and inode), not once per pair of an
+    # output and an input: a fleet's batch of thousands of maps would make millions of pairs
+    calls = []
+    real = batch.file_keys
+    monkeypatch.setattr(batch, "file_keys", lambda p: calls.append(p) or real(p))
+    tiny = np.zeros((24, 24), bool)
+    tiny[2:22, 2:22] = True
+    maps = [png(tmp_path, f"m{k}.png", T.gray(tiny)) for k in range(12)]
+    rows = segment_many(maps, tmp_path / "o", resolution=0.05, progress=False)
+    assert all(r["status"] == "ok" for r in rows)
+    outputs = len(batch.OUTPUT_NAMES) + 2  # a folder's files, its run record and changes.json
+    assert len(calls) <= len(maps) * (1 + outputs)  # 12 x 12 pairs x 10 outputs before
+    # an input named as an output is still refused, through a link as well
+    link = tmp_path / "o2"
+    link.mkdir()
+    os.symlink(maps[0], link / "labels.png")
+    with pytest.raises(ParameterError, match="is an input of this run"):
+        segment_many([maps[0]], link, resolution=0.05, progress=False)  # link/labels.png would replace m0.png

@@ -14,7 +14,7 @@ from ..errors import MapFileError, TopomapError, named
 
 log = logging.getLogger(__name__)
 
-__all__ = ["atomic_write", "write_bytes", "remove_stale_temporaries", "renamed_error", "same_file"]
+__all__ = ["atomic_write", "write_bytes", "remove_stale_temporaries", "renamed_error", "file_keys", "same_file"]
 
 
 #: Temporary files :func:`atomic_write` makes: ``.NAME.topomap-pPID.RANDOM.tmp`` (the ``topomap-`` marker:
@@ -142,12 +142,24 @@ def write_bytes(path: Path, data: bytes):
         fh.write(data)
 
 
+def file_keys(path) -> tuple:
+    """What names the file ``path`` is, for :func:`same_file`: ``(its path with links resolved, (device,
+    inode) when it exists, else None)``; ``(None, None)`` for a name the system refuses (a NUL byte).
+    Comparing the keys of many paths (a set of them) is linear in the paths, where comparing every pair
+    is not."""
+    try:
+        real = os.path.realpath(path)
+    except (OSError, ValueError):
+        return None, None
+    try:
+        st = os.stat(path)
+    except (OSError, ValueError):
+        return real, None
+    return real, (st.st_dev, st.st_ino)
+
+
 def same_file(a, b) -> bool:
     """Whether the paths ``a`` and ``b`` name one file: the same path once links are resolved (either may
     not exist yet), or the same existing file (hard links); False for a name the system refuses (a NUL byte)."""
-    try:
-        if os.path.realpath(a) == os.path.realpath(b):
-            return True
-        return os.path.samefile(a, b)
-    except (OSError, ValueError):
-        return False
+    (ra, ia), (rb, ib) = file_keys(a), file_keys(b)
+    return ra is not None and rb is not None and (ra == rb or (ia is not None and ia == ib))

@@ -90,7 +90,7 @@ from ..core.segmentation import METHODS, check_method_options
 from ..errors import MapFileError, MissingDependencyError, OutputExistsError, ParameterError, TopomapError, \
     first_line, named
 from ..grid import share_memory
-from ..io.files import atomic_write, same_file
+from ..io.files import atomic_write, file_keys
 from .job import STAGES, segment_file, summary_counts
 from .record import COMPLETE, INCOMPLETE, OUTPUT_NAMES, RECORD, file_stamp, fingerprint, input_files, \
     nav2_exports, output_stamps, read_record, restore_record, up_to_date, write_record
@@ -240,11 +240,16 @@ def _refuse_inputs_as_outputs(paths, dirs, write_options):
     outs = [(d / n, None) for d in dirs for n in (*OUTPUT_NAMES, RECORD, "changes.json")]
     if write_options.get("bag") is not None:
         outs.append((Path(write_options["bag"]), "--bag"))
+    known = {}  # every input's keys (its resolved path, its device and inode): one look per file
+    for i in inputs:
+        for k in file_keys(i):
+            if k is not None:
+                known.setdefault(k, i)
     for o, what in outs:
-        for i in inputs:
-            if same_file(o, i):
-                raise ParameterError(f"{what + ' ' if what else ''}{o}: is an input of this run ({i}); "
-                                     "it would be replaced: choose another output")
+        i = next((known[k] for k in file_keys(o) if k is not None and k in known), None)
+        if i is not None:
+            raise ParameterError(f"{what + ' ' if what else ''}{o}: is an input of this run ({i}); "
+                                 "it would be replaced: choose another output")
 
 
 def _plan(paths, dirs, settings, overwrite):
