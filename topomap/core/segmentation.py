@@ -338,9 +338,9 @@ class _WallGrid:
     (:func:`topomap.core.walls.straight_lines`), and the long walls are chained
     from them; without, both are from the Hough lines only."""
 
-    def __init__(self, search: OccupancyGrid, opts, *, runs: bool = True):
+    def __init__(self, search: OccupancyGrid, opts, *, runs: bool = True, split: int | None = None):
 
-        self.split = split = wall_split(opts.wall_cell, search.resolution)
+        self.split = split = wall_split(opts.wall_cell, search.resolution) if split is None else split
         self.k = k = skeleton_factor(opts.wall_cell, search.resolution) if split == 1 else 1 / split
         self.res = res = search.resolution * k
         self._own = (search.free, opts.min_wall_length / search.resolution) if split > 1 else None
@@ -431,6 +431,20 @@ class _WallGrid:
         if self.long_walls:
             keep = ~across_walls_many(P, Q, self.index, tol_px=opts.wall_wander / (res / self.k))
         return [(P[i], Q[i]) for i in np.flatnonzero(keep)]
+
+def _wall_grid(search: OccupancyGrid, opts) -> _WallGrid:
+    """The walls of ``search`` (:class:`_WallGrid`). On a map coarser than ``opts.wall_cell`` they
+    are found on its cells split to about that size (a laser map's: its walls wander and its clutter
+    is blocky, and the band of a cell either side of a wall's line is 0.05 m, as measured, not a
+    0.10 m cell's width, within which a chair's outline passes for a wall going on past a gap),
+    unless the walls are straight on the split cells too (at least ``straight_walls`` of the faces
+    on lines: a drawn plan, whose pieces of one wall may lie a whole map cell apart as drawn and
+    keep that cell of tolerance on the map's own cells)."""
+    grid = _WallGrid(search, opts)
+    if grid.split > 1 and not opts.scanned(straight_share(grid.faces, grid.hough)):
+        grid = _WallGrid(search, opts, split=1)
+    return grid
+
 
 def furniture_keep(grid: OccupancyGrid, looked: OccupancyGrid, clutter, opts, *, parts=None,
                    rows: bool = True) -> np.ndarray:
@@ -648,7 +662,7 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
     with timer("preprocess"):
         solid, small_parts, seen = _look_through_clutter(rooms_grid, opts, furniture)
     with timer("walls"):
-        wall_grid = _WallGrid(seen.search, opts)
+        wall_grid = _wall_grid(seen.search, opts)
         straight = wall_grid.straight_share()
         opts = opts.resolved(res, straight)  # rise and furniture measured on the map
     if opts.furniture_size > furniture:
@@ -656,7 +670,7 @@ def segment_topomap(grid: OccupancyGrid, options: TopomapOptions | None = None, 
             again = _look_through_furniture(rooms_grid, opts, straight, seen, solid, small_parts)
             if again is not None:
                 seen = again
-                wall_grid = _WallGrid(seen.search, opts)
+                wall_grid = _WallGrid(seen.search, opts, split=wall_grid.split)
     del solid, small_parts
     with timer("preprocess"):
         free = seen.search.free  # read, never written, from here on
