@@ -44,8 +44,10 @@ def test_wall_split_is_the_map_cell_over_the_wall_cell():
     assert wall_split(0.05, 0.05) == 1
     assert wall_split(0.05, 0.025) == 1   # finer maps have their cells joined instead
     assert wall_split(0.05, 0.10) == 2
-    assert wall_split(0.05, 0.20) == 4
     assert wall_split(0.05, 0.075) == 1   # less than two wall cells: the map's own
+    # at most two per side: the walls' grid holds at most four times the map's cells
+    assert wall_split(0.05, 0.20) == 2
+    assert wall_split(0.05, 10.0) == 2
 
 
 def test_split_cells_find_the_openings_of_the_finer_map():

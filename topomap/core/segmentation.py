@@ -102,12 +102,21 @@ def skeleton_factor(skeleton_cell: float, resolution: float) -> int:
     return max(int(np.floor(skeleton_cell / resolution + 1e-9)), 1)
 
 
+#: A map cell is split into at most this many cells per side for the walls (:func:`wall_split`): the
+#: walls' grid then holds at most four times the map's cells, so its memory and time stay a bounded
+#: multiple of the map's whatever the resolution (a map of 1 m cells, which indoor maps never use,
+#: would otherwise be split 20 times per side, 400 times its cells). Laser maps at 0.10 m, the
+#: coarsest common resolution, get their walls on 0.05 m cells.
+MAX_WALL_SPLIT = 2
+
+
 def wall_split(wall_cell: float, resolution: float) -> int:
-    """Into how many cells (per side) each map cell is split on the grid walls are found on (>= 1):
-    on a map coarser than ``wall_cell`` each cell is split into cells of about that size, as a finer
-    map's cells are joined (:func:`skeleton_factor`), so the wall rules counted in cells (a face
-    grown by a cell, the band of a cell either side of a line) are the same lengths in metres."""
-    return max(int(np.floor(resolution / wall_cell + 1e-9)), 1)
+    """Into how many cells (per side) each map cell is split on the grid walls are found on (1 to
+    :data:`MAX_WALL_SPLIT`): on a map coarser than ``wall_cell`` each cell is split into cells of
+    about that size, as a finer map's cells are joined (:func:`skeleton_factor`), so the wall rules
+    counted in cells (a face grown by a cell, the band of a cell either side of a line) are the same
+    lengths in metres."""
+    return min(max(int(np.floor(resolution / wall_cell + 1e-9)), 1), MAX_WALL_SPLIT)
 
 
 def coarse_skeletons(free_mask: np.ndarray, occupied_mask: np.ndarray, factor: int):
